@@ -1,0 +1,109 @@
+// A regular Rusinkiewicz grid over (θh, θd, φd) and a float32 RGB table on it.
+//
+// Axes (MERL's, at any resolution):
+//   θh ∈ [0, π/2) on a square-root axis: bin i covers [(i/n)²·π/2, ((i+1)/n)²·π/2);
+//   θd ∈ [0, π/2) linear;  φd ∈ [0, π) linear, folded by reciprocity (φd ~ φd + π).
+// Bin index = φd + nφd·(θd + nθd·θh), MERL's order.
+// Nearest lookup is floor() of the continuous bin coordinate with MERL's exact arithmetic, so it picks
+// bit-identically the bin MERL's published lookup picks. Where each bin's value sits for
+// interpolation (its start or its centre) is the explicit BinPosition option.
+#pragma once
+
+#include <cmath>
+#include <cstddef>
+#include <cstdint>
+#include <numbers>
+#include <string>
+#include <vector>
+
+#include "brdfz/brdf.h"
+
+namespace brdfz {
+
+// Where a bin's sample sits along each axis for interpolation and tabulation. MERL's lookup floors,
+// which reads values as bin starts (θh = 0 is then sampled exactly); Centre reads them as bin averages.
+enum class BinPosition { Start, Centre };
+
+// Named axis maps: angle -> continuous bin coordinate in [0, n] and back. The forward maps use
+// MERL's operation order (theta_half_index and friends) so floor() matches it bit for bit.
+namespace axis {
+inline double theta_h_to_u(double theta_h, int n) {
+    return theta_h <= 0.0 ? 0.0 : std::sqrt(theta_h / (std::numbers::pi / 2.0) * n * n);
+}
+inline double theta_d_to_u(double theta_d, int n) { return theta_d / (std::numbers::pi * 0.5) * n; }
+// φd in (-π, π] folded to [0, π] by reciprocity.
+inline double phi_d_to_u(double phi_d, int n) {
+    if (phi_d < 0.0) phi_d += std::numbers::pi;
+    return phi_d / std::numbers::pi * n;
+}
+inline double u_to_theta_h(double u, int n) { return (u / n) * (u / n) * (std::numbers::pi / 2.0); }
+inline double u_to_theta_d(double u, int n) { return u / n * (std::numbers::pi / 2.0); }
+inline double u_to_phi_d(double u, int n) { return u / n * std::numbers::pi; }
+// Nearest bin of a coordinate: floor, clamped to [0, n-1]; NaN goes to 0 (fmax drops NaN) so the
+// int conversion is always defined.
+inline int bin_of(double u, int n) { return static_cast<int>(std::fmin(std::fmax(u, 0.0), n - 1.0)); }
+}  // namespace axis
+
+struct GridSpec {
+    int n_theta_h = 90;
+    int n_theta_d = 90;
+    int n_phi_d = 180;
+    BinPosition position = BinPosition::Start;
+
+    static constexpr int kMaxAxis = 4096;  // bound on any axis, checked before allocating
+
+    std::size_t bins() const {
+        return static_cast<std::size_t>(n_theta_h) * n_theta_d * n_phi_d;
+    }
+    std::size_t index(int ih, int id, int ip) const {
+        return static_cast<std::size_t>(ip) + static_cast<std::size_t>(n_phi_d) * (id + static_cast<std::size_t>(n_theta_d) * ih);
+    }
+    // Offset of a bin's sample from its start, in bins.
+    double sample_offset() const { return position == BinPosition::Centre ? 0.5 : 0.0; }
+    // Angles at which bin (ih, id, ip) is sampled.
+    double theta_h_at(int ih) const { return axis::u_to_theta_h(ih + sample_offset(), n_theta_h); }
+    double theta_d_at(int id) const { return axis::u_to_theta_d(id + sample_offset(), n_theta_d); }
+    double phi_d_at(int ip) const { return axis::u_to_phi_d(ip + sample_offset(), n_phi_d); }
+    // Throws ValueError unless every axis is in [1, kMaxAxis].
+    void validate() const;
+    std::string str() const;  // "90x90x180"
+};
+
+// How many bins a source had in each class. A bin is valid when all its channels are finite and >= 0;
+// an invalid bin is counted in every class one of its channels falls in.
+struct ValidityCounts {
+    std::size_t valid = 0;
+    std::size_t negative = 0;
+    std::size_t nan = 0;
+    std::size_t inf = 0;
+    std::size_t clamped = 0;  // negative values set to 0 instead of invalidated (tabulation policy)
+};
+
+// float32 RGB values interleaved per bin (one cache line per lookup, not three). A channel that is
+// not valid holds a quiet NaN: that is the validity mask, and lookups skip those entries.
+class Table {
+public:
+    explicit Table(GridSpec grid);  // every value invalid
+
+    const GridSpec& grid() const { return grid_; }
+    std::size_t bins() const { return grid_.bins(); }
+
+    float* data() { return values_.data(); }
+    const float* data() const { return values_.data(); }
+
+    float at(std::size_t bin, int channel) const { return values_[3 * bin + channel]; }
+    bool valid(std::size_t bin) const;
+    void set(std::size_t bin, const Rgb& f);
+    void invalidate(std::size_t bin);
+
+    // Counts of the current contents (valid bins vs bins with a NaN marker).
+    std::size_t valid_bins() const;
+
+    bool operator==(const Table& other) const;  // same grid and bit-identical values
+
+private:
+    GridSpec grid_;
+    std::vector<float> values_;
+};
+
+}  // namespace brdfz

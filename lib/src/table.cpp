@@ -1,0 +1,50 @@
+#include "brdfz/table.h"
+
+#include <cstring>
+#include <limits>
+
+#include "brdfz/errors.h"
+
+namespace brdfz {
+
+void GridSpec::validate() const {
+    for (int n : {n_theta_h, n_theta_d, n_phi_d})
+        if (n < 1 || n > kMaxAxis)
+            throw ValueError("grid " + str() + ": every axis must be in [1, " + std::to_string(kMaxAxis) + "]");
+}
+
+std::string GridSpec::str() const {
+    return std::to_string(n_theta_h) + "x" + std::to_string(n_theta_d) + "x" + std::to_string(n_phi_d);
+}
+
+Table::Table(GridSpec grid) : grid_(grid) {
+    grid_.validate();
+    values_.assign(3 * grid_.bins(), std::numeric_limits<float>::quiet_NaN());
+}
+
+bool Table::valid(std::size_t bin) const {
+    const float* v = &values_[3 * bin];
+    return !std::isnan(v[0]) && !std::isnan(v[1]) && !std::isnan(v[2]);
+}
+
+void Table::set(std::size_t bin, const Rgb& f) {
+    for (int c = 0; c < 3; ++c) values_[3 * bin + c] = static_cast<float>(f[c]);
+}
+
+void Table::invalidate(std::size_t bin) {
+    for (int c = 0; c < 3; ++c) values_[3 * bin + c] = std::numeric_limits<float>::quiet_NaN();
+}
+
+std::size_t Table::valid_bins() const {
+    std::size_t n = 0;
+    for (std::size_t b = 0; b < bins(); ++b) n += valid(b);
+    return n;
+}
+
+bool Table::operator==(const Table& other) const {
+    return grid_.n_theta_h == other.grid_.n_theta_h && grid_.n_theta_d == other.grid_.n_theta_d &&
+           grid_.n_phi_d == other.grid_.n_phi_d && grid_.position == other.grid_.position &&
+           std::memcmp(values_.data(), other.values_.data(), values_.size() * sizeof(float)) == 0;
+}
+
+}  // namespace brdfz
