@@ -76,7 +76,8 @@ struct ValidityCounts {
     std::size_t negative = 0;
     std::size_t nan = 0;
     std::size_t inf = 0;
-    std::size_t clamped = 0;  // negative values set to 0 instead of invalidated (tabulation policy)
+    std::size_t clamped = 0;        // bins with negative values set to 0 instead (tabulation policy)
+    std::size_t below_horizon = 0;  // bins whose wi or wo is below the horizon (left invalid)
 };
 
 // float32 RGB values interleaved per bin (one cache line per lookup, not three). A channel that is

@@ -1,0 +1,50 @@
+// Format-independent loading and saving: the format comes from the file extension.
+//   .binary  MERL table            (read, write)
+//   .bsdf    RGL-EPFL tensor_file  (read)
+#pragma once
+
+#include <functional>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "brdfz/brdf.h"
+#include "brdfz/repr/tabular.h"
+#include "brdfz/table.h"
+
+namespace brdfz {
+
+// What a reader found in the file, beside the Brdf itself.
+struct SourceInfo {
+    std::string format;              // "merl", "rgl"
+    std::vector<std::size_t> dims;   // the stored array's shape
+    ValidityCounts counts;           // bins (MERL) or stored values (RGL) by class
+    double min_value = 0, max_value = 0;  // range of the valid values, f_r in 1/sr
+};
+
+struct Loaded {
+    std::unique_ptr<Brdf> brdf;
+    SourceInfo info;
+};
+
+struct LoadOptions {
+    BinPosition position = BinPosition::Start;  // tables: where samples sit in their bins
+    Lookup lookup = Lookup::Linear;              // tables: lookup used by eval
+};
+
+struct SaveOptions {
+    GridSpec grid{};  // resolution when the Brdf must be tabulated first (it is not a table already)
+    int threads = 0;
+    std::function<void(double)> progress;  // tabulation progress, fraction done
+};
+
+// "merl" / "rgl" from the extension; FormatError naming the file otherwise.
+std::string format_of(const std::string& path);
+
+Loaded load(const std::string& path, const LoadOptions& options = {});
+
+// Writes atomically. A TabularBrdf is written as it is; any other Brdf is tabulated first on
+// options.grid. Returns the counts of what was written.
+ValidityCounts save(const Brdf& brdf, const std::string& path, const SaveOptions& options = {});
+
+}  // namespace brdfz

@@ -1,0 +1,72 @@
+#include "brdfz/formats/io.h"
+
+#include <algorithm>
+#include <cmath>
+#include <filesystem>
+#include <limits>
+
+#include "brdfz/errors.h"
+#include "brdfz/formats/merl.h"
+#include "brdfz/tabulate.h"
+
+namespace brdfz {
+namespace {
+
+// Range of a table's valid values.
+void value_range(const Table& t, SourceInfo& info) {
+    double lo = std::numeric_limits<double>::infinity(), hi = -lo;
+    for (std::size_t k = 0; k < 3 * t.bins(); ++k) {
+        const float v = t.data()[k];
+        if (std::isnan(v)) continue;
+        lo = std::min<double>(lo, v);
+        hi = std::max<double>(hi, v);
+    }
+    info.min_value = lo <= hi ? lo : 0.0;
+    info.max_value = lo <= hi ? hi : 0.0;
+}
+
+Loaded load_merl(const std::string& path, const LoadOptions& options) {
+    merl::ReadResult r = merl::read(path, options.position);
+    const GridSpec& g = r.table.grid();
+    Loaded out;
+    out.info.format = "merl";
+    out.info.dims = {static_cast<std::size_t>(g.n_theta_h), static_cast<std::size_t>(g.n_theta_d),
+                     static_cast<std::size_t>(g.n_phi_d)};
+    out.info.counts = r.counts;
+    value_range(r.table, out.info);
+    out.brdf = std::make_unique<TabularBrdf>(std::move(r.table), options.lookup);
+    return out;
+}
+
+}  // namespace
+
+std::string format_of(const std::string& path) {
+    const std::string ext = std::filesystem::path(path).extension().string();
+    if (ext == ".binary") return "merl";
+    if (ext == ".bsdf") return "rgl";
+    throw FormatError(path, "unknown file extension '" + ext + "' (expected .binary or .bsdf)");
+}
+
+Loaded load(const std::string& path, const LoadOptions& options) {
+    const std::string format = format_of(path);
+    if (format == "merl") return load_merl(path, options);
+    throw UnsupportedError(path, "reading " + format + " files is not supported");
+}
+
+ValidityCounts save(const Brdf& brdf, const std::string& path, const SaveOptions& options) {
+    const std::string format = format_of(path);
+    if (format != "merl") throw UnsupportedError(path, "writing " + format + " files is not supported");
+    if (const auto* tab = dynamic_cast<const TabularBrdf*>(&brdf)) {
+        merl::write(path, tab->table());
+        return {.valid = tab->table().valid_bins()};
+    }
+    TabulateOptions t;
+    t.grid = options.grid;
+    t.threads = options.threads;
+    t.progress = options.progress;
+    Tabulated tab = tabulate(brdf, t);
+    merl::write(path, tab.table);
+    return tab.counts;
+}
+
+}  // namespace brdfz

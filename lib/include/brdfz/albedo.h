@@ -1,0 +1,20 @@
+// Directional albedo ρ(θo) = ∫ f(wi, wo) cosθi dωi over the upper hemisphere, by deterministic
+// quadrature. The integral is taken over half vectors (dωi = 4 (wo·h) dωh) on MERL's square-root θh
+// axis, so a specular peak at h = ẑ is resolved; the horizon cut (wi.z = 0) is located per φh and
+// the θh range integrated exactly up to it, so smooth BRDFs converge fast.
+#pragma once
+
+#include "brdfz/brdf.h"
+
+namespace brdfz {
+
+struct AlbedoOptions {
+    int n_phi = 256;    // midpoint nodes in φh
+    int n_panels = 16;  // composite Gauss-Legendre panels along √θh
+    int order = 8;      // nodes per panel
+};
+
+// θo in radians, [0, π/2). wo lies in the xz-plane.
+Rgb directional_albedo(const Brdf& brdf, double theta_o, const AlbedoOptions& options = {});
+
+}  // namespace brdfz

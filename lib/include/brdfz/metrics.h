@@ -1,0 +1,39 @@
+// Error metrics between two BRDFs over the valid bins of a reference grid.
+//
+// Samples are the bins of the reference's own grid when it is a TabularBrdf (its invalid bins are
+// skipped), otherwise of MetricOptions::grid; bins with θi or θo >= max_theta_deg are left out.
+// Each bin counts once (the MERL literature's convention, e.g. Ngan et al. 2005, Löw et al. 2012).
+// With x = f_ref·cosθi and y = f_approx·cosθi per channel:
+//   cos_rmse     = sqrt(mean (x − y)²)
+//   cos_rmse_rel = sqrt(Σ (x − y)² / Σ x²)
+//   log_rmse     = sqrt(mean (ln(1 + x) − ln(1 + y))²)      (negative values enter as 0, and are counted)
+//   cbrt_rmse    = sqrt(mean (∛x − ∛y)²)
+// `mean` is the average of the three channel values.
+#pragma once
+
+#include <cstddef>
+
+#include "brdfz/brdf.h"
+#include "brdfz/table.h"
+
+namespace brdfz {
+
+struct PerChannel {
+    double r = 0, g = 0, b = 0, mean = 0;
+};
+
+struct Metrics {
+    PerChannel cos_rmse, cos_rmse_rel, log_rmse, cbrt_rmse;
+    std::size_t samples = 0;    // bins compared
+    std::size_t negatives = 0;  // channel values below 0 (either BRDF) taken as 0 by log_rmse
+};
+
+struct MetricOptions {
+    GridSpec grid{};  // sample grid when the reference is not a table
+    double max_theta_deg = 80.0;
+    int threads = 0;  // 0: one per hardware thread
+};
+
+Metrics compare(const Brdf& reference, const Brdf& approx, const MetricOptions& options = {});
+
+}  // namespace brdfz

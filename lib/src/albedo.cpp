@@ -1,0 +1,76 @@
+#include "brdfz/albedo.h"
+
+#include <cmath>
+#include <numbers>
+#include <vector>
+
+#include "brdfz/errors.h"
+#include "detail/gauss_legendre.h"
+
+namespace brdfz {
+namespace {
+
+Vec3 half_at(double theta_h, double phi_h) { return spherical_direction(theta_h, phi_h); }
+
+Vec3 reflect(const Vec3& wo, const Vec3& h) { return (2.0 * dot(wo, h)) * h - wo; }
+
+// Largest θh (along azimuth φh) whose mirror direction of wo stays above the horizon. wi.z > 0 at
+// θh = 0; scan to the first crossing, then bisect.
+double horizon_theta_h(const Vec3& wo, double phi_h) {
+    constexpr int kScan = 64;
+    const double top = std::numbers::pi / 2.0;
+    double lo = 0.0;
+    for (int s = 1; s <= kScan; ++s) {
+        const double t = top * s / kScan;
+        if (reflect(wo, half_at(t, phi_h)).z <= 0.0) {
+            double hi = t;
+            for (int it = 0; it < 60; ++it) {
+                const double mid = 0.5 * (lo + hi);
+                (reflect(wo, half_at(mid, phi_h)).z > 0.0 ? lo : hi) = mid;
+            }
+            return lo;
+        }
+        lo = t;
+    }
+    return top;
+}
+
+}  // namespace
+
+Rgb directional_albedo(const Brdf& brdf, double theta_o, const AlbedoOptions& o) {
+    if (!(theta_o >= 0.0 && theta_o < std::numbers::pi / 2.0))
+        throw ValueError("albedo: theta_o must be in [0, pi/2)");
+    if (o.n_phi < 1 || o.n_panels < 1 || o.order < 1 || o.order > 64)
+        throw ValueError("albedo: quadrature sizes must be positive (order <= 64)");
+    const Vec3 wo = spherical_direction(theta_o, 0.0);
+    const detail::Quadrature gl = detail::gauss_legendre01(o.order);
+
+    const std::size_t per_phi = static_cast<std::size_t>(o.n_panels) * o.order;
+    std::vector<Vec3> wi(per_phi * o.n_phi), wos(wi.size(), wo);
+    std::vector<double> weight(wi.size());
+    const double dphi = 2.0 * std::numbers::pi / o.n_phi;
+    for (int j = 0; j < o.n_phi; ++j) {
+        const double phi_h = (j + 0.5) * dphi;
+        // θh = (π/2)·u², u ∈ [0, u_max]: dθh = π u du.
+        const double u_max = std::sqrt(horizon_theta_h(wo, phi_h) / (std::numbers::pi / 2.0));
+        const double du = u_max / o.n_panels;
+        for (int p = 0; p < o.n_panels; ++p)
+            for (int q = 0; q < o.order; ++q) {
+                const double u = (p + gl.x[q]) * du;
+                const double theta_h = std::numbers::pi / 2.0 * u * u;
+                const Vec3 h = half_at(theta_h, phi_h);
+                const std::size_t k = j * per_phi + p * o.order + q;
+                wi[k] = reflect(wo, h);
+                // f·cosθi is applied after evaluation; here the Jacobian and quadrature weights.
+                weight[k] = 4.0 * dot(wo, h) * std::sin(theta_h) * std::numbers::pi * u * gl.w[q] * du * dphi;
+            }
+    }
+    std::vector<Rgb> f(wi.size());
+    brdf.eval(wi, wos, f);
+    Rgb rho{0.0, 0.0, 0.0};
+    for (std::size_t k = 0; k < wi.size(); ++k)
+        for (int c = 0; c < 3; ++c) rho[c] += f[k][c] * wi[k].z * weight[k];
+    return rho;
+}
+
+}  // namespace brdfz

@@ -1,0 +1,97 @@
+#include "brdfz/metrics.h"
+
+#include <cmath>
+#include <numbers>
+#include <vector>
+
+#include "brdfz/errors.h"
+#include "brdfz/repr/tabular.h"
+#include "detail/grid_sweep.h"
+
+namespace brdfz {
+namespace {
+
+struct Sums {
+    double sq[3] = {}, ref_sq[3] = {}, log_sq[3] = {}, cbrt_sq[3] = {};
+    std::size_t n = 0, negatives = 0;
+};
+
+PerChannel per_channel(const double v[3]) { return {v[0], v[1], v[2], (v[0] + v[1] + v[2]) / 3.0}; }
+
+}  // namespace
+
+Metrics compare(const Brdf& reference, const Brdf& approx, const MetricOptions& options) {
+    if (!(options.max_theta_deg > 0.0 && options.max_theta_deg <= 90.0))
+        throw ValueError("metrics: max_theta_deg must be in (0, 90]");
+    const auto* ref_table = dynamic_cast<const TabularBrdf*>(&reference);
+    const GridSpec g = ref_table ? ref_table->table().grid() : options.grid;
+    g.validate();
+    const double min_cos = std::cos(options.max_theta_deg * std::numbers::pi / 180.0);
+
+    const int workers = detail::resolve_threads(options.threads);
+    std::vector<Sums> sums(workers);
+    std::vector<std::vector<Rgb>> ref_f(workers), app_f(workers);
+    detail::sweep_slices(g, workers, [&](int w, int ih, std::span<const Vec3> wi, std::span<const Vec3> wo) {
+        ref_f[w].resize(wi.size());
+        app_f[w].resize(wi.size());
+        if (!ref_table) reference.eval(wi, wo, ref_f[w]);
+        approx.eval(wi, wo, app_f[w]);
+        Sums& s = sums[w];
+        const std::size_t base = g.index(ih, 0, 0);
+        for (std::size_t k = 0; k < wi.size(); ++k) {
+            if (!(wi[k].z > min_cos && wo[k].z > min_cos)) continue;
+            Rgb ref = ref_f[w][k];
+            if (ref_table) {
+                if (!ref_table->table().valid(base + k)) continue;
+                for (int c = 0; c < 3; ++c) ref[c] = ref_table->table().at(base + k, c);
+            }
+            bool finite = true;
+            for (int c = 0; c < 3; ++c) finite = finite && std::isfinite(ref[c]) && std::isfinite(app_f[w][k][c]);
+            if (!finite) continue;  // a reference without a value at this bin is not a sample
+            ++s.n;
+            for (int c = 0; c < 3; ++c) {
+                const double x = ref[c] * wi[k].z, y = app_f[w][k][c] * wi[k].z;
+                s.negatives += (x < 0.0) + (y < 0.0);
+                s.sq[c] += (x - y) * (x - y);
+                s.ref_sq[c] += x * x;
+                const double dl = std::log1p(std::fmax(x, 0.0)) - std::log1p(std::fmax(y, 0.0));
+                s.log_sq[c] += dl * dl;
+                const double dc = std::cbrt(x) - std::cbrt(y);
+                s.cbrt_sq[c] += dc * dc;
+            }
+        }
+    });
+
+    Sums total;
+    for (const Sums& s : sums) {
+        total.n += s.n;
+        total.negatives += s.negatives;
+        for (int c = 0; c < 3; ++c) {
+            total.sq[c] += s.sq[c];
+            total.ref_sq[c] += s.ref_sq[c];
+            total.log_sq[c] += s.log_sq[c];
+            total.cbrt_sq[c] += s.cbrt_sq[c];
+        }
+    }
+    if (total.n == 0) throw ValueError("metrics: no valid reference bin inside the angular cut-off");
+
+    double cos_rmse[3], rel[3], log_rmse[3], cbrt_rmse[3];
+    for (int c = 0; c < 3; ++c) {
+        cos_rmse[c] = std::sqrt(total.sq[c] / total.n);
+        // An all-zero reference has no scale: relative error is 0 if the approximation is too, else inf.
+        rel[c] = total.ref_sq[c] > 0.0 ? std::sqrt(total.sq[c] / total.ref_sq[c])
+                                       : (total.sq[c] > 0.0 ? INFINITY : 0.0);
+        log_rmse[c] = std::sqrt(total.log_sq[c] / total.n);
+        cbrt_rmse[c] = std::sqrt(total.cbrt_sq[c] / total.n);
+    }
+    Metrics m;
+    m.cos_rmse = per_channel(cos_rmse);
+    m.cos_rmse_rel = per_channel(rel);
+    m.log_rmse = per_channel(log_rmse);
+    m.cbrt_rmse = per_channel(cbrt_rmse);
+    m.samples = total.n;
+    m.negatives = total.negatives;
+    return m;
+}
+
+}  // namespace brdfz
