@@ -56,12 +56,13 @@ Loaded load(const std::string& path, const LoadOptions& options) {
 ValidityCounts save(const Brdf& brdf, const std::string& path, const SaveOptions& options) {
     const std::string format = format_of(path);
     if (format != "merl") throw UnsupportedError(path, "writing " + format + " files is not supported");
-    if (const auto* tab = dynamic_cast<const TabularBrdf*>(&brdf)) {
-        merl::write(path, tab->table());
-        return {.valid = tab->table().valid_bins()};
+    const auto* table = dynamic_cast<const TabularBrdf*>(&brdf);
+    if (table && (!options.grid || *options.grid == table->table().grid())) {
+        merl::write(path, table->table());
+        return {.valid = table->table().valid_bins()};
     }
     TabulateOptions t;
-    t.grid = options.grid;
+    t.grid = options.grid.value_or(GridSpec{});
     t.threads = options.threads;
     t.progress = options.progress;
     Tabulated tab = tabulate(brdf, t);

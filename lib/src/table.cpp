@@ -42,9 +42,7 @@ std::size_t Table::valid_bins() const {
 }
 
 bool Table::operator==(const Table& other) const {
-    return grid_.n_theta_h == other.grid_.n_theta_h && grid_.n_theta_d == other.grid_.n_theta_d &&
-           grid_.n_phi_d == other.grid_.n_phi_d && grid_.position == other.grid_.position &&
-           std::memcmp(values_.data(), other.values_.data(), values_.size() * sizeof(float)) == 0;
+    return grid_ == other.grid_ && std::memcmp(values_.data(), other.values_.data(), values_.size() * sizeof(float)) == 0;
 }
 
 }  // namespace brdfz

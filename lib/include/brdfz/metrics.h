@@ -29,7 +29,9 @@ struct Metrics {
 };
 
 struct MetricOptions {
-    GridSpec grid{};  // sample grid when the reference is not a table
+    // Sample grid when the reference is not a table. Bin starts, so that a table approximating an
+    // analytic reference on the default (bin-centre) grid is judged between its samples, not at them.
+    GridSpec grid{90, 90, 180, BinPosition::Start};
     double max_theta_deg = 80.0;
     int threads = 0;  // 0: one per hardware thread
 };

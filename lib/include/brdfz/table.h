@@ -20,8 +20,10 @@
 
 namespace brdfz {
 
-// Where a bin's sample sits along each axis for interpolation and tabulation. MERL's lookup floors,
-// which reads values as bin starts (θh = 0 is then sampled exactly); Centre reads them as bin averages.
+// Where a bin's sample sits along each axis, for interpolation and tabulation. Centre (the default)
+// reads a value as its bin's average, which is how MERL measurements were binned, and makes MERL's
+// floor() lookup the nearest sample; Start puts sample i at the bin's lower edge (θh = 0 is then
+// sampled exactly), as some published MERL tools assume.
 enum class BinPosition { Start, Centre };
 
 // Named axis maps: angle -> continuous bin coordinate in [0, n] and back. The forward maps use
@@ -48,7 +50,7 @@ struct GridSpec {
     int n_theta_h = 90;
     int n_theta_d = 90;
     int n_phi_d = 180;
-    BinPosition position = BinPosition::Start;
+    BinPosition position = BinPosition::Centre;
 
     static constexpr int kMaxAxis = 4096;  // bound on any axis, checked before allocating
 
@@ -67,6 +69,7 @@ struct GridSpec {
     // Throws ValueError unless every axis is in [1, kMaxAxis].
     void validate() const;
     std::string str() const;  // "90x90x180"
+    bool operator==(const GridSpec&) const = default;
 };
 
 // How many bins a source had in each class. A bin is valid when all its channels are finite and >= 0;

@@ -5,6 +5,7 @@
 
 #include <functional>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -28,12 +29,14 @@ struct Loaded {
 };
 
 struct LoadOptions {
-    BinPosition position = BinPosition::Start;  // tables: where samples sit in their bins
+    BinPosition position = BinPosition::Centre;  // tables: where samples sit in their bins
     Lookup lookup = Lookup::Linear;              // tables: lookup used by eval
 };
 
 struct SaveOptions {
-    GridSpec grid{};  // resolution when the Brdf must be tabulated first (it is not a table already)
+    // Table resolution to write. Unset: a TabularBrdf keeps its own grid, anything else is tabulated on
+    // MERL's 90x90x180. A table on another grid is resampled (tabulated through its lookup).
+    std::optional<GridSpec> grid;
     int threads = 0;
     std::function<void(double)> progress;  // tabulation progress, fraction done
 };
@@ -43,8 +46,7 @@ std::string format_of(const std::string& path);
 
 Loaded load(const std::string& path, const LoadOptions& options = {});
 
-// Writes atomically. A TabularBrdf is written as it is; any other Brdf is tabulated first on
-// options.grid. Returns the counts of what was written.
+// Writes atomically; returns the counts of what was written.
 ValidityCounts save(const Brdf& brdf, const std::string& path, const SaveOptions& options = {});
 
 }  // namespace brdfz

@@ -20,7 +20,7 @@ struct ReadResult {
 
 // Validates the whole file's shape before allocating; FormatError / IoError name the file.
 // `position` says where the file's samples sit inside their bins (the data does not record it).
-ReadResult read(const std::string& path, BinPosition position = BinPosition::Start);
+ReadResult read(const std::string& path, BinPosition position = BinPosition::Centre);
 
 // Writes any table (any resolution) atomically; invalid entries are written as kUnmeasured.
 void write(const std::string& path, const Table& table);

@@ -1,0 +1,14 @@
+// Each subcommand registers itself on the app; its callback does the work and throws on failure.
+#pragma once
+
+#include <CLI/CLI.hpp>
+
+namespace brdfz::cli {
+
+void add_info(CLI::App& app);
+void add_convert(CLI::App& app);
+void add_eval(CLI::App& app);
+void add_diff(CLI::App& app);
+void add_demo(CLI::App& app);
+
+}  // namespace brdfz::cli

@@ -1,0 +1,34 @@
+// brdfz diff A B [--json]: error metrics of B against the reference A.
+#include <iostream>
+
+#include "commands.h"
+#include "output.h"
+#include "report.h"
+
+namespace brdfz::cli {
+
+void add_diff(CLI::App& app) {
+    struct Args {
+        std::string a, b;
+        bool json = false;
+        LoadOptions load;
+        MetricOptions metrics;
+    };
+    auto args = std::make_shared<Args>();
+    CLI::App* cmd = app.add_subcommand("diff", "error metrics of B against the reference A");
+    cmd->add_option("A", args->a, "reference")->required();
+    cmd->add_option("B", args->b, "approximation")->required();
+    cmd->add_flag("--json", args->json, "print JSON");
+    cmd->add_option("--max-theta", args->metrics.max_theta_deg, "leave out theta_i or theta_o at or above (degrees)")
+        ->capture_default_str();
+    add_load_options(cmd, args->load);
+    cmd->callback([args] {
+        const Loaded a = load(args->a, args->load);
+        const Loaded b = load(args->b, args->load);
+        const Metrics m = compare(*a.brdf, *b.brdf, args->metrics);
+        if (!args->json) std::cout << args->b << " against " << args->a << "\n";
+        print_metrics(m, args->json, std::cout);
+    });
+}
+
+}  // namespace brdfz::cli

@@ -1,0 +1,100 @@
+// brdfz eval FILE --wi x,y,z --wo x,y,z | --pairs PAIRS.csv
+// Prints f (no cosine) as one "r,g,b" row per pair, full precision, in input order. All input is
+// parsed before anything is printed, so a bad row produces an error and no partial output.
+#include <cmath>
+#include <cstdlib>
+#include <fstream>
+#include <iostream>
+#include <sstream>
+
+#include "brdfz/errors.h"
+#include "commands.h"
+#include "output.h"
+
+namespace brdfz::cli {
+namespace {
+
+// Parses exactly `count` comma-separated numbers; false on anything else.
+bool parse_numbers(const std::string& text, double* out, int count) {
+    const char* p = text.c_str();
+    for (int k = 0; k < count; ++k) {
+        char* end = nullptr;
+        out[k] = std::strtod(p, &end);
+        if (end == p) return false;
+        p = end;
+        while (*p == ' ' || *p == '\t' || *p == '\r') ++p;
+        if (k + 1 < count) {
+            if (*p != ',') return false;
+            ++p;
+        }
+    }
+    return *p == '\0';
+}
+
+// Unit direction from a user vector; ValueError for zero or non-finite vectors.
+Vec3 direction(const double* v, const std::string& where) {
+    const Vec3 d{v[0], v[1], v[2]};
+    const double n = length(d);
+    if (!std::isfinite(n) || n == 0.0) throw ValueError(where + ": direction must be a finite non-zero vector");
+    return (1.0 / n) * d;
+}
+
+void read_pairs(const std::string& path, std::vector<Vec3>& wi, std::vector<Vec3>& wo) {
+    std::ifstream in(path);
+    if (!in) throw IoError(path, "cannot open");
+    std::string line;
+    for (int lineno = 1; std::getline(in, line); ++lineno) {
+        if (line.find_first_not_of(" \t\r") == std::string::npos) continue;
+        double v[6];
+        if (!parse_numbers(line, v, 6)) {
+            if (lineno == 1) continue;  // a header line
+            throw FormatError(path + ":" + std::to_string(lineno), "expected 6 numbers wix,wiy,wiz,wox,woy,woz");
+        }
+        const std::string where = path + ":" + std::to_string(lineno);
+        wi.push_back(direction(v, where));
+        wo.push_back(direction(v + 3, where));
+    }
+    if (in.bad()) throw IoError(path, "read failed");
+}
+
+}  // namespace
+
+void add_eval(CLI::App& app) {
+    struct Args {
+        std::string file, wi, wo, pairs;
+        LoadOptions load;
+    };
+    auto args = std::make_shared<Args>();
+    CLI::App* cmd = app.add_subcommand("eval", "evaluate f (no cosine) at direction pairs; prints r,g,b per pair");
+    cmd->add_option("FILE", args->file, "input file")->required();
+    auto* wi = cmd->add_option("--wi", args->wi, "incident direction x,y,z (normalised)");
+    auto* wo = cmd->add_option("--wo", args->wo, "outgoing direction x,y,z (normalised)");
+    auto* pairs = cmd->add_option("--pairs", args->pairs, "CSV of wix,wiy,wiz,wox,woy,woz rows (header optional)");
+    wi->needs(wo);
+    wo->needs(wi);
+    pairs->excludes(wi)->excludes(wo);
+    add_load_options(cmd, args->load);
+    cmd->callback([args] {
+        std::vector<Vec3> wi, wo;
+        if (!args->pairs.empty()) {
+            read_pairs(args->pairs, wi, wo);
+        } else if (!args->wi.empty()) {
+            double a[3], b[3];
+            if (!parse_numbers(args->wi, a, 3)) throw ValueError("--wi: expected x,y,z");
+            if (!parse_numbers(args->wo, b, 3)) throw ValueError("--wo: expected x,y,z");
+            wi.push_back(direction(a, "--wi"));
+            wo.push_back(direction(b, "--wo"));
+        } else {
+            throw ValueError("eval: give --wi and --wo, or --pairs");
+        }
+        const Loaded loaded = load(args->file, args->load);
+        std::vector<Rgb> f(wi.size());
+        loaded.brdf->eval(wi, wo, f);
+        std::string out;
+        out.reserve(f.size() * 64);
+        for (const Rgb& v : f) out += number(v[0]) + "," + number(v[1]) + "," + number(v[2]) + "\n";
+        std::cout << out;
+    });
+}
+
+}  // namespace brdfz::cli

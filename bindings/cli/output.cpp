@@ -1,0 +1,120 @@
+#include "output.h"
+
+#include <unistd.h>
+
+#include <cmath>
+#include <cstdio>
+#include <iostream>
+#include <mutex>
+
+#include "brdfz/errors.h"
+
+namespace brdfz::cli {
+
+std::string number(double v, bool json) {
+    if (json && !std::isfinite(v)) return "null";
+    char buf[32];
+    std::snprintf(buf, sizeof buf, "%.17g", v);
+    return buf;
+}
+
+void JsonWriter::separate() {
+    if (after_key_) {
+        after_key_ = false;
+        return;
+    }
+    if (!first_.back()) os_ << ", ";
+    first_.back() = false;
+}
+
+JsonWriter& JsonWriter::begin_object() {
+    separate();
+    os_ << "{";
+    first_.push_back(true);
+    return *this;
+}
+JsonWriter& JsonWriter::end_object() {
+    first_.pop_back();
+    os_ << "}";
+    return *this;
+}
+JsonWriter& JsonWriter::begin_array() {
+    separate();
+    os_ << "[";
+    first_.push_back(true);
+    return *this;
+}
+JsonWriter& JsonWriter::end_array() {
+    first_.pop_back();
+    os_ << "]";
+    return *this;
+}
+JsonWriter& JsonWriter::key(const std::string& k) {
+    value(k);
+    os_ << ": ";
+    after_key_ = true;
+    return *this;
+}
+JsonWriter& JsonWriter::value(double v) {
+    separate();
+    os_ << number(v, true);
+    return *this;
+}
+JsonWriter& JsonWriter::value(std::size_t v) {
+    separate();
+    os_ << v;
+    return *this;
+}
+JsonWriter& JsonWriter::value(bool v) {
+    separate();
+    os_ << (v ? "true" : "false");
+    return *this;
+}
+JsonWriter& JsonWriter::value(const std::string& v) {
+    separate();
+    os_ << '"';
+    for (char c : v) {
+        if (c == '"' || c == '\\') {
+            os_ << '\\' << c;
+        } else if (static_cast<unsigned char>(c) < 0x20) {
+            char buf[8];
+            std::snprintf(buf, sizeof buf, "\\u%04x", c);
+            os_ << buf;
+        } else {
+            os_ << c;
+        }
+    }
+    os_ << '"';
+    return *this;
+}
+
+std::function<void(double)> progress_bar(const std::string& label) {
+    if (!::isatty(STDERR_FILENO)) return nullptr;
+    return [label, last = -1](double fraction) mutable {
+        const int pct = static_cast<int>(fraction * 100.0);
+        if (pct == last) return;
+        last = pct;
+        std::cerr << "\r" << label << " " << pct << "%" << (pct >= 100 ? "\n" : "") << std::flush;
+    };
+}
+
+void add_load_options(CLI::App* cmd, LoadOptions& options) {
+    cmd->add_option("--bin-position", options.position,
+                    "where table samples sit in their bins: centre (default) or start")
+        ->transform(CLI::CheckedTransformer(
+            std::map<std::string, BinPosition>{{"start", BinPosition::Start}, {"centre", BinPosition::Centre}}));
+    cmd->add_option("--lookup", options.lookup, "table lookup: nearest or linear")
+        ->transform(CLI::CheckedTransformer(
+            std::map<std::string, Lookup>{{"nearest", Lookup::Nearest}, {"linear", Lookup::Linear}}));
+}
+
+GridSpec parse_resolution(const std::string& text) {
+    GridSpec g;
+    char tail = 0;
+    if (std::sscanf(text.c_str(), "%dx%dx%d%c", &g.n_theta_h, &g.n_theta_d, &g.n_phi_d, &tail) != 3)
+        throw ValueError("resolution '" + text + "' is not of the form NHxNDxNP (e.g. 90x90x180)");
+    g.validate();
+    return g;
+}
+
+}  // namespace brdfz::cli

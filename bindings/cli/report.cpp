@@ -1,0 +1,101 @@
+#include "report.h"
+
+#include <cstdio>
+#include <numbers>
+
+#include "brdfz/albedo.h"
+#include "output.h"
+
+namespace brdfz::cli {
+namespace {
+
+std::string fixed(double v, const char* fmt = "%.6g") {
+    char buf[48];
+    std::snprintf(buf, sizeof buf, fmt, v);
+    return buf;
+}
+
+}  // namespace
+
+void print_info(const std::string& path, const Loaded& loaded, bool json, std::ostream& os) {
+    const SourceInfo& info = loaded.info;
+    Rgb albedo[std::size(kAlbedoAnglesDeg)];
+    for (std::size_t k = 0; k < std::size(kAlbedoAnglesDeg); ++k)
+        albedo[k] = directional_albedo(*loaded.brdf, kAlbedoAnglesDeg[k] * std::numbers::pi / 180.0);
+
+    if (json) {
+        JsonWriter j(os);
+        j.begin_object();
+        j.key("file").value(path);
+        j.key("format").value(info.format);
+        j.key("dims").begin_array();
+        for (std::size_t d : info.dims) j.value(d);
+        j.end_array();
+        j.key("valid").value(info.counts.valid);
+        j.key("negative").value(info.counts.negative);
+        j.key("nan").value(info.counts.nan);
+        j.key("inf").value(info.counts.inf);
+        j.key("min").value(info.min_value);
+        j.key("max").value(info.max_value);
+        j.key("nbytes").value(loaded.brdf->nbytes());
+        j.key("channels").value(static_cast<std::size_t>(loaded.brdf->channels()));
+        j.key("describe").value(loaded.brdf->describe());
+        j.key("albedo").begin_array();
+        for (std::size_t k = 0; k < std::size(kAlbedoAnglesDeg); ++k) {
+            j.begin_object();
+            j.key("theta_o_deg").value(kAlbedoAnglesDeg[k]);
+            j.key("r").value(albedo[k][0]).key("g").value(albedo[k][1]).key("b").value(albedo[k][2]);
+            j.end_object();
+        }
+        j.end_array();
+        j.end_object();
+        os << "\n";
+        return;
+    }
+    std::string dims;
+    for (std::size_t d : info.dims) dims += (dims.empty() ? "" : "x") + std::to_string(d);
+    os << path << "\n"
+       << "  format     " << info.format << "\n"
+       << "  dims       " << dims << "\n"
+       << "  stored as  " << loaded.brdf->describe() << "\n"
+       << "  nbytes     " << loaded.brdf->nbytes() << "\n"
+       << "  valid      " << info.counts.valid << "\n"
+       << "  negative   " << info.counts.negative << "\n"
+       << "  nan        " << info.counts.nan << "\n"
+       << "  inf        " << info.counts.inf << "\n"
+       << "  range      [" << fixed(info.min_value) << ", " << fixed(info.max_value) << "] 1/sr\n"
+       << "  albedo     theta_o      r        g        b\n";
+    for (std::size_t k = 0; k < std::size(kAlbedoAnglesDeg); ++k)
+        os << "             " << fixed(kAlbedoAnglesDeg[k], "%5.0f") << " deg  " << fixed(albedo[k][0], "%.4f") << "   "
+           << fixed(albedo[k][1], "%.4f") << "   " << fixed(albedo[k][2], "%.4f") << "\n";
+}
+
+void print_metrics(const Metrics& m, bool json, std::ostream& os) {
+    const std::pair<const char*, const PerChannel*> rows[] = {
+        {"cos_rmse", &m.cos_rmse}, {"cos_rmse_rel", &m.cos_rmse_rel}, {"log_rmse", &m.log_rmse}, {"cbrt_rmse", &m.cbrt_rmse}};
+    if (json) {
+        JsonWriter j(os);
+        j.begin_object();
+        for (const auto& [name, v] : rows) {
+            j.key(name).begin_object();
+            j.key("r").value(v->r).key("g").value(v->g).key("b").value(v->b).key("mean").value(v->mean);
+            j.end_object();
+        }
+        j.key("samples").value(m.samples);
+        j.key("negatives").value(m.negatives);
+        j.end_object();
+        os << "\n";
+        return;
+    }
+    os << "  metric         r            g            b            mean\n";
+    for (const auto& [name, v] : rows) {
+        char buf[128];
+        std::snprintf(buf, sizeof buf, "  %-13s  %-11.5g  %-11.5g  %-11.5g  %.5g\n", name, v->r, v->g, v->b, v->mean);
+        os << buf;
+    }
+    os << "  over " << m.samples << " bins (theta_i, theta_o < cut-off)";
+    if (m.negatives) os << "; " << m.negatives << " negative values taken as 0 by log_rmse";
+    os << "\n";
+}
+
+}  // namespace brdfz::cli

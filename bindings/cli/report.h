@@ -1,0 +1,18 @@
+// Reports printed by several subcommands (info and demo, diff and demo), as text or JSON.
+#pragma once
+
+#include <ostream>
+#include <string>
+
+#include "brdfz/formats/io.h"
+#include "brdfz/metrics.h"
+
+namespace brdfz::cli {
+
+// Directional albedo is reported at these view elevations (degrees).
+inline constexpr double kAlbedoAnglesDeg[] = {0.0, 30.0, 60.0, 80.0};
+
+void print_info(const std::string& path, const Loaded& loaded, bool json, std::ostream& os);
+void print_metrics(const Metrics& m, bool json, std::ostream& os);
+
+}  // namespace brdfz::cli

@@ -1,0 +1,124 @@
+#include <cmath>
+#include <limits>
+
+#include "brdfz/errors.h"
+#include "brdfz/formats/rgl.h"
+#include "tensor_file.h"
+
+namespace brdfz::rgl {
+namespace {
+
+using detail::DType;
+using detail::Field;
+using detail::TensorFile;
+
+std::string shape_str(const std::vector<std::uint64_t>& shape) {
+    std::string s;
+    for (std::size_t k = 0; k < shape.size(); ++k) s += (k ? "x" : "") + std::to_string(shape[k]);
+    return shape.empty() ? "scalar" : s;
+}
+
+// A field Mitsuba's `measured` plugin requires, with its dtype and rank; FormatError otherwise.
+const Field& require(const TensorFile& tf, const char* name, DType dtype, std::size_t rank) {
+    const Field* f = tf.find(name);
+    if (!f) throw FormatError(tf.path(), std::string("missing field '") + name + "'");
+    if (f->dtype != dtype || f->shape.size() != rank)
+        throw FormatError(tf.path(), std::string("field '") + name + "' is " + std::to_string(f->shape.size()) + "-d " +
+                                         detail::dtype_name(f->dtype) + ", expected " + std::to_string(rank) + "-d " +
+                                         detail::dtype_name(dtype));
+    return *f;
+}
+
+void expect_shape(const TensorFile& tf, const Field& f, const std::vector<std::uint64_t>& expected) {
+    if (f.shape != expected)
+        throw FormatError(tf.path(), "field '" + f.name + "' has shape " + shape_str(f.shape) + ", expected " +
+                                         shape_str(expected));
+}
+
+// A field whose last two dimensions are the rows and columns of its tables; the leading ones (at
+// most {1, θi count, 3}, checked by the caller) count the slices.
+Grids read_grids(const TensorFile& tf, const Field& f) {
+    Grids g;
+    const std::size_t rank = f.shape.size();
+    for (std::size_t k = 0; k + 2 < rank; ++k) g.slices *= f.shape[k];
+    g.rows = f.shape[rank - 2];
+    g.cols = f.shape[rank - 1];
+    g.values = tf.read_f32(f);
+    return g;
+}
+
+}  // namespace
+
+ReadResult read(const std::string& path) {
+    const TensorFile tf(path);
+
+    // Valid files this library does not handle; recognised before their shapes are checked,
+    // since they differ from the isotropic RGB layout.
+    if (tf.find("wavelengths") || tf.find("spectra"))
+        throw UnsupportedError(path, "spectral RGL file ('wavelengths'/'spectra' fields): only RGB files are supported");
+    if (const Field* iso = tf.find("isotropic")) {
+        const std::vector<std::uint8_t> flag = tf.read_u8(*iso);
+        if (flag.size() != 1) throw FormatError(path, "field 'isotropic' has shape " + shape_str(iso->shape) + ", expected 1");
+        if (flag[0] == 0) throw UnsupportedError(path, "anisotropic RGL file (isotropic flag is 0): only isotropic files are supported");
+    }
+    const Field& phi_i = require(tf, "phi_i", DType::F32, 1);
+    if (phi_i.shape[0] != 1)
+        throw UnsupportedError(path, "anisotropic RGL file (phi_i has " + std::to_string(phi_i.shape[0]) +
+                                         " entries): only isotropic files are supported");
+
+    const Field& description = require(tf, "description", DType::U8, 1);
+    const Field& jacobian = require(tf, "jacobian", DType::U8, 1);
+    const Field& theta_i = require(tf, "theta_i", DType::F32, 1);
+    const Field& ndf = require(tf, "ndf", DType::F32, 2);
+    const Field& sigma = require(tf, "sigma", DType::F32, 2);
+    const Field& vndf = require(tf, "vndf", DType::F32, 4);
+    const Field& luminance = require(tf, "luminance", DType::F32, 4);
+    const Field& rgb = require(tf, "rgb", DType::F32, 5);
+
+    const std::uint64_t n_theta = theta_i.shape[0];
+    if (n_theta == 0) throw FormatError(path, "field 'theta_i' is empty");
+    expect_shape(tf, jacobian, {1});
+    expect_shape(tf, vndf, {1, n_theta, vndf.shape[2], vndf.shape[3]});
+    expect_shape(tf, rgb, {1, n_theta, 3, rgb.shape[3], rgb.shape[3]});
+    // Unused here (it serves importance sampling), but Mitsuba rejects files where it does not match.
+    expect_shape(tf, luminance, {1, n_theta, rgb.shape[3], rgb.shape[4]});
+
+    ReadResult result;
+    for (std::uint64_t d : rgb.shape) result.dims.push_back(static_cast<std::size_t>(d));
+    const std::vector<std::uint8_t> text = tf.read_u8(description);
+    result.description.assign(text.begin(), text.end());
+    while (!result.description.empty() && result.description.back() == '\0') result.description.pop_back();
+
+    Tensors t;
+    t.theta_i = tf.read_f32(theta_i);
+    t.ndf = read_grids(tf, ndf);
+    t.sigma = read_grids(tf, sigma);
+    t.vndf = read_grids(tf, vndf);
+    t.rgb = read_grids(tf, rgb);
+    t.jacobian = tf.read_u8(jacobian)[0] != 0;
+
+    double lo = std::numeric_limits<double>::infinity(), hi = -lo;
+    for (float v : t.rgb.values) {
+        ValidityCounts& c = result.counts;
+        if (std::isnan(v)) {
+            ++c.nan;
+        } else if (std::isinf(v)) {
+            ++c.inf;
+        } else {
+            ++(v < 0.0f ? c.negative : c.valid);
+            lo = std::min<double>(lo, v);
+            hi = std::max<double>(hi, v);
+        }
+    }
+    result.min_value = lo <= hi ? lo : 0.0;
+    result.max_value = lo <= hi ? hi : 0.0;
+
+    try {
+        result.brdf = std::make_unique<RglBrdf>(std::move(t));
+    } catch (const ValueError& e) {
+        throw FormatError(path, e.what());
+    }
+    return result;
+}
+
+}  // namespace brdfz::rgl
