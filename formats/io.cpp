@@ -59,7 +59,9 @@ ValidityCounts save(const Brdf& brdf, const std::string& path, const SaveOptions
     const auto* table = dynamic_cast<const TabularBrdf*>(&brdf);
     if (table && (!options.grid || *options.grid == table->table().grid())) {
         merl::write(path, table->table());
-        return {.valid = table->table().valid_bins()};
+        ValidityCounts written;
+        written.valid = table->table().valid_bins();
+        return written;
     }
     TabulateOptions t;
     t.grid = options.grid.value_or(GridSpec{});
