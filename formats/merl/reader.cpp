@@ -75,6 +75,8 @@ ReadResult read(const std::string& path, BinPosition position) {
         result.counts.nan += (fl & kNan) != 0;
         result.counts.inf += (fl & kInf) != 0;
     }
+    if (result.counts.valid == 0)
+        throw FormatError(path, "no valid value in the MERL table (every bin is negative, NaN or Inf)");
     return result;
 }
 

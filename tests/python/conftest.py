@@ -1,0 +1,50 @@
+"""Shared fixtures: the built `brdfz` command, a small MERL table, and the real-data locations."""
+import os
+import pathlib
+import subprocess
+
+import pytest
+
+REPO = pathlib.Path(__file__).resolve().parents[2]
+SHARED = REPO.parent / "shared"
+
+
+@pytest.fixture(scope="session")
+def cli():
+    path = os.environ.get("BRDFZ_CLI")
+    if not path or not os.path.exists(path):
+        pytest.skip("BRDFZ_CLI is not set to the built brdfz command (run through ctest)")
+    return path
+
+
+def run(cli, *args, check=True):
+    """Run the CLI; returns the CompletedProcess (text mode)."""
+    proc = subprocess.run([cli, *map(str, args)], capture_output=True, text=True, timeout=300)
+    if check and proc.returncode != 0:
+        raise AssertionError(f"brdfz {' '.join(map(str, args))} failed ({proc.returncode}): {proc.stderr}")
+    return proc
+
+
+@pytest.fixture(scope="session")
+def demo_table(cli, tmp_path_factory):
+    """The demo's MERL table of the built-in material (no data files needed)."""
+    out = tmp_path_factory.mktemp("demo")
+    run(cli, "demo", "--out", out)
+    return out / "coated-diffuse.binary"
+
+
+@pytest.fixture(scope="session")
+def merl_tables():
+    d = os.environ.get("BRDFZ_MERL_DIR")
+    files = sorted(pathlib.Path(d).glob("*.binary")) if d and os.path.isdir(d) else []
+    if not files:
+        pytest.skip("no MERL tables generated from ../shared (missing ../shared or numpy)")
+    return files
+
+
+@pytest.fixture(scope="session")
+def rgl_files():
+    files = sorted((SHARED / "data" / "rgl").glob("*.bsdf"))
+    if not files:
+        pytest.skip("../shared/data/rgl is missing")
+    return files
