@@ -62,8 +62,9 @@ RglBrdf::~RglBrdf() = default;
 
 std::size_t RglBrdf::nbytes() const {
     const Tensors& t = tensors_;
-    return sizeof(float) *
-           (t.theta_i.size() + t.ndf.values.size() + t.sigma.values.size() + t.vndf.values.size() + t.rgb.values.size());
+    const std::size_t floats =
+        t.theta_i.size() + t.ndf.values.size() + t.sigma.values.size() + t.vndf.values.size() + t.rgb.values.size();
+    return sizeof(float) * floats;
 }
 
 std::string RglBrdf::describe() const {
@@ -82,6 +83,9 @@ void RglBrdf::eval_batch(const Vec3* wi, const Vec3* wo, Rgb* out, std::size_t n
 }
 
 Rgb RglBrdf::eval_one(const Vec3& wi, const Vec3& wo) const {
+    // Brdf::eval checks only z > 0; a NaN or infinite component has no meaningful value.
+    for (double v : {wi.x, wi.y, wi.z, wo.x, wo.y, wo.z})
+        if (!std::isfinite(v)) return {0.0, 0.0, 0.0};
     const Tensors& t = tensors_;
     const double theta_i = elevation(wi), phi_i = std::atan2(wi.y, wi.x);
     const Vec3 m = normalize(wi + wo);  // finite: both z > 0
@@ -110,7 +114,7 @@ Rgb RglBrdf::eval_one(const Vec3& wi, const Vec3& wo) const {
         const double v = detail::bilinear(detail::blend(t.rgb.values.data() + c * plane, 3 * plane, w), t.rgb.rows,
                                           t.rgb.cols, s) *
                          scale;
-        // A zero sigma, an empty VNDF row or a non-finite input direction would give Inf or NaN.
+        // A zero sigma, an empty VNDF row or a wo.z so small that f overflows would give Inf or NaN.
         f[c] = std::isfinite(v) ? v : 0.0;
     }
     return f;

@@ -79,7 +79,9 @@ inline double bilinear(const SliceBlend& t, std::size_t rows, std::size_t cols, 
 
 // Integral over the first fraction t of a segment of length `width` along which a function goes
 // linearly from v0 to v1.
-inline double partial_integral(double t, double width, double v0, double v1) { return t * lerp(v0, v1, 0.5 * t) * width; }
+inline double partial_integral(double t, double width, double v0, double v1) {
+    return t * lerp(v0, v1, 0.5 * t) * width;
+}
 
 // The 2D warp of a density given by a bilinearly interpolated table, one table per slice (Mitsuba's
 // Marginal2D with Continuous = true). Sampling inverts the marginal CDF of y, then the conditional
@@ -96,7 +98,8 @@ public:
         cond_.resize(slices * rows * (cols - 1));
         marg_.resize(slices * (rows - 1));
         std::vector<double> row_total(rows);
-        const double half_width = 0.5 / static_cast<double>(cols - 1), half_height = 0.5 / static_cast<double>(rows - 1);
+        const double half_width = 0.5 / static_cast<double>(cols - 1);
+        const double half_height = 0.5 / static_cast<double>(rows - 1);
         for (std::size_t s = 0; s < slices; ++s) {
             float* d = data_.data() + s * rows * cols;
             float* cond = cond_.data() + s * rows * (cols - 1);

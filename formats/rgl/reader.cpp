@@ -55,11 +55,15 @@ ReadResult read(const std::string& path) {
     // Valid files this library does not handle; recognised before their shapes are checked,
     // since they differ from the isotropic RGB layout.
     if (tf.find("wavelengths") || tf.find("spectra"))
-        throw UnsupportedError(path, "spectral RGL file ('wavelengths'/'spectra' fields): only RGB files are supported");
+        throw UnsupportedError(path, "spectral RGL file ('wavelengths'/'spectra' fields): only RGB files are "
+                                     "supported");
     if (const Field* iso = tf.find("isotropic")) {
         const std::vector<std::uint8_t> flag = tf.read_u8(*iso);
-        if (flag.size() != 1) throw FormatError(path, "field 'isotropic' has shape " + shape_str(iso->shape) + ", expected 1");
-        if (flag[0] == 0) throw UnsupportedError(path, "anisotropic RGL file (isotropic flag is 0): only isotropic files are supported");
+        if (flag.size() != 1)
+            throw FormatError(path, "field 'isotropic' has shape " + shape_str(iso->shape) + ", expected 1");
+        if (flag[0] == 0)
+            throw UnsupportedError(path, "anisotropic RGL file (isotropic flag is 0): only isotropic files are "
+                                         "supported");
     }
     const Field& phi_i = require(tf, "phi_i", DType::F32, 1);
     if (phi_i.shape[0] != 1)

@@ -134,7 +134,8 @@ const Field* TensorFile::find(std::string_view name) const {
 
 void TensorFile::read_at(std::uint64_t offset, void* out, std::uint64_t bytes) const {
     if (bytes == 0) return;
-    if (std::fseek(file_.get(), static_cast<long>(offset), SEEK_SET) != 0 || std::fread(out, 1, bytes, file_.get()) != bytes)
+    if (std::fseek(file_.get(), static_cast<long>(offset), SEEK_SET) != 0 ||
+        std::fread(out, 1, bytes, file_.get()) != bytes)
         throw IoError(path_, "read failed (file changed while reading?)");
 }
 

@@ -9,8 +9,8 @@
 // Direction mapping: the file's incident direction (the θi its tables are conditioned on) is our
 // `wi`, Mitsuba's `si.wi`. Mitsuba's eval returns f·cosθo; eval here returns f, that value / wo.z.
 // Like Mitsuba, nothing is clamped: real files hold slightly negative RGB values, and eval returns
-// slightly negative f_r where they dominate. Where the data would give a non-finite value (a zero
-// sigma, an empty VNDF row), eval returns 0 instead.
+// slightly negative f_r where they dominate. Where the result would not be finite (a zero sigma,
+// an empty VNDF row, f overflowing at wo.z → 0, a NaN or infinite direction), eval returns 0.
 #pragma once
 
 #include <cstddef>
