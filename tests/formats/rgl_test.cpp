@@ -1,0 +1,353 @@
+#include <catch2/catch.hpp>
+
+#include <cmath>
+#include <cstdint>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <limits>
+#include <map>
+#include <numbers>
+#include <random>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "brdfz/errors.h"
+#include "brdfz/formats/rgl.h"
+
+using namespace brdfz;
+namespace fs = std::filesystem;
+
+namespace {
+
+constexpr std::uint8_t kU8 = 1, kF32 = 10, kF64 = 11;
+
+struct FieldSpec {
+    std::string name;
+    std::uint8_t dtype;
+    std::vector<std::uint64_t> shape;
+    std::vector<unsigned char> data;
+};
+
+std::vector<unsigned char> f32(const std::vector<float>& v) {
+    std::vector<unsigned char> b;
+    for (float x : v) {
+        std::uint32_t u;
+        std::memcpy(&u, &x, 4);
+        for (int k = 0; k < 4; ++k) b.push_back(static_cast<unsigned char>(u >> (8 * k)));
+    }
+    return b;
+}
+
+std::vector<float> filled(std::size_t n, float v) { return std::vector<float>(n, v); }
+
+// A tensor_file image, with where each field's offset and shape sit in the header (for corrupting).
+struct Image {
+    std::vector<unsigned char> bytes;
+    std::map<std::string, std::size_t> offset_at, shape_at;
+    std::size_t header_size = 0;
+};
+
+// Little-endian integers, appended or overwritten in place.
+template <typename T>
+unsigned char byte_of(T v, std::size_t k) {
+    return static_cast<unsigned char>(static_cast<std::uint64_t>(v) >> (8 * k));
+}
+template <typename T>
+void put(std::vector<unsigned char>& b, T v) {
+    for (std::size_t k = 0; k < sizeof(T); ++k) b.push_back(byte_of(v, k));
+}
+template <typename T>
+void poke(std::vector<unsigned char>& b, std::size_t at, T v) {
+    for (std::size_t k = 0; k < sizeof(T); ++k) b[at + k] = byte_of(v, k);
+}
+std::vector<unsigned char> prefix(const std::vector<unsigned char>& b, std::size_t n) {
+    return {b.begin(), b.begin() + static_cast<std::ptrdiff_t>(n)};
+}
+
+Image serialize(const std::vector<FieldSpec>& fields) {
+    Image img;
+    std::vector<unsigned char>& b = img.bytes;
+    const char magic[] = "tensor_file";
+    b.assign(magic, magic + sizeof magic);  // including the NUL
+    b.push_back(1);
+    b.push_back(0);
+    put<std::uint32_t>(b, static_cast<std::uint32_t>(fields.size()));
+    std::size_t header = b.size();
+    for (const auto& f : fields) header += 2 + f.name.size() + 2 + 1 + 8 + 8 * f.shape.size();
+    img.header_size = header;
+    std::uint64_t offset = header;
+    for (const auto& f : fields) {
+        put<std::uint16_t>(b, static_cast<std::uint16_t>(f.name.size()));
+        b.insert(b.end(), f.name.begin(), f.name.end());
+        put<std::uint16_t>(b, static_cast<std::uint16_t>(f.shape.size()));
+        b.push_back(f.dtype);
+        img.offset_at[f.name] = b.size();
+        put<std::uint64_t>(b, offset);
+        img.shape_at[f.name] = b.size();
+        for (std::uint64_t d : f.shape) put<std::uint64_t>(b, d);
+        offset += f.data.size();
+    }
+    for (const auto& f : fields) b.insert(b.end(), f.data.begin(), f.data.end());
+    return img;
+}
+
+// A small valid isotropic RGB file: constant densities (so the VNDF warp is the identity and
+// ndf / (4·sigma) = 1/4) and constant colours 0.1, 0.2, 0.3, hence f·cosθo = 0.025, 0.05, 0.075.
+std::vector<FieldSpec> synthetic_fields() {
+    std::vector<float> rgb;
+    for (int t = 0; t < 2; ++t)
+        for (int c = 0; c < 3; ++c)
+            for (int k = 0; k < 16; ++k) rgb.push_back(0.1f * static_cast<float>(c + 1));
+    const std::string desc = "synthetic";
+    return {
+        {"description", kU8, {desc.size()}, {desc.begin(), desc.end()}},
+        {"phi_i", kF32, {1}, f32({0.0f})},
+        {"theta_i", kF32, {2}, f32({0.0f, 1.5707964f})},
+        {"sigma", kF32, {2, 4}, f32(filled(8, 1.0f))},
+        {"ndf", kF32, {2, 4}, f32(filled(8, 1.0f))},
+        {"vndf", kF32, {1, 2, 4, 4}, f32(filled(32, 1.0f))},
+        {"luminance", kF32, {1, 2, 4, 4}, f32(filled(32, 1.0f))},
+        {"rgb", kF32, {1, 2, 3, 4, 4}, f32(rgb)},
+        {"jacobian", kU8, {1}, {1}},
+    };
+}
+
+FieldSpec& field(std::vector<FieldSpec>& fields, const std::string& name) {
+    for (auto& f : fields)
+        if (f.name == name) return f;
+    throw std::logic_error("test bug: no field " + name);
+}
+
+class TempDir {
+public:
+    TempDir() : path_(fs::temp_directory_path() / ("brdfz_rgl_test_" + std::to_string(std::random_device{}()))) {
+        fs::create_directories(path_);
+    }
+    ~TempDir() {
+        std::error_code ec;
+        fs::remove_all(path_, ec);
+    }
+    std::string write(const std::string& name, const std::vector<unsigned char>& bytes) const {
+        const std::string p = (path_ / name).string();
+        std::ofstream(p, std::ios::binary)
+            .write(reinterpret_cast<const char*>(bytes.data()), static_cast<std::streamsize>(bytes.size()));
+        return p;
+    }
+
+private:
+    fs::path path_;
+};
+
+Vec3 random_upper(std::mt19937_64& rng) {
+    std::uniform_real_distribution<double> u(0.0, 1.0);
+    return spherical_direction(std::acos(u(rng)), 2 * std::numbers::pi * u(rng));
+}
+
+bool all_finite(const Rgb& f) { return std::isfinite(f[0]) && std::isfinite(f[1]) && std::isfinite(f[2]); }
+
+}  // namespace
+
+TEST_CASE("rgl: synthetic file loads and evaluates analytically", "[rgl]") {
+    TempDir dir;
+    const auto r = rgl::read(dir.write("ok.bsdf", serialize(synthetic_fields()).bytes));
+    CHECK(r.description == "synthetic");
+    CHECK(r.dims == std::vector<std::size_t>{1, 2, 3, 4, 4});
+    CHECK(r.counts.valid == 96);
+    CHECK(r.counts.negative + r.counts.nan + r.counts.inf == 0);
+    CHECK(r.min_value == Approx(0.1));
+    CHECK(r.max_value == Approx(0.3));
+    CHECK(r.brdf->channels() == 3);
+    CHECK(r.brdf->nbytes() == 4 * (2 + 8 + 8 + 32 + 96));
+
+    std::mt19937_64 rng(3);
+    for (int k = 0; k < 1000; ++k) {
+        const Vec3 wi = random_upper(rng), wo = random_upper(rng);
+        const Rgb f = r.brdf->eval(wi, wo);
+        for (int c = 0; c < 3; ++c) CHECK(f[c] * wo.z == Approx(0.025 * (c + 1)).epsilon(1e-6));
+    }
+}
+
+TEST_CASE("rgl: invalid files are rejected with FormatError or IoError", "[rgl]") {
+    TempDir dir;
+    const auto fields = synthetic_fields();
+    const Image good = serialize(fields);
+    const auto rejects = [&](const std::string& name, const std::vector<unsigned char>& bytes) {
+        INFO(name);
+        CHECK_THROWS_AS(rgl::read(dir.write(name, bytes)), FormatError);
+    };
+
+    CHECK_THROWS_AS(rgl::read((fs::temp_directory_path() / "brdfz_no_such_file.bsdf").string()), IoError);
+    rejects("empty", {});
+
+    auto bytes = good.bytes;
+    bytes[0] = 'T';
+    rejects("wrong magic", bytes);
+
+    bytes = good.bytes;
+    bytes[12] = 2;
+    rejects("wrong version", bytes);
+
+    bytes = good.bytes;
+    poke<std::uint32_t>(bytes, 14, 0xFFFFFFFFu);
+    rejects("absurd field count", bytes);
+
+    rejects("truncated header", prefix(good.bytes, good.header_size / 2));
+    rejects("truncated field data", prefix(good.bytes, good.bytes.size() - 1));
+
+    bytes = good.bytes;
+    poke<std::uint64_t>(bytes, good.offset_at.at("rgb"), bytes.size() + 8);
+    rejects("field offset past EOF", bytes);
+
+    bytes = good.bytes;
+    poke<std::uint64_t>(bytes, good.offset_at.at("vndf"), ~std::uint64_t{0} - 3);
+    rejects("field offset near 2^64", bytes);
+
+    bytes = good.bytes;
+    poke<std::uint64_t>(bytes, good.shape_at.at("rgb") + 8 * 3, std::uint64_t{1} << 62);
+    rejects("absurd shape", bytes);
+
+    bytes = good.bytes;
+    for (int d = 0; d < 4; ++d) poke<std::uint64_t>(bytes, good.shape_at.at("vndf") + 8 * d, std::uint64_t{1} << 32);
+    rejects("shape product overflowing 2^64", bytes);
+
+    auto edited = fields;
+    edited.erase(edited.begin() + 4);  // ndf
+    rejects("missing field", serialize(edited).bytes);
+
+    edited = fields;
+    edited.erase(edited.begin() + 7);  // rgb, with no sign of spectral data
+    rejects("missing rgb", serialize(edited).bytes);
+
+    edited = fields;
+    edited.push_back(field(edited, "ndf"));
+    rejects("duplicate field", serialize(edited).bytes);
+
+    edited = fields;
+    field(edited, "rgb").dtype = kF64;
+    field(edited, "rgb").data.resize(2 * field(edited, "rgb").data.size());
+    rejects("rgb as float64", serialize(edited).bytes);
+
+    edited = fields;
+    field(edited, "rgb").shape = {1, 2, 4, 4, 3};
+    rejects("rgb with 4 channels", serialize(edited).bytes);
+
+    edited = fields;
+    field(edited, "theta_i").data = f32({1.0f, 0.5f});
+    rejects("theta_i decreasing", serialize(edited).bytes);
+
+    edited = fields;
+    field(edited, "vndf").data = f32(filled(32, 0.0f));
+    rejects("vndf integrating to 0", serialize(edited).bytes);
+
+    edited = fields;
+    field(edited, "ndf").data = f32({1, 1, 1, 1, 1, 1, 1, std::numeric_limits<float>::quiet_NaN()});
+    rejects("NaN in ndf", serialize(edited).bytes);
+
+    edited = fields;
+    field(edited, "sigma").shape = {1, 8};
+    rejects("sigma with a single row", serialize(edited).bytes);
+
+    // Every proper prefix of a valid file: the last field's data always ends past EOF.
+    for (std::size_t n = 0; n < good.bytes.size(); n += 7)
+        rejects("prefix " + std::to_string(n), prefix(good.bytes, n));
+}
+
+TEST_CASE("rgl: anisotropic and spectral files are UnsupportedError", "[rgl]") {
+    TempDir dir;
+    auto fields = synthetic_fields();
+    field(fields, "phi_i") = {"phi_i", kF32, {2}, f32({0.0f, 3.14159f})};
+    CHECK_THROWS_AS(rgl::read(dir.write("aniso.bsdf", serialize(fields).bytes)), UnsupportedError);
+
+    fields = synthetic_fields();
+    fields.push_back({"isotropic", kU8, {1}, {0}});
+    CHECK_THROWS_AS(rgl::read(dir.write("aniso_flag.bsdf", serialize(fields).bytes)), UnsupportedError);
+
+    fields = synthetic_fields();
+    field(fields, "rgb") = {"spectra", kF32, {1, 2, 4, 4, 4}, f32(filled(128, 0.5f))};
+    fields.push_back({"wavelengths", kF32, {4}, f32({400, 500, 600, 700})});
+    CHECK_THROWS_AS(rgl::read(dir.write("spectral.bsdf", serialize(fields).bytes)), UnsupportedError);
+}
+
+TEST_CASE("rgl: non-finite and negative rgb values are counted, eval stays finite", "[rgl]") {
+    TempDir dir;
+    auto fields = synthetic_fields();
+    std::vector<float> rgb(96, 0.2f);
+    rgb[0] = std::numeric_limits<float>::quiet_NaN();
+    rgb[1] = std::numeric_limits<float>::infinity();
+    rgb[2] = -0.01f;
+    field(fields, "rgb").data = f32(rgb);
+    const auto r = rgl::read(dir.write("nan.bsdf", serialize(fields).bytes));
+    CHECK(r.counts.nan == 1);
+    CHECK(r.counts.inf == 1);
+    CHECK(r.counts.negative == 1);
+    CHECK(r.counts.valid == 93);
+    CHECK(r.min_value == Approx(-0.01));
+    std::mt19937_64 rng(5);
+    for (int k = 0; k < 1000; ++k) CHECK(all_finite(r.brdf->eval(random_upper(rng), random_upper(rng))));
+}
+
+TEST_CASE("rgl: corrupted bytes never crash the reader", "[rgl]") {
+    TempDir dir;
+    const Image good = serialize(synthetic_fields());
+    std::mt19937_64 rng(11);
+    std::uniform_int_distribution<std::size_t> pos(0, good.header_size - 1);
+    std::uniform_int_distribution<int> byte(0, 255);
+    std::size_t loaded = 0;
+    for (int k = 0; k < 500; ++k) {
+        auto bytes = good.bytes;
+        for (int flips = 0; flips < 3; ++flips) bytes[pos(rng)] = static_cast<unsigned char>(byte(rng));
+        try {
+            const auto r = rgl::read(dir.write("fuzz.bsdf", bytes));
+            ++loaded;
+            CHECK(all_finite(r.brdf->eval(random_upper(rng), random_upper(rng))));
+        } catch (const Error&) {
+        }
+    }
+    CHECK(loaded < 500);
+}
+
+TEST_CASE("rgl: shared RGL-EPFL files load and evaluate", "[rgl]") {
+    const fs::path dir = fs::path(BRDFZ_SHARED_DIR) / "data" / "rgl";
+    if (!fs::is_directory(dir)) {
+        WARN("skipped: ../shared missing");
+        return;
+    }
+    std::size_t files = 0;
+    for (const auto& entry : fs::directory_iterator(dir)) {
+        if (entry.path().extension() != ".bsdf") continue;
+        ++files;
+        INFO(entry.path().string());
+        const auto r = rgl::read(entry.path().string());
+        REQUIRE(r.dims.size() == 5);
+        CHECK(r.dims[0] == 1);
+        CHECK(r.dims[2] == 3);
+        CHECK(r.dims[3] == r.dims[4]);
+        const std::size_t n = r.dims[0] * r.dims[1] * r.dims[2] * r.dims[3] * r.dims[4];
+        CHECK(r.counts.valid + r.counts.negative == n);
+        CHECK(r.counts.nan + r.counts.inf == 0);
+        CHECK(r.counts.negative < n / 10);  // a few slightly negative values, as measured
+        CHECK(r.min_value > -0.1);
+        CHECK(r.max_value > 0.0);
+        CHECK(!r.description.empty());
+
+        std::mt19937_64 rng(17);
+        std::vector<Vec3> wi, wo;
+        for (int k = 0; k < 2000; ++k) {
+            wi.push_back(random_upper(rng));
+            wo.push_back(random_upper(rng));
+        }
+        std::vector<Rgb> batch(wi.size());
+        r.brdf->eval(wi, wo, batch);
+        for (std::size_t k = 0; k < wi.size(); ++k) {
+            const Rgb f = r.brdf->eval(wi[k], wo[k]);
+            CHECK(all_finite(f));
+            CHECK(f == batch[k]);
+            const Vec3 below{wo[k].x, wo[k].y, -wo[k].z};
+            CHECK(r.brdf->eval(wi[k], below) == Rgb{0, 0, 0});
+            CHECK(r.brdf->eval(below, wi[k]) == Rgb{0, 0, 0});
+        }
+    }
+    CHECK(files > 0);
+}
