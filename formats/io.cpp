@@ -7,6 +7,7 @@
 
 #include "brdfz/errors.h"
 #include "brdfz/formats/merl.h"
+#include "brdfz/formats/rgl.h"
 #include "brdfz/tabulate.h"
 
 namespace brdfz {
@@ -38,6 +39,18 @@ Loaded load_merl(const std::string& path, const LoadOptions& options) {
     return out;
 }
 
+Loaded load_rgl(const std::string& path) {
+    rgl::ReadResult r = rgl::read(path);
+    Loaded out;
+    out.info.format = "rgl";
+    out.info.dims = std::move(r.dims);
+    out.info.counts = r.counts;
+    out.info.min_value = r.min_value;
+    out.info.max_value = r.max_value;
+    out.brdf = std::move(r.brdf);
+    return out;
+}
+
 }  // namespace
 
 std::string format_of(const std::string& path) {
@@ -50,6 +63,7 @@ std::string format_of(const std::string& path) {
 Loaded load(const std::string& path, const LoadOptions& options) {
     const std::string format = format_of(path);
     if (format == "merl") return load_merl(path, options);
+    if (format == "rgl") return load_rgl(path);
     throw UnsupportedError(path, "reading " + format + " files is not supported");
 }
 

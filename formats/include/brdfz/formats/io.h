@@ -19,8 +19,10 @@ namespace brdfz {
 struct SourceInfo {
     std::string format;              // "merl", "rgl"
     std::vector<std::size_t> dims;   // the stored array's shape
-    ValidityCounts counts;           // bins (MERL) or stored values (RGL) by class
-    double min_value = 0, max_value = 0;  // range of the valid values, f_r in 1/sr
+    // MERL: bins by class, range of f_r in 1/sr. RGL: the stored `rgb` tensor's values by class and
+    // their range, in the file's units (f·cosθo over the warped domain, before the Jacobian).
+    ValidityCounts counts;
+    double min_value = 0, max_value = 0;
 };
 
 struct Loaded {
