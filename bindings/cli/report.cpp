@@ -63,7 +63,8 @@ void print_info(const std::string& path, const Loaded& loaded, bool json, std::o
        << "  negative   " << info.counts.negative << "\n"
        << "  nan        " << info.counts.nan << "\n"
        << "  inf        " << info.counts.inf << "\n"
-       << "  range      [" << fixed(info.min_value) << ", " << fixed(info.max_value) << "] 1/sr\n"
+       << "  range      [" << fixed(info.min_value) << ", " << fixed(info.max_value) << "]"
+       << (info.format == "merl" ? " 1/sr\n" : " (stored values)\n")
        << "  albedo     theta_o      r        g        b\n";
     for (std::size_t k = 0; k < std::size(kAlbedoAnglesDeg); ++k)
         os << "             " << fixed(kAlbedoAnglesDeg[k], "%5.0f") << " deg  " << fixed(albedo[k][0], "%.4f") << "   "
