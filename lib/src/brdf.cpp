@@ -1,5 +1,8 @@
 #include "brdfz/brdf.h"
 
+#include <cmath>
+#include <numbers>
+
 #include "brdfz/errors.h"
 
 namespace brdfz {
@@ -28,5 +31,46 @@ void Brdf::eval_cos(std::span<const Vec3> wi, std::span<const Vec3> wo, std::spa
 void Brdf::eval_batch(const Vec3* wi, const Vec3* wo, Rgb* out, std::size_t n) const {
     for (std::size_t k = 0; k < n; ++k) out[k] = eval(wi[k], wo[k]);
 }
+
+BrdfSample Brdf::sample(const Vec3& wo, double u1, double u2) const {
+    if (!(wo.z > 0.0 && u1 >= 0.0 && u1 < 1.0 && u2 >= 0.0 && u2 < 1.0)) return {};
+    BrdfSample s = sample_above(wo, u1, u2);
+    if (!(s.wi.z > 0.0 && s.pdf > 0.0 && std::isfinite(s.pdf))) return {};
+    // A sampler that knows f sets the weight itself; otherwise evaluate it.
+    if (s.weight == Rgb{0.0, 0.0, 0.0}) {
+        s.weight = eval_above(s.wi, wo);
+        for (double& c : s.weight) c *= s.wi.z / s.pdf;
+    }
+    return s;
+}
+
+double Brdf::pdf(const Vec3& wo, const Vec3& wi) const {
+    if (!(wo.z > 0.0 && wi.z > 0.0)) return 0.0;
+    return pdf_above(wo, wi);
+}
+
+void Brdf::sample(std::span<const Vec3> wo, std::span<const std::array<double, 2>> u,
+                  std::span<BrdfSample> out) const {
+    if (wo.size() != u.size() || wo.size() != out.size())
+        throw ValueError("sample: batch sizes differ (wo " + std::to_string(wo.size()) + ", u " +
+                         std::to_string(u.size()) + ", out " + std::to_string(out.size()) + ")");
+    for (std::size_t k = 0; k < wo.size(); ++k) out[k] = sample(wo[k], u[k][0], u[k][1]);
+}
+
+void Brdf::pdf(std::span<const Vec3> wo, std::span<const Vec3> wi, std::span<double> out) const {
+    if (wo.size() != wi.size() || wo.size() != out.size())
+        throw ValueError("pdf: batch sizes differ (wo " + std::to_string(wo.size()) + ", wi " +
+                         std::to_string(wi.size()) + ", out " + std::to_string(out.size()) + ")");
+    for (std::size_t k = 0; k < wo.size(); ++k) out[k] = pdf(wo[k], wi[k]);
+}
+
+BrdfSample Brdf::sample_above(const Vec3&, double u1, double u2) const {
+    // Malley's method: a uniform point on the unit disk lifted to the hemisphere.
+    const double r = std::sqrt(u1), phi = 2.0 * std::numbers::pi * u2;
+    const Vec3 wi{r * std::cos(phi), r * std::sin(phi), std::sqrt(std::fmax(0.0, 1.0 - u1))};
+    return {wi, wi.z / std::numbers::pi, {}};
+}
+
+double Brdf::pdf_above(const Vec3&, const Vec3& wi) const { return wi.z / std::numbers::pi; }
 
 }  // namespace brdfz

@@ -9,8 +9,10 @@
 //  - Polar angles come from elevation() in frame.h (2·asin(½‖v − ẑ‖)), not acos(z).
 //  - Colour: three channels, linear RGB. Monochrome data has channels() == 1 and repeats its value
 //    in all three channels, so callers never branch on the channel count.
-//  - Sampling (added with the samplers): sample(wo, u) → {wi, pdf, weight = f·cosθi/pdf};
-//    pdf(wo, wi) is per unit solid angle of wi.
+//  - Sampling: sample(wo, u1, u2) → {wi, pdf, weight = f·cosθi/pdf}; pdf(wo, wi) is per unit solid
+//    angle of wi and equals the density sample() draws from. A failed sample (wo below the horizon,
+//    u outside [0, 1), a direction drawn below the horizon) has pdf 0 and weight 0. Representations
+//    without a sampler of their own use cosine-weighted hemisphere sampling.
 #pragma once
 
 #include <array>
@@ -23,6 +25,12 @@
 namespace brdfz {
 
 using Rgb = std::array<double, 3>;
+
+struct BrdfSample {
+    Vec3 wi;
+    double pdf = 0;  // per unit solid angle of wi; 0 marks a failed sample
+    Rgb weight{};    // f(wi, wo)·cosθi / pdf; 0 for a failed sample
+};
 
 class Brdf {
 public:
@@ -41,6 +49,14 @@ public:
     void eval(std::span<const Vec3> wi, std::span<const Vec3> wo, std::span<Rgb> out) const;
     void eval_cos(std::span<const Vec3> wi, std::span<const Vec3> wo, std::span<Rgb> out) const;
 
+    // Draw wi for a given wo from u1, u2 in [0, 1).
+    BrdfSample sample(const Vec3& wo, double u1, double u2) const;
+    // Density of sample(wo, ·) at wi, per unit solid angle; 0 below the horizon.
+    double pdf(const Vec3& wo, const Vec3& wi) const;
+    // Batches: out[k] = sample(wo[k], u[k][0], u[k][1]) / pdf(wo[k], wi[k]); equal lengths or ValueError.
+    void sample(std::span<const Vec3> wo, std::span<const std::array<double, 2>> u, std::span<BrdfSample> out) const;
+    void pdf(std::span<const Vec3> wo, std::span<const Vec3> wi, std::span<double> out) const;
+
     // 1 (monochrome) or 3 (RGB).
     virtual int channels() const = 0;
     // Exact size in bytes of the parameters the representation stores (not of the C++ object).
@@ -53,6 +69,12 @@ protected:
     virtual Rgb eval_above(const Vec3& wi, const Vec3& wo) const = 0;
     // Batch kernel over n pairs; must write 0 for below-horizon pairs. The default loops over eval().
     virtual void eval_batch(const Vec3* wi, const Vec3* wo, Rgb* out, std::size_t n) const;
+    // Sampler for wo above the horizon and u in [0, 1)²: returns wi and its pdf; sample() fills in
+    // the weight (overrides may set it when they have f at hand) and rejects wi below the horizon.
+    // The default draws cosθi/π.
+    virtual BrdfSample sample_above(const Vec3& wo, double u1, double u2) const;
+    // Density for wo and wi above the horizon, consistent with sample_above. Default cosθi/π.
+    virtual double pdf_above(const Vec3& wo, const Vec3& wi) const;
 };
 
 }  // namespace brdfz
