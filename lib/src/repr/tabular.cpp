@@ -1,6 +1,7 @@
 #include "brdfz/repr/tabular.h"
 
 #include <cmath>
+#include <memory>
 
 #include "brdfz/coords.h"
 #include "brdfz/errors.h"
@@ -115,5 +116,15 @@ void TabularBrdf::eval_batch(const Vec3* wi, const Vec3* wo, Rgb* out, std::size
             out[k] = wi[k].z > 0.0 && wo[k].z > 0.0 ? lookup_linear(table_, wi[k], wo[k]) : zero;
     }
 }
+
+const HalfVectorSampler& TabularBrdf::sampler() const {
+    return sampler_.get([this] { return std::make_unique<HalfVectorSampler>(*this); });
+}
+
+BrdfSample TabularBrdf::sample_above(const Vec3& wo, double u1, double u2) const {
+    return sampler().sample(wo, u1, u2);
+}
+
+double TabularBrdf::pdf_above(const Vec3& wo, const Vec3& wi) const { return sampler().pdf(wo, wi); }
 
 }  // namespace brdfz

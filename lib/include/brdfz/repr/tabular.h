@@ -4,6 +4,8 @@
 #include <string>
 
 #include "brdfz/brdf.h"
+#include "brdfz/sample/halfvector.h"
+#include "brdfz/sample/lazy.h"
 #include "brdfz/table.h"
 
 namespace brdfz {
@@ -22,7 +24,12 @@ public:
 
     const Table& table() const { return table_; }
     Lookup lookup() const { return lookup_; }
-    void set_lookup(Lookup lookup) { lookup_ = lookup; }
+    void set_lookup(Lookup lookup) {
+        lookup_ = lookup;
+        sampler_.reset();  // built from eval, which depends on the lookup
+    }
+    // The importance sampler, built from the table on first use.
+    const HalfVectorSampler& sampler() const;
 
     int channels() const override { return 3; }
     std::size_t nbytes() const override { return table_.bins() * 3 * sizeof(float); }
@@ -31,10 +38,13 @@ public:
 protected:
     Rgb eval_above(const Vec3& wi, const Vec3& wo) const override;
     void eval_batch(const Vec3* wi, const Vec3* wo, Rgb* out, std::size_t n) const override;
+    BrdfSample sample_above(const Vec3& wo, double u1, double u2) const override;
+    double pdf_above(const Vec3& wo, const Vec3& wi) const override;
 
 private:
     Table table_;
     Lookup lookup_;
+    Lazy<HalfVectorSampler> sampler_;
 };
 
 }  // namespace brdfz

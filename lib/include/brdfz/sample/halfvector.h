@@ -1,0 +1,54 @@
+// Data-driven importance sampling for any isotropic Brdf, with an exact pdf.
+//
+// For K view elevations θo_k, the integrand f(wi, wo_k)·cosθi, pulled back to half vectors, is
+// tabulated as a piecewise-constant distribution (Piecewise2D) over x = |φh − φo| / π (isotropy makes
+// it symmetric about the plane of wo) and y = √(θh / (π/2)), MERL's square-root axis, which puts
+// cells where specular peaks are. A given wo picks one of its two neighbouring slices at random with
+// linear weights in θo, draws h, and reflects wo about h. The pdf of wi is the blended slice density
+// times the Jacobians (dωh = 2π² y sinθh dx dy over both signs of φ; dωi = 4 (wo·h) dωh), mixed with a
+// small share of cosine-weighted sampling so that the pdf is positive wherever f·cos might be.
+#pragma once
+
+#include <vector>
+
+#include "brdfz/brdf.h"
+#include "brdfz/sample/piecewise2d.h"
+
+namespace brdfz {
+
+struct HalfVectorSamplerOptions {
+    int n_theta_o = 32;       // view-elevation slices over [0°, kMaxThetaODeg]
+    int n_theta_h = 64;       // cells along y = √(θh / (π/2))
+    int n_phi = 64;           // cells along |φh − φo| ∈ [0, π]
+    double cosine_share = 0.1;  // probability of a cosine-weighted sample (defensive mixture)
+    int threads = 0;          // 0: one per hardware thread, for building
+};
+
+class HalfVectorSampler {
+public:
+    static constexpr double kMaxThetaODeg = 89.5;
+
+    HalfVectorSampler(const Brdf& brdf, const HalfVectorSamplerOptions& options = {});
+
+    // For wo above the horizon and u in [0, 1)²: wi and its pdf (pdf 0 when wi falls below the horizon).
+    BrdfSample sample(const Vec3& wo, double u1, double u2) const;
+    // Density of sample() at wi, per unit solid angle, for wo and wi above the horizon.
+    double pdf(const Vec3& wo, const Vec3& wi) const;
+
+    std::size_t nbytes() const;
+
+private:
+    // The two slices around wo's elevation and the weight of the upper one.
+    struct SlicePair {
+        int k0, k1;
+        double t;
+    };
+    SlicePair slices_for(double theta_o) const;
+    double data_pdf(const Vec3& wo, const Vec3& wi) const;
+
+    HalfVectorSamplerOptions options_;
+    std::vector<double> theta_o_;
+    std::vector<Piecewise2D> slices_;
+};
+
+}  // namespace brdfz

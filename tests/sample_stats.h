@@ -1,0 +1,132 @@
+// Statistical checks of samplers (as pbrt's and Mitsuba's tests do): a χ² goodness-of-fit test of
+// sampled directions against the pdf, and the integral of the pdf over the hemisphere.
+// Both work in half-vector coordinates relative to wo — y = √(θh/(π/2)), x = (φh − φo)/2π + ½ — where
+// specular peaks are wide, and integrate the pdf with the Jacobian dωi = 4 (wo·h) · π y sinθh · 2π dx dy.
+#pragma once
+
+#include <cmath>
+#include <random>
+#include <vector>
+
+#include "brdfz/brdf.h"
+#include "brdfz/coords.h"
+
+namespace brdfz::test {
+
+struct HalfCoords {
+    double x, y;
+};
+
+inline HalfCoords half_coords(const Vec3& wo, const Vec3& wi) {
+    const Vec3 h = half_vector(wi, wo);
+    const double phi_o = std::atan2(wo.y, wo.x);
+    double x = (std::atan2(h.y, h.x) - phi_o) / (2 * M_PI) + 0.5;
+    x -= std::floor(x);
+    return {x, std::sqrt(elevation(h) / (M_PI / 2))};
+}
+
+// wi for half-vector coordinates, and the Jacobian dωi / dx dy (0 where wi is below the horizon).
+inline Vec3 wi_at(const Vec3& wo, double x, double y, double* jacobian) {
+    const double phi_o = std::atan2(wo.y, wo.x), theta_h = M_PI / 2 * y * y;
+    const Vec3 h = spherical_direction(theta_h, phi_o + (x - 0.5) * 2 * M_PI);
+    const Vec3 wi = (2 * dot(wo, h)) * h - wo;
+    *jacobian = wi.z > 0 ? 4 * dot(wo, h) * M_PI * y * std::sin(theta_h) * 2 * M_PI : 0.0;
+    return wi;
+}
+
+// ∫ pdf(wo, wi) dωi over the upper hemisphere, by a midpoint rule with n×n points per unit square.
+inline double pdf_integral(const Brdf& b, const Vec3& wo, int n = 1024) {
+    double sum = 0;
+    for (int i = 0; i < n; ++i)
+        for (int j = 0; j < n; ++j) {
+            double jac;
+            const Vec3 wi = wi_at(wo, (i + 0.5) / n, (j + 0.5) / n, &jac);
+            if (jac > 0) sum += b.pdf(wo, wi) * jac;
+        }
+    return sum / (double(n) * n);
+}
+
+// Regularised upper incomplete gamma Q(a, x): series below a + 1, continued fraction above.
+inline double gamma_q(double a, double x) {
+    if (x <= 0) return 1.0;
+    const double lg = std::lgamma(a);
+    if (x < a + 1) {
+        double sum = 1.0 / a, term = sum;
+        for (int n = 1; n < 1000; ++n) {
+            term *= x / (a + n);
+            sum += term;
+            if (std::fabs(term) < std::fabs(sum) * 1e-15) break;
+        }
+        return 1.0 - sum * std::exp(-x + a * std::log(x) - lg);
+    }
+    double b = x + 1 - a, c = 1e300, d = 1 / b, h = d;  // modified Lentz
+    for (int i = 1; i < 1000; ++i) {
+        const double an = -i * (i - a);
+        b += 2;
+        d = an * d + b;
+        if (std::fabs(d) < 1e-300) d = 1e-300;
+        c = b + an / c;
+        if (std::fabs(c) < 1e-300) c = 1e-300;
+        d = 1 / d;
+        const double del = d * c;
+        h *= del;
+        if (std::fabs(del - 1) < 1e-15) break;
+    }
+    return std::exp(-x + a * std::log(x) - lg) * h;
+}
+
+struct Chi2Result {
+    double p_value;
+    int dof;
+    std::size_t failed;  // samples with pdf 0
+};
+
+// Histogram of `samples` sampled wi against expected counts from the pdf on a cells×cells grid in
+// half-vector coordinates; cells with expected count < 5 are pooled.
+inline Chi2Result chi2_test(const Brdf& b, const Vec3& wo, std::size_t samples, int cells = 32,
+                            std::uint64_t seed = 1) {
+    std::vector<double> observed(cells * cells, 0.0), expected(cells * cells, 0.0);
+    std::mt19937_64 rng(seed);
+    std::uniform_real_distribution<double> u(0.0, 1.0);
+    std::size_t failed = 0;
+    for (std::size_t k = 0; k < samples; ++k) {
+        const BrdfSample s = b.sample(wo, u(rng), u(rng));
+        if (s.pdf == 0) {
+            ++failed;
+            continue;
+        }
+        const HalfCoords c = half_coords(wo, s.wi);
+        const int i = std::min(int(c.x * cells), cells - 1), j = std::min(int(c.y * cells), cells - 1);
+        observed[j * cells + i] += 1;
+    }
+    const int sub = 16;
+    for (int j = 0; j < cells; ++j)
+        for (int i = 0; i < cells; ++i) {
+            double sum = 0;
+            for (int a = 0; a < sub; ++a)
+                for (int c = 0; c < sub; ++c) {
+                    double jac;
+                    const Vec3 wi = wi_at(wo, (i + (a + 0.5) / sub) / cells, (j + (c + 0.5) / sub) / cells, &jac);
+                    if (jac > 0) sum += b.pdf(wo, wi) * jac;
+                }
+            expected[j * cells + i] = sum / (sub * sub) / (double(cells) * cells) * samples;
+        }
+    double chi2 = 0, pooled_o = 0, pooled_e = 0;
+    int dof = -1;
+    for (std::size_t k = 0; k < expected.size(); ++k) {
+        if (expected[k] < 5) {
+            pooled_o += observed[k];
+            pooled_e += expected[k];
+            continue;
+        }
+        chi2 += (observed[k] - expected[k]) * (observed[k] - expected[k]) / expected[k];
+        ++dof;
+    }
+    if (pooled_e >= 5) {
+        chi2 += (pooled_o - pooled_e) * (pooled_o - pooled_e) / pooled_e;
+        ++dof;
+    }
+    return {dof > 0 ? gamma_q(dof / 2.0, chi2 / 2.0) : 0.0, dof, failed};
+}
+
+}  // namespace brdfz::test
