@@ -1,8 +1,6 @@
 // brdfz eval FILE --wi x,y,z --wo x,y,z | --pairs PAIRS.csv
 // Prints f (no cosine) as one "r,g,b" row per pair, full precision, in input order. All input is
 // parsed before anything is printed, so a bad row produces an error and no partial output.
-#include <cmath>
-#include <cstdlib>
 #include <fstream>
 #include <iostream>
 #include <sstream>
@@ -13,31 +11,6 @@
 
 namespace brdfz::cli {
 namespace {
-
-// Parses exactly `count` comma-separated numbers; false on anything else.
-bool parse_numbers(const std::string& text, double* out, int count) {
-    const char* p = text.c_str();
-    for (int k = 0; k < count; ++k) {
-        char* end = nullptr;
-        out[k] = std::strtod(p, &end);
-        if (end == p) return false;
-        p = end;
-        while (*p == ' ' || *p == '\t' || *p == '\r') ++p;
-        if (k + 1 < count) {
-            if (*p != ',') return false;
-            ++p;
-        }
-    }
-    return *p == '\0';
-}
-
-// Unit direction from a user vector; ValueError for zero or non-finite vectors.
-Vec3 direction(const double* v, const std::string& where) {
-    const Vec3 d{v[0], v[1], v[2]};
-    const double n = length(d);
-    if (!std::isfinite(n) || n == 0.0) throw ValueError(where + ": direction must be a finite non-zero vector");
-    return (1.0 / n) * d;
-}
 
 void read_pairs(const std::string& path, std::vector<Vec3>& wi, std::vector<Vec3>& wo) {
     std::ifstream in(path);
@@ -51,8 +24,8 @@ void read_pairs(const std::string& path, std::vector<Vec3>& wi, std::vector<Vec3
             throw FormatError(path + ":" + std::to_string(lineno), "expected 6 numbers wix,wiy,wiz,wox,woy,woz");
         }
         const std::string where = path + ":" + std::to_string(lineno);
-        wi.push_back(direction(v, where));
-        wo.push_back(direction(v + 3, where));
+        wi.push_back(unit_direction(v, where));
+        wo.push_back(unit_direction(v + 3, where));
     }
     if (in.bad()) throw IoError(path, "read failed");
 }
@@ -79,11 +52,8 @@ void add_eval(CLI::App& app) {
         if (!args->pairs.empty()) {
             read_pairs(args->pairs, wi, wo);
         } else if (!args->wi.empty()) {
-            double a[3], b[3];
-            if (!parse_numbers(args->wi, a, 3)) throw ValueError("--wi: expected x,y,z");
-            if (!parse_numbers(args->wo, b, 3)) throw ValueError("--wo: expected x,y,z");
-            wi.push_back(direction(a, "--wi"));
-            wo.push_back(direction(b, "--wo"));
+            wi.push_back(parse_direction(args->wi, "--wi"));
+            wo.push_back(parse_direction(args->wo, "--wo"));
         } else {
             throw ValueError("eval: give --wi and --wo, or --pairs");
         }

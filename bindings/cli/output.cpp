@@ -4,6 +4,7 @@
 
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <iostream>
 #include <mutex>
 
@@ -106,6 +107,35 @@ void add_load_options(CLI::App* cmd, LoadOptions& options) {
     cmd->add_option("--lookup", options.lookup, "table lookup: nearest or linear")
         ->transform(CLI::CheckedTransformer(
             std::map<std::string, Lookup>{{"nearest", Lookup::Nearest}, {"linear", Lookup::Linear}}));
+}
+
+bool parse_numbers(const std::string& text, double* out, int count) {
+    const char* p = text.c_str();
+    for (int k = 0; k < count; ++k) {
+        char* end = nullptr;
+        out[k] = std::strtod(p, &end);
+        if (end == p) return false;
+        p = end;
+        while (*p == ' ' || *p == '\t' || *p == '\r') ++p;
+        if (k + 1 < count) {
+            if (*p != ',') return false;
+            ++p;
+        }
+    }
+    return *p == '\0';
+}
+
+Vec3 unit_direction(const double* v, const std::string& where) {
+    const Vec3 d{v[0], v[1], v[2]};
+    const double n = length(d);
+    if (!std::isfinite(n) || n == 0.0) throw ValueError(where + ": direction must be a finite non-zero vector");
+    return (1.0 / n) * d;
+}
+
+Vec3 parse_direction(const std::string& text, const std::string& option) {
+    double v[3];
+    if (!parse_numbers(text, v, 3)) throw ValueError(option + ": expected x,y,z");
+    return unit_direction(v, option);
 }
 
 GridSpec parse_resolution(const std::string& text) {

@@ -43,6 +43,13 @@ std::function<void(double)> progress_bar(const std::string& label);
 // --bin-position and --lookup, shared by every command that loads files.
 void add_load_options(CLI::App* cmd, LoadOptions& options);
 
+// Parses exactly `count` comma-separated numbers; false on anything else.
+bool parse_numbers(const std::string& text, double* out, int count);
+// Unit direction from a user vector; ValueError naming `where` for zero or non-finite vectors.
+Vec3 unit_direction(const double* v, const std::string& where);
+// "x,y,z" -> unit direction; ValueError naming the option otherwise.
+Vec3 parse_direction(const std::string& text, const std::string& option);
+
 // "90x90x180" -> GridSpec; ValueError otherwise.
 GridSpec parse_resolution(const std::string& text);
 

@@ -20,8 +20,12 @@ std::string fixed(double v, const char* fmt = "%.6g") {
 void print_info(const std::string& path, const Loaded& loaded, bool json, std::ostream& os) {
     const SourceInfo& info = loaded.info;
     Rgb albedo[std::size(kAlbedoAnglesDeg)];
-    for (std::size_t k = 0; k < std::size(kAlbedoAnglesDeg); ++k)
-        albedo[k] = directional_albedo(*loaded.brdf, kAlbedoAnglesDeg[k] * std::numbers::pi / 180.0);
+    SampledAlbedo sampled[std::size(kAlbedoAnglesDeg)];
+    for (std::size_t k = 0; k < std::size(kAlbedoAnglesDeg); ++k) {
+        const double theta_o = kAlbedoAnglesDeg[k] * std::numbers::pi / 180.0;
+        albedo[k] = directional_albedo(*loaded.brdf, theta_o);
+        sampled[k] = sampled_albedo(*loaded.brdf, theta_o, kAlbedoSamples);
+    }
 
     if (json) {
         JsonWriter j(os);
@@ -45,6 +49,10 @@ void print_info(const std::string& path, const Loaded& loaded, bool json, std::o
             j.begin_object();
             j.key("theta_o_deg").value(kAlbedoAnglesDeg[k]);
             j.key("r").value(albedo[k][0]).key("g").value(albedo[k][1]).key("b").value(albedo[k][2]);
+            j.key("sampled").begin_object();
+            for (int c = 0; c < 3; ++c) j.key(std::string(1, "rgb"[c])).value(sampled[k].mean[c]);
+            for (int c = 0; c < 3; ++c) j.key(std::string("stderr_") + "rgb"[c]).value(sampled[k].stderr_[c]);
+            j.end_object();
             j.end_object();
         }
         j.end_array();
@@ -65,10 +73,14 @@ void print_info(const std::string& path, const Loaded& loaded, bool json, std::o
        << "  inf        " << info.counts.inf << "\n"
        << "  range      [" << fixed(info.min_value) << ", " << fixed(info.max_value) << "]"
        << (info.format == "merl" ? " 1/sr\n" : " (stored values)\n")
-       << "  albedo     theta_o      r        g        b\n";
-    for (std::size_t k = 0; k < std::size(kAlbedoAnglesDeg); ++k)
+       << "  albedo     theta_o      r        g        b         sampled (" << kAlbedoSamples
+       << " samples)  r, g, b ± stderr\n";
+    for (std::size_t k = 0; k < std::size(kAlbedoAnglesDeg); ++k) {
         os << "             " << fixed(kAlbedoAnglesDeg[k], "%5.0f") << " deg  " << fixed(albedo[k][0], "%.4f") << "   "
-           << fixed(albedo[k][1], "%.4f") << "   " << fixed(albedo[k][2], "%.4f") << "\n";
+           << fixed(albedo[k][1], "%.4f") << "   " << fixed(albedo[k][2], "%.4f") << "    ";
+        for (int c = 0; c < 3; ++c)
+            os << fixed(sampled[k].mean[c], "%.4f") << "±" << fixed(sampled[k].stderr_[c], "%.4f") << (c < 2 ? "  " : "\n");
+    }
 }
 
 void print_metrics(const Metrics& m, bool json, std::ostream& os) {

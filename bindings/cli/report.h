@@ -11,6 +11,8 @@ namespace brdfz::cli {
 
 // Directional albedo is reported at these view elevations (degrees).
 inline constexpr double kAlbedoAnglesDeg[] = {0.0, 30.0, 60.0, 80.0};
+// Samples for the sampler's albedo estimate shown beside the quadrature value.
+inline constexpr std::size_t kAlbedoSamples = 65536;
 
 void print_info(const std::string& path, const Loaded& loaded, bool json, std::ostream& os);
 void print_metrics(const Metrics& m, bool json, std::ostream& os);

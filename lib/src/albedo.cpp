@@ -2,6 +2,7 @@
 
 #include <cmath>
 #include <numbers>
+#include <random>
 #include <vector>
 
 #include "brdfz/errors.h"
@@ -71,6 +72,30 @@ Rgb directional_albedo(const Brdf& brdf, double theta_o, const AlbedoOptions& o)
     for (std::size_t k = 0; k < wi.size(); ++k)
         for (int c = 0; c < 3; ++c) rho[c] += f[k][c] * wi[k].z * weight[k];
     return rho;
+}
+
+SampledAlbedo sampled_albedo(const Brdf& brdf, double theta_o, std::size_t n, std::uint64_t seed) {
+    if (!(theta_o >= 0.0 && theta_o < std::numbers::pi / 2.0))
+        throw ValueError("albedo: theta_o must be in [0, pi/2)");
+    if (n < 2) throw ValueError("albedo: at least 2 samples are needed");
+    const Vec3 wo = spherical_direction(theta_o, 0.0);
+    std::mt19937_64 rng(seed);
+    std::uniform_real_distribution<double> u(0.0, 1.0);
+    double sum[3] = {}, sum_sq[3] = {};
+    for (std::size_t k = 0; k < n; ++k) {
+        const BrdfSample s = brdf.sample(wo, u(rng), u(rng));
+        for (int c = 0; c < 3; ++c) {
+            sum[c] += s.weight[c];
+            sum_sq[c] += s.weight[c] * s.weight[c];
+        }
+    }
+    SampledAlbedo r;
+    for (int c = 0; c < 3; ++c) {
+        r.mean[c] = sum[c] / n;
+        const double var = std::fmax(0.0, (sum_sq[c] - n * r.mean[c] * r.mean[c]) / (n - 1));
+        r.stderr_[c] = std::sqrt(var / n);
+    }
+    return r;
 }
 
 }  // namespace brdfz

@@ -193,3 +193,31 @@ def test_rgl_to_merl(cli, rgl_files, tmp_path):
     for a, b in zip(info["albedo"], src_info["albedo"]):
         for c in "rgb":
             assert a[c] == pytest.approx(b[c], rel=0.05, abs=2e-3)
+
+
+def test_sample_prints_n_rows_consistent_with_eval(cli, demo_table):
+    out = run(cli, "sample", demo_table, "--wo", "0.3,0,0.9", "-n", "500", "--seed", "4").stdout.splitlines()
+    assert out[0] == "wix,wiy,wiz,pdf,weight_r,weight_g,weight_b"
+    rows = [[float(c) for c in line.split(",")] for line in out[1:]]
+    assert len(rows) == 500
+    wo = unit([0.3, 0, 0.9])
+    for row in rows[:20]:
+        wi, pdf, weight = row[:3], row[3], row[4:]
+        assert pdf > 0 and wi[2] > 0
+        f = parse_rows(run(cli, "eval", demo_table, "--wi", ",".join(map(repr, wi)),
+                           "--wo", ",".join(map(repr, wo))).stdout)[0]
+        for c in range(3):
+            assert weight[c] == pytest.approx(f[c] * wi[2] / pdf, rel=1e-6)
+    # Same seed, same samples; another seed, other samples.
+    again = run(cli, "sample", demo_table, "--wo", "0.3,0,0.9", "-n", "500", "--seed", "4").stdout.splitlines()
+    assert again == out
+    assert run(cli, "sample", demo_table, "--wo", "0.3,0,0.9", "-n", "500", "--seed", "5").stdout.splitlines() != out
+    assert_one_line_error(run(cli, "sample", demo_table, "--wo", "0,0,0", check=False), "--wo")
+
+
+def test_info_reports_sampled_albedo_matching_quadrature(cli, demo_table):
+    info = json.loads(run(cli, "info", demo_table, "--json").stdout)
+    for a in info["albedo"]:
+        s = a["sampled"]
+        for c in "rgb":
+            assert s[c] == pytest.approx(a[c], abs=5 * s["stderr_" + c] + 2e-3)
