@@ -6,6 +6,8 @@
 #include <limits>
 
 #include "brdfz/errors.h"
+#include "brdfz/formats/alta.h"
+#include "brdfz/formats/cornell.h"
 #include "brdfz/formats/merl.h"
 #include "brdfz/formats/rgl.h"
 #include "brdfz/tabulate.h"
@@ -57,14 +59,51 @@ std::string format_of(const std::string& path) {
     const std::string ext = std::filesystem::path(path).extension().string();
     if (ext == ".binary") return "merl";
     if (ext == ".bsdf") return "rgl";
-    throw FormatError(path, "unknown file extension '" + ext + "' (expected .binary or .bsdf)");
+    if (ext == ".brdf") return "cornell";
+    if (ext == ".dat") return "alta";
+    throw FormatError(path, "unknown file extension '" + ext + "' (expected .binary, .bsdf, .brdf or .dat)");
 }
 
 Loaded load(const std::string& path, const LoadOptions& options) {
     const std::string format = format_of(path);
     if (format == "merl") return load_merl(path, options);
     if (format == "rgl") return load_rgl(path);
+    if (holds_measurements(path))
+        throw UnsupportedError(path, "a " + format + " file holds scattered measurements, not a BRDF: it can be the " +
+                                         "reference of a comparison or be fitted, not evaluated");
     throw UnsupportedError(path, "reading " + format + " files is not supported");
+}
+
+bool holds_measurements(const std::string& path) {
+    const std::string format = format_of(path);
+    return format == "cornell" || format == "alta";
+}
+
+LoadedMeasurements load_measurements(const std::string& path) {
+    const std::string format = format_of(path);
+    LoadedMeasurements out;
+    out.info.format = format;
+    if (format == "cornell") {
+        cornell::ReadResult r = cornell::read(path);
+        out.info.dims = {r.records, r.wavelengths.size()};
+        out.info.counts = r.counts;
+        out.set = std::move(r.set);
+    } else if (format == "alta") {
+        alta::ReadResult r = alta::read(path);
+        out.info.dims = {r.rows, 1};
+        out.info.counts = r.counts;
+        out.set = std::move(r.set);
+    } else {
+        throw UnsupportedError(path, "a " + format + " file holds a BRDF, not scattered measurements: load it with load()");
+    }
+    // Readers keep only finite samples, and at least one.
+    out.info.min_value = out.info.max_value = out.set.samples.front().f[0];
+    for (const Measurement& m : out.set.samples)
+        for (double v : m.f) {
+            out.info.min_value = std::min(out.info.min_value, v);
+            out.info.max_value = std::max(out.info.max_value, v);
+        }
+    return out;
 }
 
 ValidityCounts save(const Brdf& brdf, const std::string& path, const SaveOptions& options) {

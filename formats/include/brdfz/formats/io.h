@@ -1,6 +1,8 @@
 // Format-independent loading and saving: the format comes from the file extension.
 //   .binary  MERL table            (read, write)
 //   .bsdf    RGL-EPFL tensor_file  (read)
+//   .brdf    Cornell spectral measurements  (read with load_measurements)
+//   .dat     ALTA text measurements         (read with load_measurements)
 #pragma once
 
 #include <functional>
@@ -10,6 +12,7 @@
 #include <vector>
 
 #include "brdfz/brdf.h"
+#include "brdfz/measurements.h"
 #include "brdfz/repr/tabular.h"
 #include "brdfz/table.h"
 
@@ -21,12 +24,20 @@ struct SourceInfo {
     std::vector<std::size_t> dims;   // the stored array's shape
     // MERL: bins by class, range of f_r in 1/sr. RGL: the stored `rgb` tensor's values by class and
     // their range, in the file's units (f·cosθo over the warped domain, before the Jacobian).
+    // Cornell ("cornell", dims {records, wavelengths}) and ALTA ("alta", dims {rows, 1}): records by
+    // class as cornell.h / alta.h define them, range of the kept samples' f_r in 1/sr.
     ValidityCounts counts;
     double min_value = 0, max_value = 0;
 };
 
 struct Loaded {
     std::unique_ptr<Brdf> brdf;
+    SourceInfo info;
+};
+
+// Scattered measurements (Cornell, ALTA) and what the reader found.
+struct LoadedMeasurements {
+    MeasurementSet set;
     SourceInfo info;
 };
 
@@ -43,10 +54,17 @@ struct SaveOptions {
     std::function<void(double)> progress;  // tabulation progress, fraction done
 };
 
-// "merl" / "rgl" from the extension; FormatError naming the file otherwise.
+// "merl" / "rgl" / "cornell" / "alta" from the extension; FormatError naming the file otherwise.
 std::string format_of(const std::string& path);
 
 Loaded load(const std::string& path, const LoadOptions& options = {});
+
+// True when the file's format holds scattered measurements (Cornell .brdf, ALTA .dat), which
+// load_measurements reads and load rejects; FormatError for an unknown extension.
+bool holds_measurements(const std::string& path);
+
+// Cornell .brdf or ALTA .dat; UnsupportedError for formats that hold a BRDF (use load).
+LoadedMeasurements load_measurements(const std::string& path);
 
 // Writes atomically; returns the counts of what was written.
 ValidityCounts save(const Brdf& brdf, const std::string& path, const SaveOptions& options = {});
