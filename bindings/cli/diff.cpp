@@ -1,4 +1,5 @@
-// brdfz diff A B [--json]: error metrics of B against the reference A.
+// brdfz diff A B [--json]: error metrics of B against the reference A (a BRDF, or Cornell / ALTA
+// measurements).
 #include <iostream>
 
 #include "commands.h"
@@ -23,9 +24,10 @@ void add_diff(CLI::App& app) {
         ->capture_default_str();
     add_load_options(cmd, args->load);
     cmd->callback([args] {
-        const Loaded a = load(args->a, args->load);
-        const Loaded b = load(args->b, args->load);
-        const Metrics m = compare(*a.brdf, *b.brdf, args->metrics);
+        // A may be scattered measurements (Cornell, ALTA): B is then judged at the measured points.
+        const Metrics m = holds_measurements(args->a)
+                              ? compare(load_measurements(args->a).set, *load(args->b, args->load).brdf, args->metrics)
+                              : compare(*load(args->a, args->load).brdf, *load(args->b, args->load).brdf, args->metrics);
         if (!args->json) std::cout << args->b << " against " << args->a << "\n";
         print_metrics(m, args->json, std::cout);
     });

@@ -6,6 +6,56 @@
 #include "report.h"
 
 namespace brdfz::cli {
+namespace {
+
+// Scattered measurements have no BRDF to integrate: albedo is an empty array in JSON (the same type
+// as for a BRDF, so readers iterate over nothing) and said to be undefined in text.
+void print_measurement_info(const std::string& path, const LoadedMeasurements& m, bool json, std::ostream& os) {
+    const SourceInfo& info = m.info;
+    const std::size_t nbytes = m.set.samples.size() * sizeof(Measurement);
+    const std::string describe = std::to_string(m.set.samples.size()) + " measurements (wi, wo, f as float64), " +
+                                 (m.set.channels == 1 ? "monochrome" : "linear sRGB");
+    if (json) {
+        JsonWriter j(os);
+        j.begin_object();
+        j.key("file").value(path);
+        j.key("format").value(info.format);
+        j.key("dims").begin_array();
+        for (std::size_t d : info.dims) j.value(d);
+        j.end_array();
+        j.key("valid").value(info.counts.valid);
+        j.key("negative").value(info.counts.negative);
+        j.key("nan").value(info.counts.nan);
+        j.key("inf").value(info.counts.inf);
+        j.key("below_horizon").value(info.counts.below_horizon);
+        j.key("samples").value(m.set.samples.size());
+        j.key("min").value(info.min_value);
+        j.key("max").value(info.max_value);
+        j.key("nbytes").value(nbytes);
+        j.key("channels").value(static_cast<std::size_t>(m.set.channels));
+        j.key("describe").value(describe);
+        j.key("albedo").begin_array().end_array();
+        j.end_object();
+        os << "\n";
+        return;
+    }
+    std::string dims;
+    for (std::size_t d : info.dims) dims += (dims.empty() ? "" : "x") + std::to_string(d);
+    os << path << "\n"
+       << "  format     " << info.format << "\n"
+       << "  dims       " << dims << (info.format == "cornell" ? " (records x wavelengths)\n" : " (rows x values)\n")
+       << "  stored as  " << describe << "\n"
+       << "  nbytes     " << nbytes << "\n"
+       << "  valid      " << info.counts.valid << "\n"
+       << "  negative   " << info.counts.negative << " (kept)\n"
+       << "  nan        " << info.counts.nan << " (dropped)\n"
+       << "  inf        " << info.counts.inf << " (dropped)\n"
+       << "  horizon    " << info.counts.below_horizon << " on or below the horizon (dropped)\n"
+       << "  range      [" << number(info.min_value) << ", " << number(info.max_value) << "] 1/sr\n"
+       << "  albedo     not defined for scattered samples (no BRDF to integrate)\n";
+}
+
+}  // namespace
 
 void add_info(CLI::App& app) {
     struct Args {
@@ -18,7 +68,12 @@ void add_info(CLI::App& app) {
     cmd->add_option("FILE", args->file, "input file")->required();
     cmd->add_flag("--json", args->json, "print JSON");
     add_load_options(cmd, args->load);
-    cmd->callback([args] { print_info(args->file, load(args->file, args->load), args->json, std::cout); });
+    cmd->callback([args] {
+        if (holds_measurements(args->file))
+            print_measurement_info(args->file, load_measurements(args->file), args->json, std::cout);
+        else
+            print_info(args->file, load(args->file, args->load), args->json, std::cout);
+    });
 }
 
 }  // namespace brdfz::cli

@@ -18,15 +18,55 @@ struct Sums {
 
 PerChannel per_channel(const double v[3]) { return {v[0], v[1], v[2], (v[0] + v[1] + v[2]) / 3.0}; }
 
+// One sample: reference and approximation f_r at a pair with cosθi = cos_i.
+void add_sample(Sums& s, const Rgb& ref, const Rgb& app, double cos_i) {
+    ++s.n;
+    for (int c = 0; c < 3; ++c) {
+        const double x = ref[c] * cos_i, y = app[c] * cos_i;
+        s.negatives += (x < 0.0) + (y < 0.0);
+        s.sq[c] += (x - y) * (x - y);
+        s.ref_sq[c] += x * x;
+        const double dl = std::log1p(std::fmax(x, 0.0)) - std::log1p(std::fmax(y, 0.0));
+        s.log_sq[c] += dl * dl;
+        const double dc = std::cbrt(x) - std::cbrt(y);
+        s.cbrt_sq[c] += dc * dc;
+    }
+}
+
+Metrics to_metrics(const Sums& total) {
+    if (total.n == 0) throw ValueError("metrics: no valid reference bin inside the angular cut-off");
+    double cos_rmse[3], rel[3], log_rmse[3], cbrt_rmse[3];
+    for (int c = 0; c < 3; ++c) {
+        cos_rmse[c] = std::sqrt(total.sq[c] / total.n);
+        // An all-zero reference has no scale: relative error is 0 if the approximation is too, else inf.
+        rel[c] = total.ref_sq[c] > 0.0 ? std::sqrt(total.sq[c] / total.ref_sq[c])
+                                       : (total.sq[c] > 0.0 ? INFINITY : 0.0);
+        log_rmse[c] = std::sqrt(total.log_sq[c] / total.n);
+        cbrt_rmse[c] = std::sqrt(total.cbrt_sq[c] / total.n);
+    }
+    Metrics m;
+    m.cos_rmse = per_channel(cos_rmse);
+    m.cos_rmse_rel = per_channel(rel);
+    m.log_rmse = per_channel(log_rmse);
+    m.cbrt_rmse = per_channel(cbrt_rmse);
+    m.samples = total.n;
+    m.negatives = total.negatives;
+    return m;
+}
+
+double min_cos_of(const MetricOptions& options) {
+    if (!(options.max_theta_deg > 0.0 && options.max_theta_deg <= 90.0))
+        throw ValueError("metrics: max_theta_deg must be in (0, 90]");
+    return std::cos(options.max_theta_deg * std::numbers::pi / 180.0);
+}
+
 }  // namespace
 
 Metrics compare(const Brdf& reference, const Brdf& approx, const MetricOptions& options) {
-    if (!(options.max_theta_deg > 0.0 && options.max_theta_deg <= 90.0))
-        throw ValueError("metrics: max_theta_deg must be in (0, 90]");
+    const double min_cos = min_cos_of(options);
     const auto* ref_table = dynamic_cast<const TabularBrdf*>(&reference);
     const GridSpec g = ref_table ? ref_table->table().grid() : options.grid;
     g.validate();
-    const double min_cos = std::cos(options.max_theta_deg * std::numbers::pi / 180.0);
 
     const int workers = detail::resolve_threads(options.threads);
     std::vector<Sums> sums(workers);
@@ -48,17 +88,7 @@ Metrics compare(const Brdf& reference, const Brdf& approx, const MetricOptions& 
             bool finite = true;
             for (int c = 0; c < 3; ++c) finite = finite && std::isfinite(ref[c]) && std::isfinite(app_f[w][k][c]);
             if (!finite) continue;  // a reference without a value at this bin is not a sample
-            ++s.n;
-            for (int c = 0; c < 3; ++c) {
-                const double x = ref[c] * wi[k].z, y = app_f[w][k][c] * wi[k].z;
-                s.negatives += (x < 0.0) + (y < 0.0);
-                s.sq[c] += (x - y) * (x - y);
-                s.ref_sq[c] += x * x;
-                const double dl = std::log1p(std::fmax(x, 0.0)) - std::log1p(std::fmax(y, 0.0));
-                s.log_sq[c] += dl * dl;
-                const double dc = std::cbrt(x) - std::cbrt(y);
-                s.cbrt_sq[c] += dc * dc;
-            }
+            add_sample(s, ref, app_f[w][k], wi[k].z);
         }
     });
 
@@ -73,25 +103,29 @@ Metrics compare(const Brdf& reference, const Brdf& approx, const MetricOptions& 
             total.cbrt_sq[c] += s.cbrt_sq[c];
         }
     }
-    if (total.n == 0) throw ValueError("metrics: no valid reference bin inside the angular cut-off");
+    return to_metrics(total);
+}
 
-    double cos_rmse[3], rel[3], log_rmse[3], cbrt_rmse[3];
-    for (int c = 0; c < 3; ++c) {
-        cos_rmse[c] = std::sqrt(total.sq[c] / total.n);
-        // An all-zero reference has no scale: relative error is 0 if the approximation is too, else inf.
-        rel[c] = total.ref_sq[c] > 0.0 ? std::sqrt(total.sq[c] / total.ref_sq[c])
-                                       : (total.sq[c] > 0.0 ? INFINITY : 0.0);
-        log_rmse[c] = std::sqrt(total.log_sq[c] / total.n);
-        cbrt_rmse[c] = std::sqrt(total.cbrt_sq[c] / total.n);
+Metrics compare(const MeasurementSet& reference, const Brdf& approx, const MetricOptions& options) {
+    const double min_cos = min_cos_of(options);
+    std::vector<Vec3> wi, wo;
+    std::vector<Rgb> ref;
+    for (const Measurement& m : reference.samples) {
+        if (!(m.wi.z > min_cos && m.wo.z > min_cos)) continue;
+        if (!(std::isfinite(m.f[0]) && std::isfinite(m.f[1]) && std::isfinite(m.f[2]))) continue;
+        wi.push_back(m.wi);
+        wo.push_back(m.wo);
+        ref.push_back(m.f);
     }
-    Metrics m;
-    m.cos_rmse = per_channel(cos_rmse);
-    m.cos_rmse_rel = per_channel(rel);
-    m.log_rmse = per_channel(log_rmse);
-    m.cbrt_rmse = per_channel(cbrt_rmse);
-    m.samples = total.n;
-    m.negatives = total.negatives;
-    return m;
+    std::vector<Rgb> app(wi.size());
+    approx.eval(wi, wo, app);
+    Sums total;
+    for (std::size_t k = 0; k < wi.size(); ++k) {
+        bool finite = true;
+        for (int c = 0; c < 3; ++c) finite = finite && std::isfinite(app[k][c]);
+        if (finite) add_sample(total, ref[k], app[k], wi[k].z);
+    }
+    return to_metrics(total);
 }
 
 }  // namespace brdfz

@@ -14,6 +14,7 @@
 #include <cstddef>
 
 #include "brdfz/brdf.h"
+#include "brdfz/measurements.h"
 #include "brdfz/table.h"
 
 namespace brdfz {
@@ -37,5 +38,11 @@ struct MetricOptions {
 };
 
 Metrics compare(const Brdf& reference, const Brdf& approx, const MetricOptions& options = {});
+
+// The same metrics at the points of scattered measurements (Cornell, ALTA): every sample with θi
+// and θo below max_theta_deg counts once, x being its measured f_r·cosθi. A monochrome set's value
+// repeated in the three channels is compared with each of approx's channels. options.grid and
+// options.threads are not used. ValueError when no sample lies inside the cut-off.
+Metrics compare(const MeasurementSet& reference, const Brdf& approx, const MetricOptions& options = {});
 
 }  // namespace brdfz

@@ -109,28 +109,31 @@ double HalfVectorSampler::pdf(const Vec3& wo, const Vec3& wi) const {
 
 BrdfSample HalfVectorSampler::sample(const Vec3& wo, double u1, double u2) const {
     const double share = options_.cosine_share;
-    Vec3 wi;
     if (u1 < share) {
         const double v = u1 / share, r = std::sqrt(v), phi = 2.0 * kPi * u2;
-        wi = {r * std::cos(phi), r * std::sin(phi), std::sqrt(std::fmax(0.0, 1.0 - v))};
-    } else {
-        double v1 = (u1 - share) / (1.0 - share);
-        const SlicePair sp = slices_for(elevation(wo));
-        int k = sp.k0;
-        if (v1 < 1.0 - sp.t) {
-            v1 /= 1.0 - sp.t;
-        } else {
-            k = sp.k1;
-            v1 = (v1 - (1.0 - sp.t)) / sp.t;
-        }
-        // One bit of u2 picks the side of wo's plane; the rest drives the column.
-        const double sign = u2 < 0.5 ? 1.0 : -1.0;
-        const double v2 = u2 < 0.5 ? 2.0 * u2 : 2.0 * u2 - 1.0;
-        const Piecewise2D::Point p = slices_[k].sample(std::fmin(v1, std::nextafter(1.0, 0.0)), v2);
-        wi = reflect(wo, Azimuth(wo).to_world(half_at(p.x, p.y, sign)));
+        const Vec3 wi{r * std::cos(phi), r * std::sin(phi), std::sqrt(std::fmax(0.0, 1.0 - v))};
+        return wi.z > 0.0 ? BrdfSample{wi, pdf(wo, wi), {}} : BrdfSample{};
     }
+    double v1 = (u1 - share) / (1.0 - share);
+    const SlicePair sp = slices_for(elevation(wo));
+    const bool upper = !(v1 < 1.0 - sp.t);
+    v1 = upper ? (v1 - (1.0 - sp.t)) / sp.t : v1 / (1.0 - sp.t);
+    // One bit of u2 picks the side of wo's plane; the rest drives the column.
+    const double sign = u2 < 0.5 ? 1.0 : -1.0;
+    const double v2 = u2 < 0.5 ? 2.0 * u2 : 2.0 * u2 - 1.0;
+    const Piecewise2D::Point p = slices_[upper ? sp.k1 : sp.k0].sample(std::fmin(v1, std::nextafter(1.0, 0.0)), v2);
+    const Vec3 h = Azimuth(wo).to_world(half_at(p.x, p.y, sign));
+    const Vec3 wi = reflect(wo, h);
     if (!(wi.z > 0.0)) return {};
-    return {wi, pdf(wo, wi), {}};
+    // The pdf from what is known here (the cell, θh, h) rather than by inverting wi again: the same
+    // value pdf(wo, wi) computes, without its atan2 and elevation calls.
+    const double p_other = slices_[upper ? sp.k0 : sp.k1].pdf(p.x, p.y);
+    const double p_xy = upper ? (1.0 - sp.t) * p_other + sp.t * p.pdf : (1.0 - sp.t) * p.pdf + sp.t * p_other;
+    const double theta_h = kPi / 2.0 * p.y * p.y;
+    const double jac = 4.0 * dot(wo, h) * 2.0 * kPi * kPi * p.y * std::sin(theta_h);
+    const double data = p_xy / jac;
+    if (!(std::isfinite(data) && data > 0.0)) return {};
+    return {wi, share * wi.z / kPi + (1.0 - share) * data, {}};
 }
 
 }  // namespace brdfz
