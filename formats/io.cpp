@@ -6,6 +6,7 @@
 #include <limits>
 
 #include "brdfz/errors.h"
+#include "brdfz/formats/container.h"
 #include "brdfz/formats/alta.h"
 #include "brdfz/formats/cornell.h"
 #include "brdfz/formats/merl.h"
@@ -53,21 +54,39 @@ Loaded load_rgl(const std::string& path) {
     return out;
 }
 
+Loaded load_brdfz(const std::string& path, const LoadOptions& options) {
+    container::ReadResult r = container::read(path, options.lookup);
+    Loaded out;
+    out.info.format = "brdfz";
+    out.info.counts = r.meta.achieved.counts;
+    if (const auto* t = dynamic_cast<const TabularBrdf*>(r.brdf.get())) {
+        const GridSpec& g = t->table().grid();
+        out.info.dims = {static_cast<std::size_t>(g.n_theta_h), static_cast<std::size_t>(g.n_theta_d),
+                         static_cast<std::size_t>(g.n_phi_d)};
+        value_range(t->table(), out.info);
+    }
+    out.brdf = std::move(r.brdf);
+    return out;
+}
+
 }  // namespace
 
 std::string format_of(const std::string& path) {
     const std::string ext = std::filesystem::path(path).extension().string();
     if (ext == ".binary") return "merl";
     if (ext == ".bsdf") return "rgl";
+    if (ext == ".brdfz") return "brdfz";
     if (ext == ".brdf") return "cornell";
     if (ext == ".dat") return "alta";
     throw FormatError(path, "unknown file extension '" + ext + "' (expected .binary, .bsdf, .brdf or .dat)");
 }
 
-Loaded load(const std::string& path, const LoadOptions& options) {
-    const std::string format = format_of(path);
+Loaded load(const std::string& path, const LoadOptions& options) { return load_as(format_of(path), path, options); }
+
+Loaded load_as(const std::string& format, const std::string& path, const LoadOptions& options) {
     if (format == "merl") return load_merl(path, options);
     if (format == "rgl") return load_rgl(path);
+    if (format == "brdfz") return load_brdfz(path, options);
     if (holds_measurements(path))
         throw UnsupportedError(path, "a " + format + " file holds scattered measurements, not a BRDF: it can be the " +
                                          "reference of a comparison or be fitted, not evaluated");
@@ -107,7 +126,16 @@ LoadedMeasurements load_measurements(const std::string& path) {
 }
 
 ValidityCounts save(const Brdf& brdf, const std::string& path, const SaveOptions& options) {
-    const std::string format = format_of(path);
+    const std::string format = options.format.empty() ? format_of(path) : options.format;
+    if (format == "brdfz") {
+        container::WriteOptions w;
+        w.source = options.source;
+        w.source_format = options.source_format;
+        w.grid = options.grid;
+        w.threads = options.threads;
+        w.progress = options.progress;
+        return container::write(path, brdf, w).counts;
+    }
     if (format != "merl") throw UnsupportedError(path, "writing " + format + " files is not supported");
     const auto* table = dynamic_cast<const TabularBrdf*>(&brdf);
     if (table && (!options.grid || *options.grid == table->table().grid())) {

@@ -1,6 +1,7 @@
 // Format-independent loading and saving: the format comes from the file extension.
 //   .binary  MERL table            (read, write)
 //   .bsdf    RGL-EPFL tensor_file  (read)
+//   .brdfz   brdfz container       (read, write; formats/SPEC.md)
 //   .brdf    Cornell spectral measurements  (read with load_measurements)
 //   .dat     ALTA text measurements         (read with load_measurements)
 #pragma once
@@ -52,12 +53,19 @@ struct SaveOptions {
     std::optional<GridSpec> grid;
     int threads = 0;
     std::function<void(double)> progress;  // tabulation progress, fraction done
+    // Format name overriding the extension; empty: from the extension.
+    std::string format;
+    // File the BRDF was read from and its format, recorded by writers that keep provenance (.brdfz).
+    std::string source, source_format;
 };
 
 // "merl" / "rgl" / "cornell" / "alta" from the extension; FormatError naming the file otherwise.
 std::string format_of(const std::string& path);
 
 Loaded load(const std::string& path, const LoadOptions& options = {});
+// As load, for a named format ("merl", "rgl", "brdfz", ...) whatever the extension. A .brdfz table
+// carries its own bin position, which takes precedence over options.position.
+Loaded load_as(const std::string& format, const std::string& path, const LoadOptions& options = {});
 
 // True when the file's format holds scattered measurements (Cornell .brdf, ALTA .dat), which
 // load_measurements reads and load rejects; FormatError for an unknown extension.

@@ -1,0 +1,42 @@
+// Storage modules: one per representation, each in its own file here, listed once in registry.cpp.
+// A module writes one kind of Brdf into the /representation group and reads it back; it names the
+// features (formats/SPEC.md) an object needs, so files record exactly what a reader must understand.
+// Adding a representation: a new file defining its StorageModule, one line in registry.cpp, and its
+// section in formats/SPEC.md.
+#pragma once
+
+#include <memory>
+#include <span>
+#include <string_view>
+#include <vector>
+
+#include "brdfz/formats/container.h"
+#include "h5.h"
+
+namespace brdfz::container::detail {
+
+struct ReadContext {
+    Lookup lookup = Lookup::Linear;
+};
+
+struct StorageModule {
+    std::string_view type;          // value of the /representation group's "type" attribute
+    std::vector<Feature> features;  // every feature this module's files may use
+    // The features storing this object needs; empty when the module cannot store it exactly.
+    std::vector<Feature> (*needs)(const Brdf& brdf);
+    void (*write)(h5::WriteNode& rep, const Brdf& brdf);
+    // FormatError (naming the file and object) for invalid contents; shapes bounded before allocating.
+    std::unique_ptr<Brdf> (*read)(const h5::ReadNode& rep, const ReadContext& ctx);
+};
+
+const StorageModule& tabular_storage();
+const StorageModule& rgl_storage();
+
+// Every module, in the order the writer tries them.
+std::span<const StorageModule* const> storage_modules();
+const StorageModule* find_storage(std::string_view type);
+
+// Features of the container itself (layout, metadata, CRC-32C checksums).
+inline const Feature kCore{"core", 1};
+
+}  // namespace brdfz::container::detail
