@@ -1,0 +1,44 @@
+// Generalised cosine lobe (Lafortune et al., "Non-linear approximation of reflectance functions",
+// SIGGRAPH 1997), isotropic, with the normalisation of a Phong lobe of exponent n:
+//   f = ρ · (n+2)/(2π) · max(0, cxy (wi.x wo.x + wi.y wo.y) + cz wi.z wo.z)^n
+// cxy = −1, cz = 1 is a Phong lobe around the mirror direction, cxy = cz = 1 a retro-reflective lobe,
+// cxy = 0 an off-specular lobe toward grazing. With |cxy|, |cz| <= 1 the base is at most 1 and the
+// albedo at most ρ. Reciprocal. A model "lafortune3" sums three of them.
+#pragma once
+
+#include <array>
+#include <cmath>
+#include <numbers>
+#include <string_view>
+
+#include "brdfz/repr/analytic/lobe.h"
+
+namespace brdfz::lobes {
+
+struct Lafortune {
+    static constexpr std::string_view name = "lafortune";
+    static constexpr std::array<ParamSpec, 6> params{{
+        {"rho_r", 0.0, 1.0, 0.5, ParamKind::Weight},
+        {"rho_g", 0.0, 1.0, 0.5, ParamKind::Weight},
+        {"rho_b", 0.0, 1.0, 0.5, ParamKind::Weight},
+        {"cxy", -1.0, 1.0, -1.0, ParamKind::Linear},
+        {"cz", -1.0, 1.0, 1.0, ParamKind::Linear},
+        {"n", 0.1, 1e4, 20.0, ParamKind::LogScale},
+    }};
+
+    template <typename T, typename S>
+    static void eval(const Geometry<S>& g, const T* p, T out[3]) {
+        using std::exp;
+        using std::log;
+        using std::fmax;
+        const T& n = p[5];
+        const T base = p[3] * (g.ix * g.ox + g.iy * g.oy) + p[4] * (g.iz * g.oz);
+        // base^n as exp(n ln base), differentiable in n; the floor keeps the logarithm finite where the
+        // select discards the value (base <= 0).
+        const T power = exp(n * log(fmax(base, T(kTiny))));
+        const T lobe = select(base > T(0), (n + T(2)) * T(0.5 * std::numbers::inv_pi) * power, T(0));
+        for (int c = 0; c < 3; ++c) out[c] = p[c] * lobe;
+    }
+};
+
+}  // namespace brdfz::lobes

@@ -1,0 +1,26 @@
+// Lambertian lobe: f = ρ / π per channel. Albedo ρ, reciprocal.
+#pragma once
+
+#include <array>
+#include <numbers>
+#include <string_view>
+
+#include "brdfz/repr/analytic/lobe.h"
+
+namespace brdfz::lobes {
+
+struct Lambert {
+    static constexpr std::string_view name = "lambert";
+    static constexpr std::array<ParamSpec, 3> params{{
+        {"rho_r", 0.0, 1.0, 0.5, ParamKind::Weight},
+        {"rho_g", 0.0, 1.0, 0.5, ParamKind::Weight},
+        {"rho_b", 0.0, 1.0, 0.5, ParamKind::Weight},
+    }};
+
+    template <typename T, typename S>
+    static void eval(const Geometry<S>&, const T* p, T out[3]) {
+        for (int c = 0; c < 3; ++c) out[c] = p[c] * T(std::numbers::inv_pi);
+    }
+};
+
+}  // namespace brdfz::lobes

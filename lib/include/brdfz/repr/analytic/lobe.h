@@ -1,0 +1,122 @@
+// What every analytic lobe family shares: the geometry of a direction pair, parameter descriptions,
+// and the runtime descriptor (LobeType) through which models built from a string call the templates.
+//
+// A family is a struct with
+//   static constexpr std::string_view name;                 // its term in a model string, e.g. "ggx"
+//   static constexpr std::array<ParamSpec, N> params;       // names, bounds, defaults, in storage order
+//   template <typename T, typename S>
+//   static void eval(const Geometry<S>& g, const T* p, T out[3]);   // f_r per channel, no cosine
+// T is the parameter/result scalar (double, float or ceres::Jet<double, N> for autodiff); S is the
+// geometry scalar (double or float; Jets only ever see double geometry). eval is only called for
+// pairs above the horizon but must stay finite for every such pair, grazing included, and is written
+// without data-dependent branches (min/max/select) so batch loops vectorise.
+#pragma once
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <cstddef>
+#include <limits>
+#include <span>
+#include <string_view>
+
+namespace brdfz {
+
+// How a parameter behaves, for fitting: which starting values to draw and which bounds count as
+// "hit" when a fit ends on them.
+enum class ParamKind {
+    Weight,    // a colour weight that scales a lobe; its lower bound 0 is a natural value (lobe absent)
+    Linear,    // a shape parameter drawn uniformly between its bounds
+    LogScale,  // a positive shape parameter spanning decades (roughness, exponent): drawn log-uniformly
+};
+
+struct ParamSpec {
+    std::string_view name;
+    double lo, hi;  // closed bounds; the lobe is energy-conserving (albedo <= 1) everywhere inside
+    double init;    // default value, the first start of a fit
+    ParamKind kind;
+};
+
+// Selection without a branch: both arms are computed, which lets loops over pairs vectorise and keeps
+// Jets well defined (both arms must be finite).
+template <typename T>
+T select(bool condition, const T& a, const T& b) {
+    return condition ? a : b;
+}
+
+// A direction pair in the local frame (brdf.h conventions) with its half vector h = (wi+wo)/|wi+wo|
+// and d = wi·h = wo·h, the cosine Fresnel terms take.
+template <typename S>
+struct Geometry {
+    S ix, iy, iz;  // wi
+    S ox, oy, oz;  // wo
+    S hx, hy, hz;  // h
+    S d;           // wi·h, in [0, 1]
+};
+
+template <typename S>
+Geometry<S> make_geometry(S ix, S iy, S iz, S ox, S oy, S oz) {
+    using std::sqrt;
+    const S sx = ix + ox, sy = iy + oy, sz = iz + oz;
+    // |wi + wo| vanishes only for opposite grazing pairs, which get h = ẑ as in coords.h's half_vector.
+    const S n2 = sx * sx + sy * sy + sz * sz;
+    const bool degenerate = !(n2 > std::numeric_limits<S>::min());
+    const S inv = S(1) / sqrt(std::max(n2, std::numeric_limits<S>::min()));
+    Geometry<S> g{ix, iy, iz, ox, oy, oz, select(degenerate, S(0), sx * inv), select(degenerate, S(0), sy * inv),
+                  select(degenerate, S(1), sz * inv), S(0)};
+    g.d = std::clamp(ix * g.hx + iy * g.hy + iz * g.hz, S(0), S(1));
+    return g;
+}
+
+// Numerical floor for denominators that vanish only at grazing angles, where the numerator vanishes
+// faster (cosines, exp(-tan²)).
+inline constexpr double kTiny = 1e-12;
+
+// A batch of direction pairs as structure of arrays, the layout the batch kernels vectorise over.
+struct GeometryBlock {
+    static constexpr std::size_t kSize = 128;
+    alignas(64) double ix[kSize], iy[kSize], iz[kSize], ox[kSize], oy[kSize], oz[kSize];
+    alignas(64) double hx[kSize], hy[kSize], hz[kSize], d[kSize];
+};
+
+// Runtime descriptor of a family, so a model string can name it: the templates instantiated for double.
+struct LobeType {
+    std::string_view name;
+    std::span<const ParamSpec> params;
+    void (*eval)(const Geometry<double>& g, const double* p, double out[3]);
+    // r[k], g[k], b[k] += f(pair k) for k < n: the batch kernel.
+    void (*accumulate)(const GeometryBlock& geo, std::size_t n, const double* p, double* r, double* g, double* b);
+};
+
+namespace detail {
+
+template <typename F>
+void eval_lobe(const Geometry<double>& g, const double* p, double out[3]) {
+    F::eval(g, p, out);
+}
+
+template <typename F>
+void accumulate_lobe(const GeometryBlock& geo, std::size_t n, const double* p, double* __restrict r,
+                     double* __restrict g, double* __restrict b) {
+    // Parameters copied to locals: the compiler then knows the stores below cannot change them.
+    std::array<double, F::params.size()> q;
+    std::copy_n(p, q.size(), q.begin());
+    for (std::size_t k = 0; k < n; ++k) {
+        const Geometry<double> x{geo.ix[k], geo.iy[k], geo.iz[k], geo.ox[k], geo.oy[k],
+                                 geo.oz[k], geo.hx[k], geo.hy[k], geo.hz[k], geo.d[k]};
+        double out[3];
+        F::eval(x, q.data(), out);
+        r[k] += out[0];
+        g[k] += out[1];
+        b[k] += out[2];
+    }
+}
+
+}  // namespace detail
+
+template <typename F>
+constexpr LobeType lobe_type() {
+    return {F::name, F::params, &detail::eval_lobe<F>, &detail::accumulate_lobe<F>};
+}
+
+}  // namespace brdfz
