@@ -10,6 +10,7 @@
 #include "brdfz/formats/alta.h"
 #include "brdfz/formats/cornell.h"
 #include "brdfz/formats/merl.h"
+#include "brdfz/formats/model_json.h"
 #include "brdfz/formats/rgl.h"
 #include "brdfz/tabulate.h"
 
@@ -69,6 +70,20 @@ Loaded load_brdfz(const std::string& path, const LoadOptions& options) {
     return out;
 }
 
+// An analytic model file: dims is its parameter count, the range that of its parameter values.
+Loaded load_json(const std::string& path) {
+    auto model = std::make_unique<AnalyticBrdf>(model_json::read(path));
+    Loaded out;
+    out.info.format = "json";
+    out.info.dims = {model->params().size()};
+    out.info.counts.valid = model->params().size();
+    const auto [lo, hi] = std::minmax_element(model->params().begin(), model->params().end());
+    out.info.min_value = *lo;
+    out.info.max_value = *hi;
+    out.brdf = std::move(model);
+    return out;
+}
+
 }  // namespace
 
 std::string format_of(const std::string& path) {
@@ -78,7 +93,8 @@ std::string format_of(const std::string& path) {
     if (ext == ".brdfz") return "brdfz";
     if (ext == ".brdf") return "cornell";
     if (ext == ".dat") return "alta";
-    throw FormatError(path, "unknown file extension '" + ext + "' (expected .binary, .bsdf, .brdf or .dat)");
+    if (ext == ".json") return "json";
+    throw FormatError(path, "unknown file extension '" + ext + "' (expected .binary, .bsdf, .brdfz, .brdf, .dat or .json)");
 }
 
 Loaded load(const std::string& path, const LoadOptions& options) { return load_as(format_of(path), path, options); }
@@ -87,6 +103,7 @@ Loaded load_as(const std::string& format, const std::string& path, const LoadOpt
     if (format == "merl") return load_merl(path, options);
     if (format == "rgl") return load_rgl(path);
     if (format == "brdfz") return load_brdfz(path, options);
+    if (format == "json") return load_json(path);
     if (holds_measurements(path))
         throw UnsupportedError(path, "a " + format + " file holds scattered measurements, not a BRDF: it can be the " +
                                          "reference of a comparison or be fitted, not evaluated");
@@ -135,6 +152,12 @@ ValidityCounts save(const Brdf& brdf, const std::string& path, const SaveOptions
         w.threads = options.threads;
         w.progress = options.progress;
         return container::write(path, brdf, w).counts;
+    }
+    if (format == "json") {
+        const auto* model = dynamic_cast<const AnalyticBrdf*>(&brdf);
+        if (!model) throw UnsupportedError(path, "only analytic models can be written as .json (brdfz fit makes them)");
+        model_json::write(path, *model);
+        return {};
     }
     if (format != "merl") throw UnsupportedError(path, "writing " + format + " files is not supported");
     const auto* table = dynamic_cast<const TabularBrdf*>(&brdf);

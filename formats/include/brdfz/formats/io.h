@@ -4,6 +4,7 @@
 //   .brdfz   brdfz container       (read, write; formats/SPEC.md)
 //   .brdf    Cornell spectral measurements  (read with load_measurements)
 //   .dat     ALTA text measurements         (read with load_measurements)
+//   .json    analytic model                 (read, write; docs/model-json.md)
 #pragma once
 
 #include <functional>
