@@ -25,9 +25,15 @@ void add_diff(CLI::App& app) {
     add_load_options(cmd, args->load);
     cmd->callback([args] {
         // A may be scattered measurements (Cornell, ALTA): B is then judged at the measured points.
-        const Metrics m = holds_measurements(args->a)
-                              ? compare(load_measurements(args->a).set, *load(args->b, args->load).brdf, args->metrics)
-                              : compare(*load(args->a, args->load).brdf, *load(args->b, args->load).brdf, args->metrics);
+        // A is loaded first, so that its errors are the ones reported.
+        Metrics m;
+        if (holds_measurements(args->a)) {
+            const LoadedMeasurements a = load_measurements(args->a);
+            m = compare(a.set, *load(args->b, args->load).brdf, args->metrics);
+        } else {
+            const Loaded a = load(args->a, args->load);
+            m = compare(*a.brdf, *load(args->b, args->load).brdf, args->metrics);
+        }
         if (!args->json) std::cout << args->b << " against " << args->a << "\n";
         print_metrics(m, args->json, std::cout);
     });
