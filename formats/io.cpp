@@ -7,6 +7,7 @@
 
 #include "brdfz/errors.h"
 #include "brdfz/formats/container.h"
+#include "brdfz/formats/exr.h"
 #include "brdfz/formats/alta.h"
 #include "brdfz/formats/cornell.h"
 #include "brdfz/formats/merl.h"
@@ -84,6 +85,26 @@ Loaded load_json(const std::string& path) {
     return out;
 }
 
+// Table formats: a table on the requested grid (or its own) is written as it is, anything else is
+// tabulated first.
+template <typename Write>
+ValidityCounts save_table(const Brdf& brdf, const SaveOptions& options, const Write& write) {
+    const auto* table = dynamic_cast<const TabularBrdf*>(&brdf);
+    if (table && (!options.grid || *options.grid == table->table().grid())) {
+        write(table->table());
+        ValidityCounts written;
+        written.valid = table->table().valid_bins();
+        return written;
+    }
+    TabulateOptions t;
+    t.grid = options.grid.value_or(GridSpec{});
+    t.threads = options.threads;
+    t.progress = options.progress;
+    Tabulated tab = tabulate(brdf, t);
+    write(tab.table);
+    return tab.counts;
+}
+
 }  // namespace
 
 std::string format_of(const std::string& path) {
@@ -91,6 +112,7 @@ std::string format_of(const std::string& path) {
     if (ext == ".binary") return "merl";
     if (ext == ".bsdf") return "rgl";
     if (ext == ".brdfz") return "brdfz";
+    if (ext == ".exr") return "exr";
     if (ext == ".brdf") return "cornell";
     if (ext == ".dat") return "alta";
     if (ext == ".json") return "json";
@@ -103,6 +125,18 @@ Loaded load_as(const std::string& format, const std::string& path, const LoadOpt
     if (format == "merl") return load_merl(path, options);
     if (format == "rgl") return load_rgl(path);
     if (format == "brdfz") return load_brdfz(path, options);
+    if (format == "exr") {
+        Loaded out;
+        out.info.format = "exr";
+        Table t = exr::read(path);
+        const GridSpec& g = t.grid();
+        out.info.dims = {static_cast<std::size_t>(g.n_theta_h), static_cast<std::size_t>(g.n_theta_d),
+                         static_cast<std::size_t>(g.n_phi_d)};
+        out.info.counts.valid = t.valid_bins();
+        value_range(t, out.info);
+        out.brdf = std::make_unique<TabularBrdf>(std::move(t), options.lookup);
+        return out;
+    }
     if (format == "json") return load_json(path);
     if (holds_measurements(path))
         throw UnsupportedError(path, "a " + format + " file holds scattered measurements, not a BRDF: it can be the " +
@@ -159,21 +193,9 @@ ValidityCounts save(const Brdf& brdf, const std::string& path, const SaveOptions
         model_json::write(path, *model);
         return {};
     }
-    if (format != "merl") throw UnsupportedError(path, "writing " + format + " files is not supported");
-    const auto* table = dynamic_cast<const TabularBrdf*>(&brdf);
-    if (table && (!options.grid || *options.grid == table->table().grid())) {
-        merl::write(path, table->table());
-        ValidityCounts written;
-        written.valid = table->table().valid_bins();
-        return written;
-    }
-    TabulateOptions t;
-    t.grid = options.grid.value_or(GridSpec{});
-    t.threads = options.threads;
-    t.progress = options.progress;
-    Tabulated tab = tabulate(brdf, t);
-    merl::write(path, tab.table);
-    return tab.counts;
+    if (format == "merl") return save_table(brdf, options, [&](const Table& t) { merl::write(path, t); });
+    if (format == "exr") return save_table(brdf, options, [&](const Table& t) { exr::write(path, t); });
+    throw UnsupportedError(path, "writing " + format + " files is not supported");
 }
 
 }  // namespace brdfz

@@ -2,6 +2,7 @@
 //   .binary  MERL table            (read, write)
 //   .bsdf    RGL-EPFL tensor_file  (read)
 //   .brdfz   brdfz container       (read, write; formats/SPEC.md)
+//   .exr     OpenEXR table mosaic  (read, write; brdfz/formats/exr.h)
 //   .brdf    Cornell spectral measurements  (read with load_measurements)
 //   .dat     ALTA text measurements         (read with load_measurements)
 //   .json    analytic model                 (read, write; docs/model-json.md)

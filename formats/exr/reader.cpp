@@ -1,0 +1,95 @@
+#include <OpenEXR/ImfChannelList.h>
+#include <OpenEXR/ImfFrameBuffer.h>
+#include <OpenEXR/ImfHeader.h>
+#include <OpenEXR/ImfInputFile.h>
+#include <OpenEXR/ImfIntAttribute.h>
+#include <OpenEXR/ImfStringAttribute.h>
+
+#include <cstdio>
+#include <filesystem>
+#include <vector>
+
+#include "brdfz/errors.h"
+#include "brdfz/formats/exr.h"
+
+namespace brdfz::exr {
+namespace {
+
+// Tables larger than this (12 bytes a bin: 768 MiB) are refused before allocating: a compressed image
+// can declare a size far beyond its file's.
+constexpr std::size_t kMaxBins = std::size_t{1} << 26;
+
+const std::string& string_attr(const std::string& path, const Imf::Header& h, const char* name) {
+    const auto* a = h.findTypedAttribute<Imf::StringAttribute>(name);
+    if (!a) throw FormatError(path, std::string("not a brdfz table image (no string attribute '") + name + "')");
+    return a->value();
+}
+
+}  // namespace
+
+Table read(const std::string& path) {
+    std::error_code ec;
+    if (!std::filesystem::is_regular_file(path, ec)) throw IoError(path, "cannot read: no such file");
+    try {
+        Imf::InputFile file(path.c_str());
+        const Imf::Header& h = file.header();
+
+        GridSpec g;
+        const std::string& grid = string_attr(path, h, "brdfz.grid");
+        char tail = 0;
+        if (std::sscanf(grid.c_str(), "%dx%dx%d%c", &g.n_theta_h, &g.n_theta_d, &g.n_phi_d, &tail) != 3)
+            throw FormatError(path, "attribute brdfz.grid '" + grid + "' is not NHxNDxNP");
+        for (int n : {g.n_theta_h, g.n_theta_d, g.n_phi_d})
+            if (n < 1 || n > GridSpec::kMaxAxis) throw FormatError(path, "grid " + grid + " out of range");
+        if (g.bins() > kMaxBins) throw FormatError(path, "grid " + grid + " is larger than brdfz reads from images");
+        const std::string& position = string_attr(path, h, "brdfz.bin_position");
+        if (position != "centre" && position != "start")
+            throw FormatError(path, "unknown brdfz.bin_position '" + position + "'");
+        g.position = position == "centre" ? BinPosition::Centre : BinPosition::Start;
+        const auto* across_attr = h.findTypedAttribute<Imf::IntAttribute>("brdfz.tiles_across");
+        const int across = tiles_across(g.n_phi_d), down = (g.n_phi_d + across - 1) / across;
+        if (!across_attr || across_attr->value() != across)
+            throw FormatError(path, "attribute brdfz.tiles_across is missing or not " + std::to_string(across));
+
+        const Imath::Box2i dw = h.dataWindow();
+        if (dw.min.x != 0 || dw.min.y != 0) throw FormatError(path, "data window does not start at pixel 0, 0");
+        const long width = static_cast<long>(dw.max.x) - dw.min.x + 1, height = static_cast<long>(dw.max.y) - dw.min.y + 1;
+        if (width != static_cast<long>(across) * g.n_theta_d || height != static_cast<long>(down) * g.n_theta_h)
+            throw FormatError(path, "image is " + std::to_string(width) + "x" + std::to_string(height) +
+                                        ", the mosaic of grid " + grid + " needs " +
+                                        std::to_string(across * g.n_theta_d) + "x" + std::to_string(down * g.n_theta_h));
+        static const char* const kNames[3] = {"R", "G", "B"};
+        for (const char* name : kNames) {
+            const Imf::Channel* c = h.channels().findChannel(name);
+            if (!c || c->type != Imf::FLOAT || c->xSampling != 1 || c->ySampling != 1)
+                throw FormatError(path, std::string("channel ") + name + " is missing or not full-resolution float32");
+        }
+
+        const std::size_t plane = static_cast<std::size_t>(width) * static_cast<std::size_t>(height);
+        std::vector<float> planes(3 * plane);
+        Imf::FrameBuffer fb;
+        for (int c = 0; c < 3; ++c)
+            fb.insert(kNames[c], Imf::Slice(Imf::FLOAT, reinterpret_cast<char*>(planes.data() + c * plane),
+                                            sizeof(float), sizeof(float) * static_cast<std::size_t>(width)));
+        file.setFrameBuffer(fb);
+        file.readPixels(0, dw.max.y);
+
+        Table table(g);
+        for (int ip = 0; ip < g.n_phi_d; ++ip) {
+            const int x0 = (ip % across) * g.n_theta_d, y0 = (ip / across) * g.n_theta_h;
+            for (int ih = 0; ih < g.n_theta_h; ++ih)
+                for (int id = 0; id < g.n_theta_d; ++id) {
+                    const std::size_t pixel = static_cast<std::size_t>(y0 + ih) * width + (x0 + id);
+                    float* v = table.data() + 3 * g.index(ih, id, ip);
+                    for (int c = 0; c < 3; ++c) v[c] = planes[c * plane + pixel];
+                }
+        }
+        return table;
+    } catch (const Error&) {
+        throw;
+    } catch (const std::exception& e) {
+        throw FormatError(path, std::string("not a readable OpenEXR image: ") + e.what());
+    }
+}
+
+}  // namespace brdfz::exr
