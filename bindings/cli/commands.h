@@ -10,6 +10,7 @@ void add_convert(CLI::App& app);
 void add_eval(CLI::App& app);
 void add_diff(CLI::App& app);
 void add_demo(CLI::App& app);
+void add_validate(CLI::App& app);
 void add_sample(CLI::App& app);
 
 }  // namespace brdfz::cli

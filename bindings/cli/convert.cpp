@@ -1,4 +1,7 @@
-// brdfz convert IN OUT: formats from the extensions; non-tabular sources are tabulated.
+// brdfz convert IN OUT: between every readable and writable format, from the extensions or --from /
+// --to. A representation the output format cannot hold is tabulated (on --res, default 90x90x180).
+//   read:  .binary (MERL), .bsdf (RGL), .brdfz, .exr, .json (analytic model)
+//   write: .binary, .bsdf (isotropic RGB, for Mitsuba 3 and pbrt-v4), .brdfz, .exr, .json (analytic only)
 #include <iostream>
 
 #include "commands.h"
@@ -8,18 +11,23 @@ namespace brdfz::cli {
 
 void add_convert(CLI::App& app) {
     struct Args {
-        std::string in, out, res;
+        std::string in, out, res, from, to;
         LoadOptions load;
     };
     auto args = std::make_shared<Args>();
-    CLI::App* cmd = app.add_subcommand("convert", "convert between formats (MERL -> MERL, RGL -> MERL)");
+    CLI::App* cmd = app.add_subcommand("convert", "convert between formats (merl, rgl, brdfz, exr, json)");
     cmd->add_option("IN", args->in, "input file")->required();
     cmd->add_option("OUT", args->out, "output file")->required();
     cmd->add_option("--res", args->res, "table resolution NHxNDxNP (default: the input's, or 90x90x180)");
+    cmd->add_option("--from", args->from, "input format (default: from the extension of IN)");
+    cmd->add_option("--to", args->to, "output format (default: from the extension of OUT)");
     add_load_options(cmd, args->load);
     cmd->callback([args] {
-        const Loaded in = load(args->in, args->load);
+        const Loaded in = load_as(args->from.empty() ? format_of(args->in) : args->from, args->in, args->load);
         SaveOptions save_options;
+        save_options.format = args->to;
+        save_options.source = args->in;
+        save_options.source_format = in.info.format;
         if (!args->res.empty()) save_options.grid = parse_resolution(args->res);
         save_options.progress = progress_bar("tabulating");
         const ValidityCounts c = save(*in.brdf, args->out, save_options);

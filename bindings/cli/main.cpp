@@ -13,6 +13,7 @@ int main(int argc, char** argv) {
     brdfz::cli::add_eval(app);
     brdfz::cli::add_diff(app);
     brdfz::cli::add_demo(app);
+    brdfz::cli::add_validate(app);
     brdfz::cli::add_sample(app);
     try {
         app.parse(argc, argv);

@@ -15,9 +15,71 @@ std::string fixed(double v, const char* fmt = "%.6g") {
     return buf;
 }
 
+
+// Container metadata (formats/SPEC.md): provenance, conventions, versions, achieved figures, datasets.
+void container_json(JsonWriter& j, const container::Metadata& m) {
+    j.key("container").begin_object();
+    j.key("version").value(std::size_t{m.version});
+    j.key("min_reader_version").value(std::size_t{m.min_reader_version});
+    j.key("features").begin_array();
+    for (const container::Feature& f : m.features) j.value(f.name + "@" + std::to_string(f.since));
+    j.end_array();
+    j.key("library_version").value(m.library_version);
+    j.key("created").value(m.created);
+    j.key("source").begin_object();
+    j.key("file").value(m.source.file).key("format").value(m.source.format).key("sha256").value(m.source.sha256);
+    j.end_object();
+    j.key("units").value(m.units).key("cosine").value(m.cosine).key("conventions").value(m.conventions);
+    j.key("representation").value(m.representation).key("spec").value(m.spec);
+    j.key("achieved").begin_object();
+    j.key("lossless").value(m.achieved.lossless).key("nbytes").value(std::size_t{m.achieved.nbytes});
+    if (m.achieved.metrics) {
+        const Metrics& x = *m.achieved.metrics;
+        j.key("cos_rmse").value(x.cos_rmse.mean).key("cos_rmse_rel").value(x.cos_rmse_rel.mean);
+        j.key("log_rmse").value(x.log_rmse.mean).key("cbrt_rmse").value(x.cbrt_rmse.mean);
+    }
+    j.end_object();
+    j.key("datasets").begin_array();
+    for (const container::DatasetInfo& d : m.datasets) {
+        j.begin_object().key("path").value(d.path).key("dtype").value(d.dtype).key("shape").begin_array();
+        for (std::uint64_t s : d.shape) j.value(std::size_t{s});
+        char crc[16];
+        std::snprintf(crc, sizeof crc, "%08x", d.crc32c);
+        j.end_array().key("crc32c").value(std::string(crc)).end_object();
+    }
+    j.end_array();
+    j.end_object();
+}
+
+void container_text(const container::Metadata& m, std::ostream& os) {
+    os << "  container  version " << m.version << " (readers >= " << m.min_reader_version << "), features";
+    for (std::size_t k = 0; k < m.features.size(); ++k) os << (k ? ", " : " ") << m.features[k].name;
+    os << "\n  written    " << m.created << " by brdfz " << m.library_version << "\n  source     ";
+    if (m.source.file.empty())
+        os << "(not recorded)\n";
+    else
+        os << m.source.file << " (" << m.source.format << ")\n";
+    if (!m.source.sha256.empty()) os << "  sha256     " << m.source.sha256 << "\n";
+    os << "  values     " << m.units << ", cosine " << m.cosine << "; " << m.conventions << "\n"
+       << "  stores     " << m.representation << ": " << m.spec << "\n"
+       << "  achieved   " << (m.achieved.lossless ? "lossless" : "tabulated") << ", " << m.achieved.nbytes << " bytes";
+    if (m.achieved.metrics)
+        os << ", cos_rmse " << fixed(m.achieved.metrics->cos_rmse.mean) << ", cos_rmse_rel "
+           << fixed(m.achieved.metrics->cos_rmse_rel.mean) << " against the source";
+    os << "\n";
+    for (const container::DatasetInfo& d : m.datasets) {
+        os << "  dataset    " << d.path << "  " << d.dtype << " ";
+        for (std::size_t k = 0; k < d.shape.size(); ++k) os << (k ? "x" : "") << d.shape[k];
+        char crc[16];
+        std::snprintf(crc, sizeof crc, "%08x", d.crc32c);
+        os << "  crc32c " << crc << "\n";
+    }
+}
+
 }  // namespace
 
-void print_info(const std::string& path, const Loaded& loaded, bool json, std::ostream& os) {
+void print_info(const std::string& path, const Loaded& loaded, bool json, std::ostream& os,
+                const container::Metadata* container) {
     const SourceInfo& info = loaded.info;
     Rgb albedo[std::size(kAlbedoAnglesDeg)];
     SampledAlbedo sampled[std::size(kAlbedoAnglesDeg)];
@@ -56,6 +118,7 @@ void print_info(const std::string& path, const Loaded& loaded, bool json, std::o
             j.end_object();
         }
         j.end_array();
+        if (container) container_json(j, *container);
         j.end_object();
         os << "\n";
         return;
@@ -72,7 +135,7 @@ void print_info(const std::string& path, const Loaded& loaded, bool json, std::o
        << "  nan        " << info.counts.nan << "\n"
        << "  inf        " << info.counts.inf << "\n"
        << "  range      [" << fixed(info.min_value) << ", " << fixed(info.max_value) << "]"
-       << (info.format == "merl" ? " 1/sr\n" : " (stored values)\n")
+       << (info.format == "merl" || info.format == "exr" || info.format == "brdfz" ? " 1/sr\n" : " (stored values)\n")
        << "  albedo     theta_o      r        g        b         sampled (" << kAlbedoSamples
        << " samples)  r, g, b ± stderr\n";
     for (std::size_t k = 0; k < std::size(kAlbedoAnglesDeg); ++k) {
@@ -81,6 +144,7 @@ void print_info(const std::string& path, const Loaded& loaded, bool json, std::o
         for (int c = 0; c < 3; ++c)
             os << fixed(sampled[k].mean[c], "%.4f") << "±" << fixed(sampled[k].stderr_[c], "%.4f") << (c < 2 ? "  " : "\n");
     }
+    if (container) container_text(*container, os);
 }
 
 void print_metrics(const Metrics& m, bool json, std::ostream& os) {

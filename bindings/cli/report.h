@@ -4,6 +4,7 @@
 #include <ostream>
 #include <string>
 
+#include "brdfz/formats/container.h"
 #include "brdfz/formats/io.h"
 #include "brdfz/metrics.h"
 
@@ -14,7 +15,9 @@ inline constexpr double kAlbedoAnglesDeg[] = {0.0, 30.0, 60.0, 80.0};
 // Samples for the sampler's albedo estimate shown beside the quadrature value.
 inline constexpr std::size_t kAlbedoSamples = 65536;
 
-void print_info(const std::string& path, const Loaded& loaded, bool json, std::ostream& os);
+// `container`: a .brdfz file's metadata, printed after the rest (JSON: key "container").
+void print_info(const std::string& path, const Loaded& loaded, bool json, std::ostream& os,
+                const container::Metadata* container = nullptr);
 void print_metrics(const Metrics& m, bool json, std::ostream& os);
 
 }  // namespace brdfz::cli
