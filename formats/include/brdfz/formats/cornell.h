@@ -53,8 +53,9 @@ struct ReadResult {
 
 // FormatError naming the file and line for a malformed file (bad count, non-numbers, records of the
 // wrong length, angles that are not finite or polar angles outside [0, π], wavelengths not strictly
-// increasing, no record at all); UnsupportedError for wavelengths outside 380..780 nm; IoError when
-// the OS cannot read the file. The whole file is checked before samples are allocated.
+// increasing, no record at all, no usable record); UnsupportedError for wavelengths outside
+// 380..780 nm or too narrow a range for every channel to respond; IoError when the OS cannot read
+// the file. The whole file is checked before samples are allocated.
 ReadResult read(const std::string& path);
 
 // Weights w[k] with rgb_c = Σ_k w[k][c]·s(λ_k) for a spectrum s sampled at `wavelengths` (nm): the
