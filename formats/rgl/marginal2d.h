@@ -83,18 +83,58 @@ inline double partial_integral(double t, double width, double v0, double v1) {
     return t * lerp(v0, v1, 0.5 * t) * width;
 }
 
+// Inverse of partial_integral on a unit-width segment: the t in [0, 1] with t·lerp(v0, v1, t/2) = s,
+// for v0, v1 >= 0. Rationalised, 2s / (v0 + √(v0² + 2s(v1 − v0))), so that it has no cancellation
+// and needs no special case for v0 ≈ v1 (Mitsuba switches to the constant-density solution there,
+// which is off by up to 1e-4 relative, i.e. its pdf would not quite be the density it draws from).
+inline double invert_partial_integral(double s, double v0, double v1) {
+    const double denom = v0 + std::sqrt(std::fmax(v0 * v0 + 2.0 * s * (v1 - v0), 0.0));
+    return denom > 0.0 ? clamp01(2.0 * s / denom) : 0.0;  // 0/0 only on a segment of zero density
+}
+
+// The largest j in [0, n) with cdf(j) < u, or 0 if there is none, for a non-decreasing cdf with
+// cdf(0) = 0: the cell of an inverse-CDF lookup. Cells of zero mass are never chosen (for u > 0).
+template <typename Cdf>
+std::size_t find_cell(std::size_t n, const Cdf& cdf, double u) {
+    std::size_t first = 1, count = n - 1;  // first index with cdf >= u lies in [first, first + count]
+    while (count > 0) {
+        const std::size_t half = count / 2;
+        if (cdf(first + half) < u) {
+            first += half + 1;
+            count -= half + 1;
+        } else {
+            count = half;
+        }
+    }
+    return first - 1;
+}
+
+// A point of [0,1]² and the density there.
+struct Warped {
+    Point2 p;
+    double pdf = 0.0;
+};
+
 // The 2D warp of a density given by a bilinearly interpolated table, one table per slice (Mitsuba's
-// Marginal2D with Continuous = true). Sampling inverts the marginal CDF of y, then the conditional
+// Marginal2D with Continuous = true). sample() inverts the marginal CDF of y, then the conditional
 // CDF of x given y; invert() is the inverse map, i.e. the CDF transform p ↦ (F(x | y), F(y)).
 // The Dupuy-Jakob parameterisation reads its RGB tables at invert(microfacet normal's (u_θ, u_φ)).
+// Between slices the tables are blended entry by entry; since every slice is normalised, the blended
+// CDFs are exactly the CDFs of the blended density, so sample() draws from eval() for any weights.
+// Arithmetic is in double over the float tables: sample() and invert() are inverses to rounding,
+// and the density they report is the one they realise.
 //
-// Every slice is normalised to integrate to 1, and the CDF tables are built the way Mitsuba
-// builds them (accumulated in double, stored in float), so the stored tables are bit-identical.
+// Every slice is normalised to integrate to 1, and the CDF tables are built as Mitsuba builds them
+// (accumulated in double, stored in float), though in unit-square rather than patch units, so they
+// agree with Mitsuba's to float rounding, not bit for bit.
 class Marginal2D {
 public:
-    // ValueError (naming `what`) when a slice does not integrate to a positive finite number.
+    // ValueError (naming `what`) when a value is negative (no density) or a slice does not integrate
+    // to a positive finite number.
     Marginal2D(const char* what, std::span<const float> data, std::size_t slices, std::size_t rows, std::size_t cols)
         : rows_(rows), cols_(cols), data_(data.begin(), data.end()) {
+        for (float v : data_)
+            if (v < 0.0f) throw ValueError(std::string(what) + " holds a negative value");
         cond_.resize(slices * rows * (cols - 1));
         marg_.resize(slices * (rows - 1));
         std::vector<double> row_total(rows);
@@ -128,7 +168,38 @@ public:
         }
     }
 
-    Point2 invert(Point2 p, const SliceWeights& w) const {
+    // A point of [0,1]² distributed with density eval(·, w), for u in [0,1]² (x and y each uniform).
+    Warped sample(Point2 u, const SliceWeights& w) const {
+        const std::size_t n_cond = cols_ - 1;  // conditional CDF entries per row
+        const SliceBlend data = blend(data_.data(), rows_ * cols_, w);
+        const SliceBlend cond = blend(cond_.data(), rows_ * n_cond, w);
+        const SliceBlend marg = blend(marg_.data(), rows_ - 1, w);
+        const double width = 1.0 / static_cast<double>(cols_ - 1), height = 1.0 / static_cast<double>(rows_ - 1);
+        const double ux = clamp01(u.x), uy = clamp01(u.y);
+
+        // Row of patches from the marginal CDF, then the height inside it: along a patch row the
+        // marginal density (the row integral) is linear, from the patch's lower to its upper edge.
+        const auto marg_at = [&](std::size_t j) { return j == 0 ? 0.0 : marg[j - 1]; };
+        const std::size_t iy = find_cell(rows_ - 1, marg_at, uy);
+        const std::size_t row0 = iy * n_cond, row1 = row0 + n_cond;
+        const double r0 = cond[row0 + n_cond - 1], r1 = cond[row1 + n_cond - 1];
+        const double fy = invert_partial_integral((uy - marg_at(iy)) / height, r0, r1);
+
+        // Column from the conditional CDF at that height (interpolated between the patch's rows),
+        // then the position inside the patch, where the density is linear in x.
+        const double target = ux * lerp(r0, r1, fy);
+        const auto cond_at = [&](std::size_t j) {
+            return j == 0 ? 0.0 : lerp(cond[row0 + j - 1], cond[row1 + j - 1], fy);
+        };
+        const std::size_t ix = find_cell(cols_ - 1, cond_at, target);
+        const std::size_t i = iy * cols_ + ix;
+        const double c0 = lerp(data[i], data[i + cols_], fy), c1 = lerp(data[i + 1], data[i + cols_ + 1], fy);
+        const double fx = invert_partial_integral((target - cond_at(ix)) / width, c0, c1);
+        return {{(static_cast<double>(ix) + fx) * width, (static_cast<double>(iy) + fy) * height}, lerp(c0, c1, fx)};
+    }
+
+    // The inverse of sample(): the CDF transform of p, and the density at p.
+    Warped invert(Point2 p, const SliceWeights& w) const {
         const std::size_t n_cond = cols_ - 1;  // conditional CDF entries per row
         const SliceBlend data = blend(data_.data(), rows_ * cols_, w);
         const SliceBlend cond = blend(cond_.data(), rows_ * n_cond, w);
@@ -148,7 +219,12 @@ public:
         // Marginal CDF of y: the rows of patches below, plus the part of this one.
         double y = partial_integral(q.fy, 1.0 / static_cast<double>(rows_ - 1), r0, r1);
         if (q.iy > 0) y += marg[q.iy - 1];
-        return {x, y};
+        return {{x, y}, lerp(c0, c1, q.fx)};
+    }
+
+    // The density at p (integrating to 1 over [0,1]²).
+    double eval(Point2 p, const SliceWeights& w) const {
+        return bilinear(blend(data_.data(), rows_ * cols_, w), rows_, cols_, p);
     }
 
 private:

@@ -84,7 +84,7 @@ ReadResult read(const std::string& path) {
     expect_shape(tf, jacobian, {1});
     expect_shape(tf, vndf, {1, n_theta, vndf.shape[2], vndf.shape[3]});
     expect_shape(tf, rgb, {1, n_theta, 3, rgb.shape[3], rgb.shape[3]});
-    // Unused here (it serves importance sampling), but Mitsuba rejects files where it does not match.
+    // The density of the sampler's first warp, over the same square as rgb.
     expect_shape(tf, luminance, {1, n_theta, rgb.shape[3], rgb.shape[4]});
 
     ReadResult result;
@@ -98,6 +98,7 @@ ReadResult read(const std::string& path) {
     t.ndf = read_grids(tf, ndf);
     t.sigma = read_grids(tf, sigma);
     t.vndf = read_grids(tf, vndf);
+    t.luminance = read_grids(tf, luminance);
     t.rgb = read_grids(tf, rgb);
     t.jacobian = tf.read_u8(jacobian)[0] != 0;
 
