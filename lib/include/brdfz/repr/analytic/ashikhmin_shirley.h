@@ -19,6 +19,8 @@ namespace brdfz::lobes {
 
 struct AshikhminShirley {
     static constexpr std::string_view name = "ashikhmin_shirley";
+    // Rs enters both terms non-linearly, so the weights are not plain scale factors.
+    static constexpr bool linear_weights = false;
     static constexpr std::array<ParamSpec, 8> params{{
         {"rd_r", 0.0, 1.0, 0.5, ParamKind::Weight},
         {"rd_g", 0.0, 1.0, 0.5, ParamKind::Weight},

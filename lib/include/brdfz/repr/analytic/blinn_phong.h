@@ -16,6 +16,7 @@ namespace brdfz::lobes {
 
 struct BlinnPhong {
     static constexpr std::string_view name = "blinn_phong";
+    static constexpr bool linear_weights = true;
     static constexpr std::array<ParamSpec, 4> params{{
         {"ks_r", 0.0, 1.0, 0.5, ParamKind::Weight},
         {"ks_g", 0.0, 1.0, 0.5, ParamKind::Weight},

@@ -17,6 +17,7 @@ namespace brdfz::lobes {
 
 struct Lafortune {
     static constexpr std::string_view name = "lafortune";
+    static constexpr bool linear_weights = true;
     static constexpr std::array<ParamSpec, 6> params{{
         {"rho_r", 0.0, 1.0, 0.5, ParamKind::Weight},
         {"rho_g", 0.0, 1.0, 0.5, ParamKind::Weight},

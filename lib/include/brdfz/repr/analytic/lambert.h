@@ -11,6 +11,7 @@ namespace brdfz::lobes {
 
 struct Lambert {
     static constexpr std::string_view name = "lambert";
+    static constexpr bool linear_weights = true;
     static constexpr std::array<ParamSpec, 3> params{{
         {"rho_r", 0.0, 1.0, 0.5, ParamKind::Weight},
         {"rho_g", 0.0, 1.0, 0.5, ParamKind::Weight},

@@ -4,12 +4,15 @@
 // A family is a struct with
 //   static constexpr std::string_view name;                 // its term in a model string, e.g. "ggx"
 //   static constexpr std::array<ParamSpec, N> params;       // names, bounds, defaults, in storage order
+//   static constexpr bool linear_weights;                   // f_c = p[c] · (f_c with p[0..2] = 1)?
 //   template <typename T, typename S>
 //   static void eval(const Geometry<S>& g, const T* p, T out[3]);   // f_r per channel, no cosine
 // T is the parameter/result scalar (double, float or ceres::Jet<double, N> for autodiff); S is the
 // geometry scalar (double or float; Jets only ever see double geometry). eval is only called for
 // pairs above the horizon but must stay finite for every such pair, grazing included, and is written
 // without data-dependent branches (min/max/select) so batch loops vectorise.
+// linear_weights declares that the first three parameters are colour weights scaling channel r, g, b
+// and nothing else; fitting then differentiates the rest by autodiff and the weights in closed form.
 #pragma once
 
 #include <algorithm>
@@ -83,6 +86,7 @@ struct GeometryBlock {
 struct LobeType {
     std::string_view name;
     std::span<const ParamSpec> params;
+    bool linear_weights;
     void (*eval)(const Geometry<double>& g, const double* p, double out[3]);
     // r[k], g[k], b[k] += f(pair k) for k < n: the batch kernel.
     void (*accumulate)(const GeometryBlock& geo, std::size_t n, const double* p, double* r, double* g, double* b);
@@ -116,7 +120,7 @@ void accumulate_lobe(const GeometryBlock& geo, std::size_t n, const double* p, d
 
 template <typename F>
 constexpr LobeType lobe_type() {
-    return {F::name, F::params, &detail::eval_lobe<F>, &detail::accumulate_lobe<F>};
+    return {F::name, F::params, F::linear_weights, &detail::eval_lobe<F>, &detail::accumulate_lobe<F>};
 }
 
 }  // namespace brdfz

@@ -232,6 +232,7 @@ struct Conductor {
 template <typename Distribution, typename Fresnel, detail::Name kName>
 struct Microfacet {
     static constexpr std::string_view name = kName.view();
+    static constexpr bool linear_weights = true;
     static constexpr auto params = detail::concat(detail::kSpecularWeightsAndAlpha, Fresnel::params);
 
     template <typename T, typename S>
@@ -257,6 +258,7 @@ using BeckmannConductor = Microfacet<BeckmannSeparable, Conductor, "beckmann_con
 // Anisotropic GGX with height-correlated masking and Schlick Fresnel; αx along the tangent +x.
 struct GgxAniso {
     static constexpr std::string_view name = "ggx_aniso";
+    static constexpr bool linear_weights = true;
     static constexpr std::array<ParamSpec, 6> params{{
         {"ks_r", 0.0, 1.0, 1.0, ParamKind::Weight},
         {"ks_g", 0.0, 1.0, 1.0, ParamKind::Weight},
