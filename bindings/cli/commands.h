@@ -12,5 +12,6 @@ void add_diff(CLI::App& app);
 void add_demo(CLI::App& app);
 void add_validate(CLI::App& app);
 void add_sample(CLI::App& app);
+void add_fit(CLI::App& app);
 
 }  // namespace brdfz::cli

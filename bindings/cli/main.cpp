@@ -15,6 +15,7 @@ int main(int argc, char** argv) {
     brdfz::cli::add_demo(app);
     brdfz::cli::add_validate(app);
     brdfz::cli::add_sample(app);
+    brdfz::cli::add_fit(app);
     try {
         app.parse(argc, argv);
     } catch (const CLI::ParseError& e) {

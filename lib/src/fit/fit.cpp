@@ -450,6 +450,7 @@ FitResult fit(const Brdf& source, const std::string& model, const FitOptions& op
     const GridSamples samples = sample_brdf(source, so);
     FitResult r = fit_samples(samples.set, model, options, t0);
     r.report.excluded_invalid += samples.invalid;
+    r.report.grid_bins = samples.eligible;
     if (r.report.status != FitStatus::InsufficientData) {
         MetricOptions mo = options.metrics;
         mo.max_theta_deg = options.max_theta_deg;

@@ -80,6 +80,8 @@ struct FitReport {
     std::size_t samples = 0;            // used by the fit
     std::size_t excluded_cutoff = 0;    // left out by the angular cut-off
     std::size_t excluded_invalid = 0;   // left out for lack of a finite value
+    // A Brdf input: grid bins inside the cut-off before subsampling (the cut-off applies to the grid).
+    std::size_t grid_bins = 0;
     std::array<double, 3> channel_cost{};  // ½ Σ r² per channel at the solution (Ceres' convention)
     double initial_cost = 0, final_cost = 0;  // of the refinement (all samples), robust loss included
     int iterations = 0;                 // of the kept start, both phases
