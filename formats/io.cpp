@@ -138,7 +138,7 @@ Loaded load_as(const std::string& format, const std::string& path, const LoadOpt
         return out;
     }
     if (format == "json") return load_json(path);
-    if (holds_measurements(path))
+    if (format == "cornell" || format == "alta")
         throw UnsupportedError(path, "a " + format + " file holds scattered measurements, not a BRDF: it can be the " +
                                          "reference of a comparison or be fitted, not evaluated");
     throw UnsupportedError(path, "reading " + format + " files is not supported");
