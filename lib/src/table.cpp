@@ -22,6 +22,11 @@ Table::Table(GridSpec grid) : grid_(grid) {
     values_.assign(3 * grid_.bins(), std::numeric_limits<float>::quiet_NaN());
 }
 
+Table::Table(GridSpec grid, Uninitialized) : grid_(grid) {
+    grid_.validate();
+    values_.resize(3 * grid_.bins());
+}
+
 bool Table::valid(std::size_t bin) const {
     const float* v = &values_[3 * bin];
     return !std::isnan(v[0]) && !std::isnan(v[1]) && !std::isnan(v[2]);

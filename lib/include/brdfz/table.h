@@ -12,6 +12,9 @@
 #include <cmath>
 #include <cstddef>
 #include <cstdint>
+#include <memory>
+#include <new>
+#include <utility>
 #include <numbers>
 #include <string>
 #include <vector>
@@ -88,6 +91,9 @@ struct ValidityCounts {
 class Table {
 public:
     explicit Table(GridSpec grid);  // every value invalid
+    // Values left unset, for readers that write every entry (saves a pass over the table on load).
+    struct Uninitialized {};
+    Table(GridSpec grid, Uninitialized);
 
     const GridSpec& grid() const { return grid_; }
     std::size_t bins() const { return grid_.bins(); }
@@ -106,8 +112,28 @@ public:
     bool operator==(const Table& other) const;  // same grid and bit-identical values
 
 private:
+    // Leaves new elements default-initialised (unset) instead of zeroing them.
+    template <typename T>
+    struct NoInitAllocator : std::allocator<T> {
+        template <typename U>
+        struct rebind {
+            using other = NoInitAllocator<U>;
+        };
+        NoInitAllocator() = default;
+        template <typename U>
+        NoInitAllocator(const NoInitAllocator<U>&) {}
+        template <typename U>
+        void construct(U* p) {
+            ::new (static_cast<void*>(p)) U;
+        }
+        template <typename U, typename... Args>
+        void construct(U* p, Args&&... args) {
+            ::new (static_cast<void*>(p)) U(std::forward<Args>(args)...);
+        }
+    };
+
     GridSpec grid_;
-    std::vector<float> values_;
+    std::vector<float, NoInitAllocator<float>> values_;
 };
 
 }  // namespace brdfz
