@@ -1,0 +1,75 @@
+// Helpers shared by the benchmark programs: timing, medians, arguments, a synthetic table.
+#pragma once
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <numbers>
+#include <string>
+#include <vector>
+
+#include "brdfz/table.h"
+
+namespace bench {
+
+using Clock = std::chrono::steady_clock;
+
+inline double ms_between(Clock::time_point a, Clock::time_point b) {
+    return std::chrono::duration<double, std::milli>(b - a).count();
+}
+
+// Median rather than mean: on a shared machine the outliers are other processes, not our code.
+inline double median(std::vector<double> v) {
+    std::sort(v.begin(), v.end());
+    const std::size_t m = v.size() / 2;
+    return v.size() % 2 ? v[m] : 0.5 * (v[m - 1] + v[m]);
+}
+
+struct Args {
+    std::string path;  // empty: use synthetic data
+    int reps;
+};
+
+// "[FILE.binary] [--reps N]". A bad command line prints the usage and exits: this is a program.
+inline Args parse_args(int argc, char** argv, int default_reps) {
+    Args args{"", default_reps};
+    for (int i = 1; i < argc; ++i) {
+        const std::string a = argv[i];
+        if (a == "--reps" && i + 1 < argc) {
+            args.reps = std::atoi(argv[++i]);
+        } else if (!a.empty() && a[0] != '-' && args.path.empty()) {
+            args.path = a;
+        } else {
+            args.reps = 0;
+            break;
+        }
+    }
+    if (args.reps < 1) {
+        std::fprintf(stderr, "usage: %s [FILE.binary] [--reps N]   (N >= 1, default %d)\n", argv[0], default_reps);
+        std::exit(2);
+    }
+    return args;
+}
+
+// A smooth positive RGB function of the bin angles: a specular peak in θh over a diffuse floor, with
+// θd (Fresnel-like) and φd terms so every axis of a linear lookup does real work.
+inline brdfz::Table synthetic_table(const brdfz::GridSpec& g) {
+    brdfz::Table t(g);
+    for (int ih = 0; ih < g.n_theta_h; ++ih) {
+        const double th = g.theta_h_at(ih);
+        const double spec = std::exp(-th * th / 0.02);
+        for (int id = 0; id < g.n_theta_d; ++id) {
+            const double fres = 1.0 + std::pow(std::sin(g.theta_d_at(id)), 5.0);
+            for (int ip = 0; ip < g.n_phi_d; ++ip) {
+                const double aniso = 1.0 + 0.1 * std::cos(2.0 * g.phi_d_at(ip));
+                const double s = spec * fres * aniso;
+                t.set(g.index(ih, id, ip), {0.05 + 2.0 * s, 0.04 + 1.5 * s, 0.02 + 1.0 * s});
+            }
+        }
+    }
+    return t;
+}
+
+}  // namespace bench
