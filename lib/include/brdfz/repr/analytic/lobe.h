@@ -57,17 +57,20 @@ struct Geometry {
     S d;           // wi·h, in [0, 1]
 };
 
+// Always inlined: batch loops over pairs only vectorise when no call is left in them.
 template <typename S>
-Geometry<S> make_geometry(S ix, S iy, S iz, S ox, S oy, S oz) {
+[[gnu::always_inline]] inline Geometry<S> make_geometry(S ix, S iy, S iz, S ox, S oy, S oz) {
     using std::sqrt;
     const S sx = ix + ox, sy = iy + oy, sz = iz + oz;
     // |wi + wo| vanishes only for opposite grazing pairs, which get h = ẑ as in coords.h's half_vector.
     const S n2 = sx * sx + sy * sy + sz * sz;
     const bool degenerate = !(n2 > std::numeric_limits<S>::min());
-    const S inv = S(1) / sqrt(std::max(n2, std::numeric_limits<S>::min()));
+    const S inv = S(1) / sqrt(select(degenerate, std::numeric_limits<S>::min(), n2));
     Geometry<S> g{ix, iy, iz, ox, oy, oz, select(degenerate, S(0), sx * inv), select(degenerate, S(0), sy * inv),
                   select(degenerate, S(1), sz * inv), S(0)};
-    g.d = std::clamp(ix * g.hx + iy * g.hy + iz * g.hz, S(0), S(1));
+    // Clamped to [0, 1] by value selects (std::clamp's references leave branches in the loop).
+    const S d = ix * g.hx + iy * g.hy + iz * g.hz;
+    g.d = select(d > S(1), S(1), select(d > S(0), d, S(0)));
     return g;
 }
 
