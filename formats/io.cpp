@@ -13,6 +13,7 @@
 #include "brdfz/formats/merl.h"
 #include "brdfz/formats/model_json.h"
 #include "brdfz/formats/rgl.h"
+#include "brdfz/formats/rgl_writer.h"
 #include "brdfz/tabulate.h"
 
 namespace brdfz {
@@ -194,6 +195,11 @@ ValidityCounts save(const Brdf& brdf, const std::string& path, const SaveOptions
         return {};
     }
     if (format == "merl") return save_table(brdf, options, [&](const Table& t) { merl::write(path, t); });
+    if (format == "rgl") {
+        ValidityCounts written;
+        written.valid = rgl::write(path, brdf);
+        return written;
+    }
     if (format == "exr") return save_table(brdf, options, [&](const Table& t) { exr::write(path, t); });
     throw UnsupportedError(path, "writing " + format + " files is not supported");
 }

@@ -1,8 +1,8 @@
 // RGL storage: the tensors of an isotropic RGB RGL-EPFL material (Dupuy & Jakob 2018) as RglBrdf keeps
 // them, so a .bsdf file converted to .brdfz evaluates bit-identically to the file. Datasets (float32,
 // C order): theta_i [n], ndf [rows, cols], sigma [rows, cols], vndf [n, rows, cols],
-// rgb [n, 3, rows, cols]; attribute jacobian (0 or 1). formats/include/brdfz/formats/rgl.h explains
-// the tensors.
+// rgb [n, 3, rows, cols], and luminance [n, rows, cols] when the material has one (for sampling);
+// attribute jacobian (0 or 1). formats/include/brdfz/formats/rgl.h explains the tensors.
 #include "brdfz/errors.h"
 #include "brdfz/formats/rgl.h"
 #include "storage.h"
@@ -32,6 +32,7 @@ void write(h5::WriteNode& rep, const Brdf& brdf) {
     write_grids(rep, "sigma", t.sigma, {});
     write_grids(rep, "vndf", t.vndf, {n});
     write_grids(rep, "rgb", t.rgb, {n, 3});
+    if (!t.luminance.values.empty()) write_grids(rep, "luminance", t.luminance, {n});
 }
 
 // A float32 dataset of the given rank whose leading dimensions (all but the last two) multiply to
@@ -67,6 +68,7 @@ std::unique_ptr<Brdf> read(const h5::ReadNode& rep, const ReadContext&) {
     t.sigma = read_grids(rep, "sigma", 2, {});
     t.vndf = read_grids(rep, "vndf", 3, {n});
     t.rgb = read_grids(rep, "rgb", 4, {n, 3});
+    if (rep.has("luminance")) t.luminance = read_grids(rep, "luminance", 3, {n});
     try {
         return std::make_unique<rgl::RglBrdf>(std::move(t));
     } catch (const ValueError& e) {

@@ -68,6 +68,7 @@ rgl::Tensors small_tensors() {
     t.sigma = grids(1, 2);
     t.vndf = grids(3, 3);
     t.rgb = grids(9, 4);
+    t.luminance = grids(3, 5);
     return t;
 }
 
@@ -278,12 +279,16 @@ TEST_CASE("RGL tensors round-trip through .brdfz bit for bit", "[container][rgl]
         CHECK(a.sigma.values == b.sigma.values);
         CHECK(a.vndf.values == b.vndf.values);
         CHECK(a.rgb.values == b.rgb.values);
+        CHECK(a.luminance.values == b.luminance.values);
         CHECK(a.jacobian == b.jacobian);
         for (int k = 0; k < 200; ++k) {
             const Vec3 wi = normalize(Vec3{u(rng), u(rng), std::abs(u(rng)) + 0.01});
             const Vec3 wo = normalize(Vec3{u(rng), u(rng), std::abs(u(rng)) + 0.01});
             const Rgb fa = src->eval(wi, wo), fb = back->eval(wi, wo);
             CHECK(std::memcmp(&fa, &fb, sizeof fa) == 0);
+            const BrdfSample sa = src->sample(wo, 0.3, 0.6), sb = back->sample(wo, 0.3, 0.6);
+            CHECK(std::memcmp(&sa.wi, &sb.wi, sizeof sa.wi) == 0);
+            CHECK(sa.pdf == sb.pdf);
         }
     }
 }
@@ -294,7 +299,7 @@ TEST_CASE("A flipped byte anywhere is detected, and in a dataset the dataset is 
     container::write(good.string(), rgl::RglBrdf(small_tensors()));
     const std::vector<unsigned char> bytes = slurp(good);
     const auto extents = extents_of(bytes);
-    REQUIRE(extents.size() == 5);  // theta_i, ndf, sigma, vndf, rgb
+    REQUIRE(extents.size() == 6);  // theta_i, ndf, sigma, vndf, rgb, luminance
 
     // Each dataset: a flipped byte at its start, middle and end names it.
     std::vector<std::string> named;
@@ -311,7 +316,8 @@ TEST_CASE("A flipped byte anywhere is detected, and in a dataset the dataset is 
         }
     }
     std::sort(named.begin(), named.end());
-    CHECK(named == std::vector<std::string>{"/representation/ndf", "/representation/rgb", "/representation/sigma",
+    CHECK(named == std::vector<std::string>{"/representation/luminance", "/representation/ndf",
+                                            "/representation/rgb", "/representation/sigma",
                                             "/representation/theta_i", "/representation/vndf"});
 
     // Every byte outside the datasets (header, HDF5 structure): the read fails with a FormatError

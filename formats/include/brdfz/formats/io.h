@@ -1,6 +1,6 @@
 // Format-independent loading and saving: the format comes from the file extension.
 //   .binary  MERL table            (read, write)
-//   .bsdf    RGL-EPFL tensor_file  (read)
+//   .bsdf    RGL-EPFL tensor_file  (read; write isotropic RGB: brdfz/formats/rgl_writer.h)
 //   .brdfz   brdfz container       (read, write; formats/SPEC.md)
 //   .exr     OpenEXR table mosaic  (read, write; brdfz/formats/exr.h)
 //   .brdf    Cornell spectral measurements  (read with load_measurements)

@@ -1,0 +1,322 @@
+// RGL .bsdf writer: tensors from any Brdf (rgl_writer.h) and the tensor_file serialisation
+// (tensor_file.h describes the layout).
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <cstring>
+#include <numbers>
+#include <vector>
+
+#include "brdfz/errors.h"
+#include "brdfz/formats/rgl_writer.h"
+#include "detail/atomic_file.h"
+#include "detail/bytes.h"
+#include "marginal2d.h"
+#include "tensor_file.h"
+
+namespace brdfz::rgl {
+namespace {
+
+constexpr double kPi = std::numbers::pi;
+constexpr double kUniformShare = 0.2;            // of D, spread uniformly over the hemisphere
+constexpr double kCosineShare = 0.3;             // of the warp, spread cosine-weighted over wo
+constexpr double kThetaMax = 89.0 * kPi / 180.0;  // last θi slice
+constexpr double kMinCosine = 1e-4;              // floor on m·wi: every warp row has mass
+constexpr double kLuminanceFloor = 1e-3;         // of a slice's mean, so every slice can be sampled
+
+double theta_of_u(double u) { return u * u * (kPi / 2.0); }
+double luminance(double r, double g, double b) { return 0.2126 * r + 0.7152 * g + 0.0722 * b; }
+Vec3 in_plane(double theta) { return {std::sin(theta), 0.0, std::cos(theta)}; }
+
+// The microfacet normal at unit coordinates u (φ relative to φi = 0).
+Vec3 normal_at(double ux, double uy) {
+    const double theta = theta_of_u(ux), phi = (2.0 * uy - 1.0) * kPi;
+    return {std::sin(theta) * std::cos(phi), std::sin(theta) * std::sin(phi), std::cos(theta)};
+}
+
+// dωo/du_m, the solid angle of reflected directions per unit area of the warp's square, up to the
+// constant 8π²: u_θ·sinθm·(m·wi), floored.
+double jacobian(double ux, const Vec3& m, const Vec3& wi) {
+    return ux * std::sin(theta_of_u(ux)) * std::max(dot(m, wi), kMinCosine);
+}
+
+// D at u_θ from an isotropic ndf row, interpolated linearly as the reader does.
+double ndf_at(const std::vector<double>& d, double u) {
+    const double x = std::clamp(u, 0.0, 1.0) * static_cast<double>(d.size() - 1);
+    const std::size_t i = std::min(static_cast<std::size_t>(x), d.size() - 2);
+    const double t = x - static_cast<double>(i);
+    return d[i] * (1.0 - t) + d[i + 1] * t;
+}
+
+// Midpoint quadrature over u_θ ∈ [0, 1] of g(u, θ)·dθ, dθ = π·u du.
+template <typename G>
+double integrate_theta(const G& g) {
+    constexpr int kSteps = 4096;
+    double sum = 0.0;
+    for (int k = 0; k < kSteps; ++k) {
+        const double u = (k + 0.5) / kSteps;
+        sum += g(u, theta_of_u(u)) * kPi * u;
+    }
+    return sum / kSteps;
+}
+
+// D(θ) ∝ Y(f(w, w))·cos²θ at the ndf columns (a microfacet BRDF's retro-reflection is F·D·G/(4cos²θ)),
+// normalised to ∫ D cosθ dω = 1 and mixed with the uniform D = 1/π.
+std::vector<double> derive_ndf(const Brdf& brdf, int n) {
+    std::vector<double> d(n);
+    for (int j = 0; j < n; ++j) {
+        const double theta = theta_of_u(static_cast<double>(j) / (n - 1));
+        const Vec3 w = in_plane(std::min(theta, kThetaMax));
+        const Rgb f = brdf.eval(w, w);
+        const double c = std::cos(theta), y = luminance(f[0], f[1], f[2]) * c * c;
+        d[j] = std::isfinite(y) && y > 0.0 ? y : 0.0;
+    }
+    const double total =
+        2.0 * kPi * integrate_theta([&](double u, double t) { return ndf_at(d, u) * std::cos(t) * std::sin(t); });
+    for (double& v : d) v = total > 0.0 ? (1.0 - kUniformShare) * v / total + kUniformShare / kPi : 1.0 / kPi;
+    return d;
+}
+
+// σ(θi) = ∫ D(m) max(0, m·wi) dωm; the azimuthal integral of max(0, a + b cosφ) is exact.
+double projected_area(const std::vector<double>& d, double theta_i) {
+    const double ci = std::cos(theta_i), si = std::sin(theta_i);
+    return integrate_theta([&](double u, double t) {
+        const double a = std::cos(t) * ci, b = std::sin(t) * si;
+        double azimuthal;  // ∫_0^{2π} max(0, a + b cosφ) dφ
+        if (a >= b) {
+            azimuthal = 2.0 * kPi * a;
+        } else if (a <= -b) {
+            azimuthal = 0.0;
+        } else {
+            const double phi0 = std::acos(-a / b);
+            azimuthal = 2.0 * (a * phi0 + b * std::sin(phi0));
+        }
+        return ndf_at(d, u) * azimuthal * std::sin(t);
+    });
+}
+
+// An isotropic table: 2 identical rows (φ = -π and π) of columns along u_θ.
+Grids isotropic(const std::vector<double>& row) {
+    Grids g;
+    g.rows = 2;
+    g.cols = row.size();
+    for (int r = 0; r < 2; ++r)
+        for (double v : row) g.values.push_back(static_cast<float>(v));
+    return g;
+}
+
+Grids square(std::size_t slices, int n) {
+    Grids g;
+    g.slices = slices;
+    g.rows = g.cols = static_cast<std::size_t>(n);
+    g.values.assign(slices * g.rows * g.cols, 0.0f);
+    return g;
+}
+
+// Y of each rgb grid point, clamped at 0, plus the floor: for files whose warps follow their
+// microfacet distribution (RGL's own), whose rgb values are then already per unit of the warp.
+Grids luminance_of(const Grids& rgb) {
+    Grids lum;
+    lum.slices = rgb.slices / 3;
+    lum.rows = rgb.rows;
+    lum.cols = rgb.cols;
+    const std::size_t plane = rgb.rows * rgb.cols;
+    lum.values.resize(lum.slices * plane);
+    for (std::size_t s = 0; s < lum.slices; ++s) {
+        const float* c = rgb.values.data() + 3 * s * plane;
+        float* y = lum.values.data() + s * plane;
+        double mean = 0.0;
+        for (std::size_t k = 0; k < plane; ++k) {
+            y[k] = static_cast<float>(std::max(0.0, luminance(c[k], c[plane + k], c[2 * plane + k])));
+            mean += y[k] / static_cast<double>(plane);
+        }
+        const double floor = mean > 0.0 ? kLuminanceFloor * mean : 1.0;
+        for (std::size_t k = 0; k < plane; ++k) y[k] += static_cast<float>(floor);
+    }
+    return lum;
+}
+
+// ---- tensor_file serialisation ----
+
+struct OutField {
+    std::string name;
+    detail::DType dtype;
+    std::vector<std::uint64_t> shape;
+    const void* data;
+    std::uint64_t bytes;
+};
+
+template <typename T>
+void put(std::vector<unsigned char>& b, T v) {
+    v = brdfz::detail::to_little_endian(v);
+    const auto* p = reinterpret_cast<const unsigned char*>(&v);
+    b.insert(b.end(), p, p + sizeof v);
+}
+
+void write_tensor_file(const std::string& path, const std::vector<OutField>& fields) {
+    static_assert(std::endian::native == std::endian::little, "float data are written in host order");
+    std::vector<unsigned char> header;
+    const char magic[] = "tensor_file";
+    header.insert(header.end(), magic, magic + sizeof magic);  // with its NUL
+    header.push_back(1);
+    header.push_back(0);
+    put<std::uint32_t>(header, static_cast<std::uint32_t>(fields.size()));
+    std::uint64_t size = header.size();
+    for (const OutField& f : fields) size += 2 + f.name.size() + 2 + 1 + 8 + 8 * f.shape.size();
+    // Field data follow the table, each at an 8-byte aligned offset.
+    std::vector<std::uint64_t> offsets;
+    for (const OutField& f : fields) {
+        size = (size + 7) / 8 * 8;
+        offsets.push_back(size);
+        size += f.bytes;
+    }
+    for (std::size_t k = 0; k < fields.size(); ++k) {
+        const OutField& f = fields[k];
+        put<std::uint16_t>(header, static_cast<std::uint16_t>(f.name.size()));
+        header.insert(header.end(), f.name.begin(), f.name.end());
+        put<std::uint16_t>(header, static_cast<std::uint16_t>(f.shape.size()));
+        header.push_back(static_cast<unsigned char>(f.dtype));
+        put<std::uint64_t>(header, offsets[k]);
+        for (std::uint64_t d : f.shape) put<std::uint64_t>(header, d);
+    }
+    brdfz::detail::AtomicFile file(path);
+    file.write(header.data(), header.size());
+    std::uint64_t pos = header.size();
+    const unsigned char zeros[8] = {};
+    for (std::size_t k = 0; k < fields.size(); ++k) {
+        file.write(zeros, offsets[k] - pos);
+        file.write(fields[k].data, fields[k].bytes);
+        pos = offsets[k] + fields[k].bytes;
+    }
+    file.commit();
+}
+
+OutField f32_field(const char* name, std::vector<std::uint64_t> shape, const std::vector<float>& v) {
+    return {name, detail::DType::F32, std::move(shape), v.data(), v.size() * sizeof(float)};
+}
+
+}  // namespace
+
+Tensors derive(const Brdf& brdf, const WriteOptions& options) {
+    for (int n : {options.vndf_resolution, options.rgb_resolution, options.ndf_resolution, options.n_theta_i})
+        if (n < 2 || n > 4096) throw ValueError("rgl::derive: resolutions must be in 2..4096");
+    const int n = options.n_theta_i, nv = options.vndf_resolution, nr = options.rgb_resolution;
+
+    Tensors t;
+    t.jacobian = true;
+    const std::vector<double> d = derive_ndf(brdf, options.ndf_resolution);
+    t.ndf = isotropic(d);
+    std::vector<double> sigma(d.size());
+    for (std::size_t j = 0; j < d.size(); ++j)
+        sigma[j] = projected_area(d, theta_of_u(static_cast<double>(j) / static_cast<double>(d.size() - 1)));
+    t.sigma = isotropic(sigma);
+    for (int k = 0; k < n; ++k) t.theta_i.push_back(static_cast<float>(kThetaMax * k / (n - 1)));
+
+    // The warp per slice, over (u_θm across, u_φm down): a mixture of the BRDF's own lobe at this
+    // θi, Y(f)·cosθo·dωo/du_m, which puts the rgb samples where the reflected energy is, and of
+    // cosθo·dωo/du_m, which keeps every reflected direction sampled.
+    t.vndf = square(static_cast<std::size_t>(n), nv);
+    const std::size_t cells = static_cast<std::size_t>(nv) * nv;
+    std::vector<Vec3> wis(cells), wos(cells);
+    std::vector<Rgb> f(cells);
+    std::vector<double> cosine(cells);
+    for (int k = 0; k < n; ++k) {
+        const Vec3 wi = in_plane(t.theta_i[k]);
+        for (std::size_t c = 0; c < cells; ++c) {
+            const double ux = static_cast<double>(c % nv) / (nv - 1), uy = static_cast<double>(c / nv) / (nv - 1);
+            const Vec3 m = normal_at(ux, uy);
+            wis[c] = wi;
+            wos[c] = 2.0 * dot(m, wi) * m - wi;
+            cosine[c] = jacobian(ux, m, wi) * std::max(wos[c].z, 0.0);
+        }
+        brdf.eval(wis, wos, f);
+        double lobe_total = 0.0, cosine_total = 0.0;
+        for (std::size_t c = 0; c < cells; ++c) {
+            const double y = luminance(f[c][0], f[c][1], f[c][2]) * cosine[c];
+            f[c][0] = std::isfinite(y) && y > 0.0 ? y : 0.0;  // reused as the lobe's weight
+            lobe_total += f[c][0];
+            cosine_total += cosine[c];
+        }
+        float* out = t.vndf.values.data() + static_cast<std::size_t>(k) * cells;
+        const double share = lobe_total > 0.0 ? kCosineShare : 1.0;
+        for (std::size_t c = 0; c < cells; ++c)
+            out[c] = static_cast<float>((lobe_total > 0.0 ? (1.0 - share) * f[c][0] / lobe_total : 0.0) +
+                                        share * cosine[c] / cosine_total);
+    }
+
+    // rgb at each grid point s of each slice: m = warp(s), wo = wi reflected about m, and the value
+    // from which the reader (and Mitsuba) reproduce f(wi, wo) there: f over the scale they apply,
+    // D(m)/(4σ(wi))/cosθo with D and σ as interpolated from the tables, taken from a reader of the
+    // same tables whose rgb values are all 1. 0 below the horizon.
+    // luminance: Y(f)·cosθo per unit of the square, Y·(dωo/du_m)/pdf(u_m), so that sampling by it and
+    // the warp draws wo in proportion to Y(f)·cosθo (plus a floor).
+    Tensors ones = t;
+    ones.rgb = square(3 * static_cast<std::size_t>(n), nr);
+    std::fill(ones.rgb.values.begin(), ones.rgb.values.end(), 1.0f);
+    const RglBrdf scale_of(std::move(ones));
+    const detail::Marginal2D warp("rgl: vndf", t.vndf.values, t.vndf.slices, t.vndf.rows, t.vndf.cols);
+    t.rgb = square(3 * static_cast<std::size_t>(n), nr);
+    t.luminance = square(static_cast<std::size_t>(n), nr);
+    const std::size_t plane = static_cast<std::size_t>(nr) * nr;
+    wis.resize(plane);
+    wos.resize(plane);
+    f.resize(plane);
+    std::vector<Rgb> scale(plane);
+    std::vector<double> per_unit(plane);
+    for (int k = 0; k < n; ++k) {
+        const Vec3 wi = in_plane(t.theta_i[k]);
+        const detail::SliceWeights slice{static_cast<std::size_t>(k), 0, 0.0};
+        for (std::size_t p = 0; p < plane; ++p) {
+            const detail::Point2 s{static_cast<double>(p % nr) / (nr - 1), static_cast<double>(p / nr) / (nr - 1)};
+            const detail::Warped u = warp.sample(s, slice);
+            const Vec3 m = normal_at(u.p.x, u.p.y);
+            wis[p] = wi;
+            wos[p] = 2.0 * dot(m, wi) * m - wi;
+            per_unit[p] = u.pdf > 0.0 ? jacobian(u.p.x, m, wi) / u.pdf : 0.0;
+        }
+        brdf.eval(wis, wos, f);
+        scale_of.eval(wis, wos, scale);
+        float* rgb = t.rgb.values.data() + 3 * static_cast<std::size_t>(k) * plane;
+        float* lum = t.luminance.values.data() + static_cast<std::size_t>(k) * plane;
+        double mean = 0.0;
+        for (std::size_t p = 0; p < plane; ++p) {
+            for (int c = 0; c < 3; ++c) {
+                const double v = scale[p][c] > 0.0 ? f[p][c] / scale[p][c] : 0.0;
+                rgb[c * plane + p] = std::isfinite(v) ? static_cast<float>(v) : 0.0f;
+            }
+            const double y = luminance(f[p][0], f[p][1], f[p][2]) * std::max(wos[p].z, 0.0) * per_unit[p];
+            lum[p] = std::isfinite(y) && y > 0.0 ? static_cast<float>(y) : 0.0f;
+            mean += lum[p] / static_cast<double>(plane);
+        }
+        const double floor = mean > 0.0 ? kLuminanceFloor * mean : 1.0;  // nothing reflected: uniform
+        for (std::size_t p = 0; p < plane; ++p) lum[p] += static_cast<float>(floor);
+    }
+    return t;
+}
+
+std::size_t write(const std::string& path, const Brdf& brdf, const WriteOptions& options) {
+    const auto* source = dynamic_cast<const RglBrdf*>(&brdf);
+    Tensors t = source ? source->tensors() : derive(brdf, options);
+    if (t.luminance.values.empty()) t.luminance = luminance_of(t.rgb);
+
+    const std::string description = options.description.empty() ? brdf.describe() : options.description;
+    const std::vector<float> phi_i{0.0f};
+    const std::uint8_t jacobian = t.jacobian ? 1 : 0;
+    const std::uint64_t n = t.theta_i.size(), rows = t.rgb.rows, cols = t.rgb.cols;
+    const std::vector<std::uint8_t> valid(rows * cols, 1);
+    write_tensor_file(path, {
+        {"description", detail::DType::U8, {description.size()}, description.data(), description.size()},
+        f32_field("phi_i", {1}, phi_i),
+        f32_field("theta_i", {n}, t.theta_i),
+        f32_field("sigma", {t.sigma.rows, t.sigma.cols}, t.sigma.values),
+        f32_field("ndf", {t.ndf.rows, t.ndf.cols}, t.ndf.values),
+        f32_field("vndf", {1, n, t.vndf.rows, t.vndf.cols}, t.vndf.values),
+        f32_field("luminance", {1, n, rows, cols}, t.luminance.values),
+        f32_field("rgb", {1, n, 3, rows, cols}, t.rgb.values),
+        {"jacobian", detail::DType::U8, {1}, &jacobian, 1},
+        {"valid", detail::DType::U8, {rows * cols}, valid.data(), valid.size()},
+    });
+    return n * rows * cols;
+}
+
+}  // namespace brdfz::rgl
