@@ -142,21 +142,39 @@ TEST_CASE("batch evaluation equals one-pair evaluation", "[lobes]") {
     CHECK(f[7] == Rgb{0, 0, 0});
 }
 
-TEST_CASE("lobes evaluate in float as in double", "[lobes]") {
-    std::mt19937_64 rng(8);
+namespace {
+
+// Every family's template instantiated for float, against double, at its default parameters.
+template <typename F>
+void check_float(std::mt19937_64& rng) {
+    std::array<double, F::params.size()> pd;
+    std::array<float, F::params.size()> pf;
+    for (std::size_t j = 0; j < pd.size(); ++j) pf[j] = static_cast<float>(pd[j] = F::params[j].init);
     for (int k = 0; k < 1000; ++k) {
         const Vec3 a = random_upper(rng), b = random_upper(rng);
+        if (a.z < 0.05 || b.z < 0.05) continue;  // float cosines lose their relative precision at grazing
         const auto gd = make_geometry(a.x, a.y, a.z, b.x, b.y, b.z);
         const auto gf = make_geometry<float>(a.x, a.y, a.z, b.x, b.y, b.z);
-        const double pd[] = {0.3, 0.5, 0.7, 0.25, 0.04};
-        const float pf[] = {0.3f, 0.5f, 0.7f, 0.25f, 0.04f};
         double vd[3];
         float vf[3];
-        lobes::Ggx::eval(gd, pd, vd);
-        lobes::Ggx::eval(gf, pf, vf);
-        for (int c = 0; c < 3; ++c) CHECK(vf[c] == Approx(vd[c]).epsilon(1e-4));
+        F::eval(gd, pd.data(), vd);
+        F::eval(gf, pf.data(), vf);
+        for (int c = 0; c < 3; ++c) {
+            INFO(F::name << " channel " << c);
+            CHECK(vf[c] == Approx(vd[c]).epsilon(1e-3).margin(1e-6 * (1.0 + std::fabs(vd[c]))));
+        }
     }
 }
+
+template <typename... F>
+void check_float_all(LobeList<F...>) {
+    std::mt19937_64 rng(8);
+    (check_float<F>(rng), ...);
+}
+
+}  // namespace
+
+TEST_CASE("every lobe evaluates in float as in double", "[lobes]") { check_float_all(AllLobes{}); }
 
 TEST_CASE("the microfacet lobe matches the closed form, and its pieces the existing helpers", "[lobes]") {
     // f = ks F D G2 / (4 cos_i cos_o) written out with microfacet.h's original GGX functions.
