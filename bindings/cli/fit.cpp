@@ -21,7 +21,8 @@ std::string fmt(const char* f, double v) {
     return buf;
 }
 
-void print_report(const std::string& in, const FitResult& r, const std::string& out, bool json, std::ostream& os) {
+void print_report(const std::string& in, const FitResult& r, RobustLoss robust, const std::string& out, bool json,
+                  std::ostream& os) {
     const FitReport& p = r.report;
     const Model& m = r.model.model();
     if (json) {
@@ -31,6 +32,7 @@ void print_report(const std::string& in, const FitResult& r, const std::string& 
         j.key("output").value(out);
         j.key("model").value(p.model);
         j.key("loss").value(std::string(fit_loss_name(p.loss)));
+        j.key("robust").value(std::string(robust_loss_name(robust)));
         j.key("status").value(std::string(fit_status_name(p.status)));
         j.key("message").value(p.message);
         j.key("warnings").begin_array();
@@ -79,7 +81,8 @@ void print_report(const std::string& in, const FitResult& r, const std::string& 
         os << "\n";
         return;
     }
-    os << "fit " << in << " with " << p.model << " (" << fit_loss_name(p.loss) << " loss)\n"
+    os << "fit " << in << " with " << p.model << " (" << fit_loss_name(p.loss) << " loss"
+       << (robust == RobustLoss::None ? "" : std::string(", ") + robust_loss_name(robust) + " robust loss") << ")\n"
        << "  status       " << fit_status_name(p.status) << ": " << p.message << "\n"
        << "  samples      " << p.samples << " used, " << p.excluded_cutoff << " outside the cut-off, "
        << p.excluded_invalid << " without a finite value";
@@ -156,6 +159,7 @@ void add_fit(CLI::App& app) {
                 model_json::Provenance prov = {{"source", args->in},
                                                {"status", std::string(fit_status_name(p.status))},
                                                {"loss", std::string(fit_loss_name(p.loss))},
+                                               {"robust", std::string(robust_loss_name(o.robust))},
                                                {"samples", static_cast<double>(p.samples)},
                                                {"final_cost", p.final_cost},
                                                {"unexplained", p.unexplained}};
@@ -166,7 +170,7 @@ void add_fit(CLI::App& app) {
             }
             written = args->out;
         }
-        print_report(args->in, r, written, args->json, std::cout);
+        print_report(args->in, r, o.robust, written, args->json, std::cout);
         if (p.status == FitStatus::NoConvergence || p.status == FitStatus::InsufficientData) throw CLI::RuntimeError(2);
     });
 }
