@@ -6,7 +6,10 @@
 #include <OpenEXR/ImfStringAttribute.h>
 
 #include <cstdio>
+#include <cstdint>
 #include <filesystem>
+#include <fstream>
+#include <mutex>
 #include <vector>
 
 #include "brdfz/errors.h"
@@ -15,9 +18,59 @@
 namespace brdfz::exr {
 namespace {
 
-// Tables larger than this (12 bytes a bin: 768 MiB) are refused before allocating: a compressed image
-// can declare a size far beyond its file's.
-constexpr std::size_t kMaxBins = std::size_t{1} << 26;
+// Tables larger than this (16.8 million bins, 11 times MERL's; 12 bytes a bin, twice while reading)
+// are refused before allocating: a compressed image can declare a size far beyond its file's.
+constexpr std::size_t kMaxBins = std::size_t{1} << 24;
+
+// OpenEXR allocates line and tile buffers from the header while opening a file, before any check of
+// ours: limit the data window and tiles it accepts (a process-wide OpenEXR setting, applied once;
+// generous for any brdfz mosaic, whose sides stay below 2^18 within kMaxBins).
+void limit_openexr() {
+    static std::once_flag once;
+    std::call_once(once, [] {
+        Imf::Header::setMaxImageSize(1 << 18, 1 << 18);
+        Imf::Header::setMaxTileSize(1 << 12, 1 << 12);
+    });
+}
+
+// The header OpenEXR will parse, checked first: a single-part scanline image (what write() makes)
+// whose every attribute fits in the file, so that no declared size makes OpenEXR allocate more than
+// the file holds.
+void check_header(const std::string& path) {
+    std::ifstream in(path, std::ios::binary);
+    in.seekg(0, std::ios::end);
+    const std::uint64_t size = static_cast<std::uint64_t>(in.tellg());
+    in.seekg(0);
+    const auto u32 = [&]() {
+        unsigned char b[4] = {};
+        in.read(reinterpret_cast<char*>(b), 4);
+        return std::uint32_t{b[0]} | std::uint32_t{b[1]} << 8 | std::uint32_t{b[2]} << 16 | std::uint32_t{b[3]} << 24;
+    };
+    const auto name = [&](std::size_t max) {
+        std::string s;
+        for (char c; in.get(c) && c != '\0';)
+            if (s.size() < max) s += c; else return std::string(max + 1, '?');
+        return s;
+    };
+    if (u32() != 20000630u || !in) throw FormatError(path, "not an OpenEXR image (bad magic number)");
+    const std::uint32_t version = u32();
+    // Bits 9, 11, 12: tiled, deep, multi-part; bit 10: names up to 255 characters instead of 31.
+    if ((version & 0xff) != 2 || (version & 0x1a00) != 0)
+        throw FormatError(path, "not a single-part scanline OpenEXR image (version field " + std::to_string(version) + ")");
+    const std::size_t max_name = version & 0x400 ? 255 : 31;
+    for (int k = 0;; ++k) {
+        const std::string attr = name(max_name);
+        if (!in) throw FormatError(path, "truncated OpenEXR header");
+        if (attr.empty()) return;  // the end of the header
+        const std::string type = name(max_name);
+        const std::uint32_t bytes = u32();
+        if (!in || attr.size() > max_name || type.size() > max_name || k > 1000 ||
+            bytes > size - static_cast<std::uint64_t>(in.tellg()))
+            throw FormatError(path, "corrupt OpenEXR header (attribute '" + attr.substr(0, max_name) +
+                                        "' does not fit in the file)");
+        in.seekg(bytes, std::ios::cur);
+    }
+}
 
 const std::string& string_attr(const std::string& path, const Imf::Header& h, const char* name) {
     const auto* a = h.findTypedAttribute<Imf::StringAttribute>(name);
@@ -30,6 +83,8 @@ const std::string& string_attr(const std::string& path, const Imf::Header& h, co
 Table read(const std::string& path) {
     std::error_code ec;
     if (!std::filesystem::is_regular_file(path, ec)) throw IoError(path, "cannot read: no such file");
+    limit_openexr();
+    check_header(path);
     try {
         Imf::InputFile file(path.c_str());
         const Imf::Header& h = file.header();

@@ -22,6 +22,8 @@ void write(const std::string& path, const Table& table);
 
 // Reads an image written by write(). Checks the attributes, channels and size against each other
 // before allocating: FormatError naming the file for anything else, IoError when it cannot be read.
+// Tables above 2^24 bins are refused, and OpenEXR is told (process-wide, once) to refuse images wider
+// or taller than 2^18 pixels and tiles above 4096², which it would otherwise allocate for on opening.
 Table read(const std::string& path);
 
 }  // namespace brdfz::exr
