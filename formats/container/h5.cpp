@@ -1,5 +1,7 @@
 #include "h5.h"
 
+#include <unistd.h>
+
 #include <algorithm>
 #include <cerrno>
 #include <cstdio>
@@ -311,13 +313,29 @@ Reader::Reader(std::string path) : path_(std::move(path)) {
     if (crc != get32(header + 24))
         throw FormatError(path_, "corrupt: the HDF5 structure (metadata and attributes, outside the datasets) does "
                                  "not match its CRC-32C");
-    f.reset();
+    raw_ = std::move(f);
 
     Id fapl(H5Pcreate(H5P_FILE_ACCESS), &H5Pclose);
     // Reading needs no lock, and some file systems refuse one.
     H5Pset_file_locking(fapl.get(), false, true);
     file_ = Id(H5Fopen(path_.c_str(), H5F_ACC_RDONLY, fapl.get()), &H5Fclose);
     if (file_.get() < 0) throw FormatError(path_, "unreadable HDF5 structure" + hdf5_message());
+}
+
+std::uint32_t Reader::read_extent(const Extent& e, void* out) const {
+    // In slices, each checksummed right after it lands, while it is still in cache. (A helper thread
+    // checksumming slice k while this one reads slice k + 1 was slower on the 2-core test machine.)
+    constexpr std::uint64_t kSlice = 1 << 18;  // 256 KiB: well inside a 1 MiB L2
+    auto* p = static_cast<unsigned char*>(out);
+    std::uint32_t crc = 0;
+    for (std::uint64_t done = 0; done < e.length;) {
+        const std::size_t n = static_cast<std::size_t>(std::min(kSlice, e.length - done));
+        const ssize_t got = ::pread(::fileno(raw_.get()), p + done, n, static_cast<off_t>(e.offset + done));
+        if (got <= 0) throw IoError(path_, "read failed (file changed while reading?)");
+        crc = crc32c(p + done, static_cast<std::size_t>(got), crc);
+        done += static_cast<std::uint64_t>(got);
+    }
+    return crc;
 }
 
 bool Reader::has_extent(const Extent& e) const {
@@ -489,15 +507,15 @@ Dataset::Dataset(const Reader& reader, Id id, std::string path)
     if (crc > 0xFFFFFFFFu) fail("attribute 'crc32c' out of range");
     crc_ = static_cast<std::uint32_t>(crc);
     // Every byte is covered by a checksum: the structure's, or its dataset's when the header lists it.
-    const haddr_t offset = H5Dget_offset(id_.get());
-    if (offset == HADDR_UNDEF || !reader_->has_extent({offset, nbytes()}))
+    offset_ = H5Dget_offset(id_.get());
+    if (offset_ == HADDR_UNDEF || !reader_->has_extent({offset_, nbytes()}))
         fail("data is not where the header records a dataset");
 }
 
 void Dataset::read(void* out) const {
-    if (H5Dread(id_.get(), file_type(type_), H5S_ALL, H5S_ALL, H5P_DEFAULT, out) < 0)
-        throw FormatError(reader_->path(), path_ + ": cannot read the data" + hdf5_message());
-    const std::uint32_t crc = crc32c(out, nbytes());
+    // The data are contiguous, unfiltered and little-endian (checked on opening), so their bytes in the
+    // file are the elements: read them directly, checksumming as they arrive, rather than via H5Dread.
+    const std::uint32_t crc = reader_->read_extent({offset_, nbytes()}, out);
     if (crc != crc_) {
         char buf[96];
         std::snprintf(buf, sizeof buf, " (CRC-32C 0x%08x, stored 0x%08x)", crc, crc_);

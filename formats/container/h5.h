@@ -14,6 +14,8 @@
 #include <hdf5.h>
 
 #include <cstdint>
+#include <cstdio>
+#include <memory>
 #include <span>
 #include <string>
 #include <vector>
@@ -134,6 +136,7 @@ private:
     DType type_ = DType::U8;
     std::vector<std::uint64_t> shape_;
     std::uint64_t count_ = 1;
+    std::uint64_t offset_ = 0;  // of the elements in the file
     std::uint32_t crc_ = 0;
 };
 
@@ -178,12 +181,15 @@ public:
     std::uint64_t file_size() const { return size_; }
     // Whether the header lists exactly this byte range as a dataset's.
     bool has_extent(const Extent& e) const;
+    // Reads a byte range into `out`; returns its CRC-32C. IoError when the file cannot be read.
+    std::uint32_t read_extent(const Extent& e, void* out) const;
 
 private:
     Quiet quiet_;
     std::string path_;
     std::uint64_t size_ = 0;
     std::vector<Extent> extents_;
+    std::unique_ptr<std::FILE, int (*)(std::FILE*)> raw_{nullptr, &std::fclose};  // the verified file
     Id file_;
 };
 

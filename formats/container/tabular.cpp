@@ -52,8 +52,9 @@ std::unique_ptr<Brdf> read(const h5::ReadNode& rep, const ReadContext& ctx) {
     const std::vector<std::uint64_t> expected{dims[0], dims[1], dims[2], 3};
     if (values.type() != h5::DType::F32 || values.shape() != expected)
         bad("dataset 'values' is not a float32 array of shape " + grid.str() + "x3");
-    // Shape checked against the grid, and its size against the file, before the table is allocated.
-    Table table(grid);
+    // Shape checked against the grid, and its size against the file, before the table is allocated;
+    // every entry is then read.
+    Table table(grid, Table::Uninitialized{});
     values.read(table.data());
     return std::make_unique<TabularBrdf>(std::move(table), ctx.lookup);
 }
