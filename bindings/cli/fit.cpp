@@ -1,6 +1,7 @@
-// brdfz fit IN --model MODEL [--loss log|cos|cbrt] [--starts 8] -o OUT.json
+// brdfz fit IN --model MODEL [--loss log|cos|cbrt] [--starts 8] -o OUT
 // Fits an analytic model (a sum of lobes) to any BRDF file or scattered measurements (Cornell, ALTA),
-// prints the fit report and writes the model. Exit status: 0 when the fit converged (possibly with
+// prints the fit report and writes the model: OUT.json (docs/model-json.md, with the fit's provenance)
+// or OUT.brdfz store it as parameters; table formats (.binary, .exr) tabulate it. Exit status: 0 when the fit converged (possibly with
 // parameters on their bounds), 2 when it did not (no_convergence: the best parameters are still
 // written; insufficient_data: nothing is written).
 #include <cstdio>
@@ -125,7 +126,7 @@ void add_fit(CLI::App& app) {
                                               "exit 2 when the fit did not converge");
     cmd->add_option("IN", args->in, "BRDF file or measurements (.brdf, .dat)")->required();
     cmd->add_option("--model", args->model, "lobes joined by '+': " + lobe_family_names())->required();
-    cmd->add_option("-o,--out", args->out, "output model (.json; other formats tabulate the model)")->required();
+    cmd->add_option("-o,--out", args->out, "output: .json or .brdfz keep the model, .binary/.exr tabulate it")->required();
     cmd->add_option("--loss", args->loss, "cos (cosine-weighted L2), log (ln(1+f cos)) or cbrt")->capture_default_str();
     cmd->add_option("--starts", args->fit.starts, "seeded starts; the best is refined")->capture_default_str();
     cmd->add_option("--seed", args->fit.seed, "seed of the starts and the sample subset")->capture_default_str();
@@ -166,7 +167,10 @@ void add_fit(CLI::App& app) {
                 if (p.metrics) prov.push_back({"cos_rmse_rel", p.metrics->cos_rmse_rel.mean});
                 model_json::write(args->out, r.model, prov);
             } else {
-                save(r.model, args->out);
+                SaveOptions so;
+                so.source = args->in;
+                so.threads = o.threads;
+                save(r.model, args->out, so);
             }
             written = args->out;
         }
