@@ -12,7 +12,6 @@
 
 #include "brdfz/errors.h"
 #include "checksum.h"
-#include "detail/bytes.h"
 
 namespace brdfz::container::h5 {
 namespace {
