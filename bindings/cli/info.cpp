@@ -18,15 +18,7 @@ void print_measurement_info(const std::string& path, const LoadedMeasurements& m
     if (json) {
         JsonWriter j(os);
         j.begin_object();
-        j.key("file").value(path);
-        j.key("format").value(info.format);
-        j.key("dims").begin_array();
-        for (std::size_t d : info.dims) j.value(d);
-        j.end_array();
-        j.key("valid").value(info.counts.valid);
-        j.key("negative").value(info.counts.negative);
-        j.key("nan").value(info.counts.nan);
-        j.key("inf").value(info.counts.inf);
+        write_source_keys(j, path, info);
         j.key("below_horizon").value(info.counts.below_horizon);
         j.key("samples").value(m.set.samples.size());
         j.key("min").value(info.min_value);

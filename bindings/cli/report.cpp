@@ -78,6 +78,18 @@ void container_text(const container::Metadata& m, std::ostream& os) {
 
 }  // namespace
 
+void write_source_keys(JsonWriter& j, const std::string& path, const SourceInfo& info) {
+    j.key("file").value(path);
+    j.key("format").value(info.format);
+    j.key("dims").begin_array();
+    for (std::size_t d : info.dims) j.value(d);
+    j.end_array();
+    j.key("valid").value(info.counts.valid);
+    j.key("negative").value(info.counts.negative);
+    j.key("nan").value(info.counts.nan);
+    j.key("inf").value(info.counts.inf);
+}
+
 void print_info(const std::string& path, const Loaded& loaded, bool json, std::ostream& os,
                 const container::Metadata* container) {
     const SourceInfo& info = loaded.info;
@@ -92,15 +104,7 @@ void print_info(const std::string& path, const Loaded& loaded, bool json, std::o
     if (json) {
         JsonWriter j(os);
         j.begin_object();
-        j.key("file").value(path);
-        j.key("format").value(info.format);
-        j.key("dims").begin_array();
-        for (std::size_t d : info.dims) j.value(d);
-        j.end_array();
-        j.key("valid").value(info.counts.valid);
-        j.key("negative").value(info.counts.negative);
-        j.key("nan").value(info.counts.nan);
-        j.key("inf").value(info.counts.inf);
+        write_source_keys(j, path, info);
         j.key("min").value(info.min_value);
         j.key("max").value(info.max_value);
         j.key("nbytes").value(loaded.brdf->nbytes());

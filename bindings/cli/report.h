@@ -7,6 +7,7 @@
 #include "brdfz/formats/container.h"
 #include "brdfz/formats/io.h"
 #include "brdfz/metrics.h"
+#include "output.h"
 
 namespace brdfz::cli {
 
@@ -16,6 +17,9 @@ inline constexpr double kAlbedoAnglesDeg[] = {0.0, 30.0, 60.0, 80.0};
 inline constexpr std::size_t kAlbedoSamples = 65536;
 
 // `container`: a .brdfz file's metadata, printed after the rest (JSON: key "container").
+// The keys every `info --json` starts with: file, format, dims and the validity counts.
+void write_source_keys(JsonWriter& j, const std::string& path, const SourceInfo& info);
+
 void print_info(const std::string& path, const Loaded& loaded, bool json, std::ostream& os,
                 const container::Metadata* container = nullptr);
 void print_metrics(const Metrics& m, bool json, std::ostream& os);
