@@ -1,0 +1,39 @@
+// compress(): build any compact representation of a Brdf from its ReprSpec text — the one entry
+// point behind `brdfz compress`, Python's brdfz.compress and the budget-driven selection.
+//
+// Kinds (each documented with its options in its own header under repr/):
+//   tabular:res=AxBxC,dtype=f32|f16|u8log   resampled Rusinkiewicz table (repr/tabular.h, compact_table.h)
+//   analytic:MODEL[,loss=log|cos|cbrt,starts=N,seed=S]   a Ceres fit (fit/fit.h)
+// and those registered in compress.cpp's table as they land (bivariate, svd, nmf, pca).
+#pragma once
+
+#include <functional>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "brdfz/brdf.h"
+#include "brdfz/repr/spec.h"
+
+namespace brdfz {
+
+struct CompressOptions {
+    int threads = 0;  // 0: one per hardware thread
+    // Fraction done (0..1]; may be called from worker threads, under a lock.
+    std::function<void(double)> progress;
+};
+
+struct Compressed {
+    std::unique_ptr<Brdf> brdf;
+    std::string spec;               // canonical spec text (ReprSpec::str())
+    double build_seconds = 0;       // wall time of compress()
+    std::vector<std::string> notes; // what the builder wants the user to know (fit status, clamping)
+};
+
+// ValueError for an unknown kind or a bad option (naming it); the builders' own errors pass through.
+Compressed compress(const Brdf& source, const std::string& spec, const CompressOptions& options = {});
+
+// The kinds compress() knows, for help texts.
+std::vector<std::string> compress_kinds();
+
+}  // namespace brdfz

@@ -1,0 +1,85 @@
+#include "brdfz/compress.h"
+
+#include <chrono>
+
+#include "brdfz/errors.h"
+#include "brdfz/fit/fit.h"
+#include "brdfz/repr/tabular.h"
+#include "brdfz/tabulate.h"
+
+namespace brdfz {
+namespace {
+
+using Builder = Compressed (*)(const Brdf& source, const ReprSpec& spec, const CompressOptions& options);
+
+Compressed build_tabular(const Brdf& source, const ReprSpec& spec, const CompressOptions& options) {
+    const std::vector<int> res = spec.get_dims("res", {90, 90, 180});
+    const Lookup lookup = parse_lookup(spec.get_choice("lookup", "linear", {"linear", "nearest"}));
+    spec.get_choice("dtype", "f32", {"f32"});
+    spec.finish();
+    TabulateOptions tab;
+    tab.grid = GridSpec{res[0], res[1], res[2], BinPosition::Centre};
+    tab.grid.validate();
+    tab.threads = options.threads;
+    tab.progress = options.progress;
+    Tabulated t = tabulate(source, tab);
+    Compressed out;
+    if (t.counts.clamped > 0)
+        out.notes.push_back(std::to_string(t.counts.clamped) + " negative values clamped to 0");
+    out.brdf = std::make_unique<TabularBrdf>(std::move(t.table), lookup);
+    return out;
+}
+
+Compressed build_analytic(const Brdf& source, const ReprSpec& spec, const CompressOptions& options) {
+    if (spec.positional().empty())
+        throw ValueError("analytic: name the model, e.g. analytic:lambert+ggx");
+    FitOptions fit_options;
+    fit_options.loss = parse_fit_loss(spec.get_choice("loss", "log", {"log", "cos", "cbrt"}));
+    fit_options.starts = spec.get_int("starts", fit_options.starts, 1, 1000);
+    fit_options.seed = static_cast<std::uint64_t>(spec.get_int("seed", 1, 0, 1 << 30));
+    spec.finish();
+    fit_options.threads = options.threads;
+    fit_options.progress = options.progress;
+    FitResult fitted = fit(source, spec.positional(), fit_options);
+    Compressed out;
+    out.notes.push_back(std::string("fit ") + fit_status_name(fitted.report.status) + ": " + fitted.report.message);
+    for (const std::string& w : fitted.report.warnings) out.notes.push_back(w);
+    out.brdf = std::make_unique<AnalyticBrdf>(std::move(fitted.model));
+    return out;
+}
+
+struct Kind {
+    const char* name;
+    Builder build;
+};
+
+// One line per representation kind.
+constexpr Kind kKinds[] = {
+    {"tabular", build_tabular},
+    {"analytic", build_analytic},
+};
+
+}  // namespace
+
+Compressed compress(const Brdf& source, const std::string& text, const CompressOptions& options) {
+    const ReprSpec spec = ReprSpec::parse(text);
+    for (const Kind& kind : kKinds) {
+        if (spec.kind() != kind.name) continue;
+        const auto start = std::chrono::steady_clock::now();
+        Compressed out = kind.build(source, spec, options);
+        out.build_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+        out.spec = spec.str();
+        return out;
+    }
+    std::string known;
+    for (const Kind& kind : kKinds) known += (known.empty() ? "" : ", ") + std::string(kind.name);
+    throw ValueError("unknown representation '" + spec.kind() + "' (known: " + known + ")");
+}
+
+std::vector<std::string> compress_kinds() {
+    std::vector<std::string> out;
+    for (const Kind& kind : kKinds) out.emplace_back(kind.name);
+    return out;
+}
+
+}  // namespace brdfz
