@@ -6,6 +6,9 @@
 
 #include <algorithm>
 #include <cmath>
+#include <map>
+#include <optional>
+#include <tuple>
 #include <vector>
 
 #include "brdfz/errors.h"
@@ -14,7 +17,30 @@
 #include "module.h"
 
 namespace brdfz::python {
+
+// Any Python object taken as an array argument: checked by as_rows (ValueError, not pybind11's
+// TypeError, for anything but a float32/float64 (N, k) array); typed as an array in the stubs.
+struct ArrayArg {
+    py::object obj;
+};
+
+}  // namespace brdfz::python
+
+namespace pybind11::detail {
+template <>
+struct type_caster<brdfz::python::ArrayArg> {
+    PYBIND11_TYPE_CASTER(brdfz::python::ArrayArg, const_name("numpy.typing.NDArray[numpy.floating]"));
+    bool load(handle src, bool) {
+        value.obj = reinterpret_borrow<object>(src);
+        return true;
+    }
+};
+}  // namespace pybind11::detail
+
+namespace brdfz::python {
 namespace {
+
+using Array = py::array_t<double>;
 
 // Pairs are normalised and evaluated in blocks: bounded scratch memory, and the normalised rows are
 // still in cache when the kernel reads them.
@@ -34,7 +60,8 @@ struct Rows {
 };
 
 // ValueError naming the argument for anything but a float32 / float64 array of shape (N, cols).
-Rows as_rows(const py::handle& obj, const char* name, py::ssize_t cols) {
+Rows as_rows(const ArrayArg& arg, const char* name, py::ssize_t cols) {
+    const py::handle obj = arg.obj;
     const std::string expected = "shape (N, " + std::to_string(cols) + ")";
     if (!py::isinstance<py::array>(obj)) throw ValueError(std::string(name) + ": expected a numpy array of " + expected);
     const auto array = py::reinterpret_borrow<py::array>(obj);
@@ -87,9 +114,9 @@ void pairs(const Rows& rows, std::size_t begin, std::span<std::array<double, 2>>
     }
 }
 
-py::array_t<double> new_rows(std::size_t n, py::ssize_t cols) {
+Array new_rows(std::size_t n, py::ssize_t cols) {
     const auto rows = static_cast<py::ssize_t>(n);
-    return cols == 1 ? py::array_t<double>(rows) : py::array_t<double>({rows, cols});
+    return cols == 1 ? Array(rows) : Array({rows, cols});
 }
 
 // fn(begin, a, b) for blocks of normalised directions from two row arrays, without the GIL.
@@ -107,10 +134,10 @@ void for_blocks(const Rows& a, const char* a_name, const Rows& b, const char* b_
 }
 
 template <bool Cosine>
-py::array_t<double> eval(const Brdf& brdf, const py::handle& wi_obj, const py::handle& wo_obj) {
+Array eval(const Brdf& brdf, const ArrayArg& wi_obj, const ArrayArg& wo_obj) {
     const Rows wi = as_rows(wi_obj, "wi", 3), wo = as_rows(wo_obj, "wo", 3);
     check_lengths(wi, "wi", wo, "wo");
-    py::array_t<double> out = new_rows(wi.size(), 3);
+    Array out = new_rows(wi.size(), 3);
     auto* f = reinterpret_cast<Rgb*>(out.mutable_data());
     for_blocks(wi, "wi", wo, "wo", [&](std::size_t begin, std::span<const Vec3> wi_k, std::span<const Vec3> wo_k) {
         const std::span<Rgb> f_k(f + begin, wi_k.size());
@@ -122,10 +149,10 @@ py::array_t<double> eval(const Brdf& brdf, const py::handle& wi_obj, const py::h
     return out;
 }
 
-py::array_t<double> pdf(const Brdf& brdf, const py::handle& wo_obj, const py::handle& wi_obj) {
+Array pdf(const Brdf& brdf, const ArrayArg& wo_obj, const ArrayArg& wi_obj) {
     const Rows wo = as_rows(wo_obj, "wo", 3), wi = as_rows(wi_obj, "wi", 3);
     check_lengths(wo, "wo", wi, "wi");
-    py::array_t<double> out = new_rows(wo.size(), 1);
+    Array out = new_rows(wo.size(), 1);
     double* p = out.mutable_data();
     for_blocks(wo, "wo", wi, "wi", [&](std::size_t begin, std::span<const Vec3> wo_k, std::span<const Vec3> wi_k) {
         brdf.pdf(wo_k, wi_k, std::span<double>(p + begin, wo_k.size()));
@@ -133,11 +160,11 @@ py::array_t<double> pdf(const Brdf& brdf, const py::handle& wo_obj, const py::ha
     return out;
 }
 
-py::tuple sample(const Brdf& brdf, const py::handle& wo_obj, const py::handle& u_obj) {
+std::tuple<Array, Array, Array> sample(const Brdf& brdf, const ArrayArg& wo_obj, const ArrayArg& u_obj) {
     const Rows wo_rows = as_rows(wo_obj, "wo", 3), u_rows = as_rows(u_obj, "u", 2);
     check_lengths(wo_rows, "wo", u_rows, "u");
     const std::size_t n = wo_rows.size();
-    py::array_t<double> wi_out = new_rows(n, 3), pdf_out = new_rows(n, 1), weight_out = new_rows(n, 3);
+    Array wi_out = new_rows(n, 3), pdf_out = new_rows(n, 1), weight_out = new_rows(n, 3);
     double *wi = wi_out.mutable_data(), *p = pdf_out.mutable_data(), *weight = weight_out.mutable_data();
     {
         py::gil_scoped_release release;
@@ -158,14 +185,14 @@ py::tuple sample(const Brdf& brdf, const py::handle& wo_obj, const py::handle& u
             }
         }
     }
-    return py::make_tuple(wi_out, pdf_out, weight_out);
+    return {wi_out, pdf_out, weight_out};
 }
 
 // A table's values as a read-only float32 view of shape (θh, θd, φd, 3) that keeps the Brdf alive;
 // invalid entries are NaN (the table's validity mask).
-py::object table_view(const BrdfPtr& brdf) {
+std::optional<py::array_t<float>> table_view(const BrdfPtr& brdf) {
     const auto* tabular = dynamic_cast<const TabularBrdf*>(brdf.get());
-    if (!tabular) return py::none();
+    if (!tabular) return std::nullopt;
     const Table& t = tabular->table();
     const GridSpec& g = t.grid();
     const py::ssize_t f = sizeof(float);
@@ -175,11 +202,11 @@ py::object table_view(const BrdfPtr& brdf) {
     return view;
 }
 
-py::object parameters(const Brdf& brdf) {
+std::optional<std::map<std::string, double>> parameters(const Brdf& brdf) {
     const auto* analytic = dynamic_cast<const AnalyticBrdf*>(&brdf);
-    if (!analytic) return py::none();
-    py::dict out;
-    for (std::size_t i = 0; i < analytic->model().size(); ++i) out[py::str(analytic->model().name(i))] = analytic->params()[i];
+    if (!analytic) return std::nullopt;
+    std::map<std::string, double> out;
+    for (std::size_t i = 0; i < analytic->model().size(); ++i) out[analytic->model().name(i)] = analytic->params()[i];
     return out;
 }
 

@@ -291,3 +291,17 @@ def test_eval_releases_the_gil(demo):
     gaps = np.diff(np.concatenate([[t0], inside, [t1]]))
     assert t1 - t0 > 0.1, "the batch is too small to tell"
     assert len(inside) > 100 and gaps.max() < 0.5 * (t1 - t0), (t1 - t0, gaps.max(), len(inside))
+
+
+def test_stubs_are_current(tmp_path):
+    """bindings/python/brdfz/_core.pyi is what pybind11-stubgen makes of the built module
+    (regenerate with scripts/python-stubs)."""
+    stubgen = pytest.importorskip("pybind11_stubgen", reason="pybind11-stubgen is not installed")
+    import pathlib
+    import subprocess
+    import sys
+
+    subprocess.run([sys.executable, "-m", stubgen.__name__, "brdfz._core", "-o", str(tmp_path)], check=True,
+                   capture_output=True)
+    committed = pathlib.Path(__file__).resolve().parents[2] / "bindings" / "python" / "brdfz" / "_core.pyi"
+    assert (tmp_path / "brdfz" / "_core.pyi").read_text() == committed.read_text(), "run scripts/python-stubs"
