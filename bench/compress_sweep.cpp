@@ -17,6 +17,7 @@
 
 #include "brdfz/formats/io.h"
 #include "brdfz/select.h"
+#include "common.h"
 
 namespace fs = std::filesystem;
 
@@ -65,23 +66,10 @@ std::string num(double v) {
 }  // namespace
 
 int main(int argc, char** argv) {
-    std::string out_path = "compress_sweep.csv";
-    std::vector<std::string> specs;
-    std::vector<fs::path> files;
-    for (int i = 1; i < argc; ++i) {
-        const std::string a = argv[i];
-        if (a == "--out" && i + 1 < argc) {
-            out_path = argv[++i];
-        } else if (a == "--spec" && i + 1 < argc) {
-            specs.emplace_back(argv[++i]);
-        } else if (!a.empty() && a[0] != '-') {
-            files.emplace_back(a);
-        } else {
-            std::fprintf(stderr, "usage: %s [--out FILE.csv] [--spec SPEC]... [FILE...]\n", argv[0]);
-            return 2;
-        }
-    }
-    if (specs.empty()) specs.assign(std::begin(kDefaultSpecs), std::end(kDefaultSpecs));
+    bench::SweepArgs args = bench::parse_sweep_args(argc, argv, "compress_sweep.csv", kDefaultSpecs);
+    const std::vector<std::string>& specs = args.specs;
+    std::vector<fs::path>& files = args.files;
+    const std::string& out_path = args.out;
     if (files.empty()) files = default_materials();
     if (files.empty()) {
         std::fprintf(stderr, "compress_sweep: no materials (no ../shared/data/rgl and no MERL tables); name files\n");

@@ -28,6 +28,7 @@
 #include "brdfz/repr/analytic/model.h"
 #include "brdfz/repr/tabular.h"
 #include "brdfz/select.h"
+#include "common.h"
 #include "brdfz/tabulate.h"
 
 namespace fs = std::filesystem;
@@ -162,23 +163,10 @@ std::string num(double v) {
 }  // namespace
 
 int main(int argc, char** argv) {
-    std::string out_path = "stability.csv";
-    std::vector<std::string> specs;
-    std::vector<fs::path> files;
-    for (int i = 1; i < argc; ++i) {
-        const std::string a = argv[i];
-        if (a == "--out" && i + 1 < argc) {
-            out_path = argv[++i];
-        } else if (a == "--spec" && i + 1 < argc) {
-            specs.emplace_back(argv[++i]);
-        } else if (!a.empty() && a[0] != '-') {
-            files.emplace_back(a);
-        } else {
-            std::fprintf(stderr, "usage: %s [--out FILE.csv] [--spec SPEC]... [FILE...]\n", argv[0]);
-            return 2;
-        }
-    }
-    if (specs.empty()) specs.assign(std::begin(kDefaultSpecs), std::end(kDefaultSpecs));
+    bench::SweepArgs args = bench::parse_sweep_args(argc, argv, "stability.csv", kDefaultSpecs);
+    const std::vector<std::string>& specs = args.specs;
+    std::vector<fs::path>& files = args.files;
+    const std::string& out_path = args.out;
     std::vector<Material> materials = synthetic();
     for (const fs::path& f : files) materials.push_back({f.stem().string(), "real: " + f.extension().string(), load(f.string()).brdf});
 
