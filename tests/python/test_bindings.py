@@ -221,6 +221,19 @@ def test_compress_report(demo):
     assert fitted.brdf.parameters is not None and any(n.startswith("fit ") for n in fitted.notes)
 
 
+def test_compress_equals_cli(cli, demo_table, demo, tmp_path):
+    out = tmp_path / "cli.brdfz"
+    r = json.loads(run(cli, "compress", demo_table, "-o", out, "--repr", "tabular:res=16x16x32", "--json").stdout)
+    built = brdfz.compress(demo, "tabular:res=16x16x32", report=True)
+    assert built.spec == r["repr"] and built.brdf.nbytes == r["bytes"]
+    assert np.array_equal(built.brdf.table, brdfz.load(out).table, equal_nan=True)
+    for spec in ["tabular:res=16x16", "tabular:rez=16x16x32", "tabular:dtype=f64", "analytic"]:
+        with pytest.raises(ValueError) as e:
+            brdfz.compress(demo, spec)
+        assert str(e.value) == cli_error(cli, "compress", demo_table, "-o", tmp_path / "never.brdfz", "--repr", spec)
+    assert not (tmp_path / "never.brdfz").exists()
+
+
 def test_fit_report_matches_cli(cli, demo_table, demo, tmp_path):
     r = brdfz.fit(demo, "lambert+ggx", loss="log", starts=4, seed=3, threads=1)
     ref = json.loads(run(cli, "fit", demo_table, "--model", "lambert+ggx", "--starts", "4", "--seed", "3",
