@@ -105,6 +105,8 @@ using Data = std::variant<BrdfPtr, MeasurementSet>;
 
 Data data_of(const py::handle& obj) {
     if (py::isinstance<Brdf>(obj)) return obj.cast<BrdfPtr>();
+    if (!py::isinstance<py::str>(obj) && !py::hasattr(obj, "__fspath__"))
+        throw py::type_error("expected a brdfz.Brdf or a path, got " + py::str(py::type::of(obj)).cast<std::string>());
     const Path path = obj.cast<Path>();
     return reading(path, [&]() -> Data {
         py::gil_scoped_release release;

@@ -148,6 +148,8 @@ def test_errors_carry_the_cli_message(cli, demo_table, tmp_path):
         brdfz.tabulate(brdfz.load(demo_table), (0, 90, 180))
     with pytest.raises(ValueError, match="lookup"):
         brdfz.load(demo_table, lookup="cubic")
+    with pytest.raises(TypeError, match="expected a brdfz.Brdf or a path"):
+        brdfz.metrics(42, brdfz.load(demo_table))
 
     # A write into a missing folder is an OSError and leaves nothing behind.
     with pytest.raises(OSError):
