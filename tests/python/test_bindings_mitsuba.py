@@ -50,7 +50,7 @@ def vec(a):
 
 def test_bridge_conventions(llvm, glossy):
     rng = np.random.default_rng(1)
-    bsdf = brdfz.mitsuba.bsdf(glossy)
+    bsdf = brdfz.mitsuba.bsdf(glossy, "light")
     n = 256
     view, light = upper(rng, n), upper(rng, n)
     ctx = mi.BSDFContext()
@@ -73,8 +73,8 @@ def test_bridge_conventions(llvm, glossy):
     assert np.allclose(np.array(bs.pdf), spdf, rtol=1e-5)
     assert np.allclose(np.array(weight).T, sweight, rtol=1e-5, atol=1e-7)
 
-    # incident="camera": brdfz's wi at si.wi, the same draws and pdf, weights from that eval.
-    camera = brdfz.mitsuba.bsdf(glossy, "camera")
+    # incident="camera", the default: brdfz's wi at si.wi, the same draws and pdf, weights from that eval.
+    camera = brdfz.mitsuba.bsdf(glossy)
     value_c = np.array(camera.eval(ctx, si, vec(light))).T
     assert np.allclose(value_c, glossy.eval(view, light) * light[:, 2:3], rtol=1e-5, atol=1e-7)
     assert np.allclose(np.array(camera.pdf(ctx, si, vec(light))), pdf)

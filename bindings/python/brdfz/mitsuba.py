@@ -20,9 +20,10 @@ Measured data are not exactly reciprocal, and Mitsuba's own `measured` plugin re
 file's incident direction (brdfz's wi for that file, rgl.h) at si.wi, the camera side. With
 incident="camera" the bridge does the same: eval = Brdf.eval(wi=si.wi, wo=wo)·cosθ(wo), sampled
 directions still come from Brdf.sample(wo=si.wi, u) (the same draws, so pdf is unchanged) and their
-weight is that eval over pdf. For a reciprocal BRDF both settings agree; for RGL files "camera"
-renders as Mitsuba's `measured` does, "light" (the default) applies the data as measured, incident
-light at wi.
+weight is that eval over pdf. For a reciprocal BRDF both settings agree. "camera" is the default:
+it is Mitsuba's own convention (its `incident` si.wi), so RGL files render as `measured` renders them
+(the files' adaptive parameterisation is sharp around the incident side it was built for); "light"
+applies the data with the incident light at wi, as brdf.h reads a pair.
 
 Each call hands the lanes to brdfz's batch kernels through numpy, so the plugin cannot be traced
 into a Dr.Jit kernel: in JIT variants (llvm_*) register() and bsdf() switch Dr.Jit's symbolic loops
@@ -93,7 +94,7 @@ def _class():
     class BrdfzBSDF(mi.BSDF):
         """A brdfz Brdf as a Mitsuba BSDF (module docstring: conventions)."""
 
-        def __init__(self, props: mi.Properties, brdf: Optional[Brdf] = None, incident: str = "light"):
+        def __init__(self, props: mi.Properties, brdf: Optional[Brdf] = None, incident: str = "camera"):
             mi.BSDF.__init__(self, props)
             if brdf is None:
                 if "filename" not in props:
@@ -169,7 +170,7 @@ def register(name: str = "brdfz") -> None:
     mi.register_bsdf(name, lambda props: cls(props))
 
 
-def bsdf(brdf: Brdf, incident: str = "light") -> "mi.BSDF":
+def bsdf(brdf: Brdf, incident: str = "camera") -> "mi.BSDF":
     """A Mitsuba BSDF backed by `brdf` (any representation), to place in a scene dictionary;
     `incident` says which side brdfz's wi is evaluated at (module docstring)."""
     _use_wavefront_mode()
