@@ -8,7 +8,6 @@
 #include <cstdlib>
 #include <numbers>
 #include <filesystem>
-#include <span>
 #include <string>
 #include <vector>
 
@@ -64,7 +63,7 @@ struct SweepArgs {
     std::vector<std::filesystem::path> files;
 };
 
-inline SweepArgs parse_sweep_args(int argc, char** argv, const char* default_out, std::span<const char* const> default_specs) {
+inline SweepArgs parse_sweep_args(int argc, char** argv, const char* default_out, const std::vector<std::string>& default_specs) {
     SweepArgs args{default_out, {}, {}};
     for (int i = 1; i < argc; ++i) {
         const std::string a = argv[i];
@@ -79,7 +78,7 @@ inline SweepArgs parse_sweep_args(int argc, char** argv, const char* default_out
             std::exit(2);
         }
     }
-    if (args.specs.empty()) args.specs.assign(default_specs.begin(), default_specs.end());
+    if (args.specs.empty()) args.specs = default_specs;
     return args;
 }
 

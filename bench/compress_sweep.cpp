@@ -4,7 +4,7 @@
 //
 //   compress_sweep [--out sweep.csv] [--spec SPEC]... [FILE...]
 // FILEs: any BRDF files (default: ../shared/data/rgl/*.bsdf and the MERL tables in $BRDFZ_MERL_DIR).
-// --spec replaces the default list of settings (repeatable). A setting whose kind is not built into
+// --spec replaces the default list of settings, brdfz::benchmark_specs() (repeatable). A setting whose kind is not built into
 // this library, or that fails on a material, gets a row with status "error: ..." and empty numbers.
 #include <algorithm>
 #include <cstdio>
@@ -23,15 +23,6 @@ namespace fs = std::filesystem;
 
 namespace {
 
-const char* const kDefaultSpecs[] = {
-    "tabular:res=90x90x180",        // the MERL grid in float32: the baseline
-    "tabular:res=45x45x90",         "tabular:res=45x45x90,dtype=f16", "tabular:res=45x45x90,dtype=u8log",
-    "tabular:res=32x32x64,dtype=f16", "tabular:res=32x32x64,dtype=u8log", "tabular:res=16x16x32,dtype=u8log",
-    "bivariate:res=90x90",          "bivariate:res=90x90,dtype=u8log", "bivariate:res=32x32,dtype=f16",
-    "svd:rank=1,space=log",         "svd:rank=2,space=log", "svd:rank=4,space=log", "svd:rank=8,space=log",
-    "svd:rank=4,space=cos",         "nmf:rank=1", "nmf:rank=2", "nmf:rank=4",
-    "analytic:lambert+ggx",         "analytic:lambert+ggx+ggx", "analytic:lambert+beckmann",
-};
 
 std::vector<fs::path> default_materials() {
     std::vector<fs::path> out;
@@ -66,7 +57,7 @@ std::string num(double v) {
 }  // namespace
 
 int main(int argc, char** argv) {
-    bench::SweepArgs args = bench::parse_sweep_args(argc, argv, "compress_sweep.csv", kDefaultSpecs);
+    bench::SweepArgs args = bench::parse_sweep_args(argc, argv, "compress_sweep.csv", brdfz::benchmark_specs());
     const std::vector<std::string>& specs = args.specs;
     std::vector<fs::path>& files = args.files;
     const std::string& out_path = args.out;

@@ -36,7 +36,7 @@ using namespace brdfz;
 
 namespace {
 
-const char* const kDefaultSpecs[] = {
+const std::vector<std::string> kDefaultSpecs = {
     "analytic:lambert+ggx,loss=log",  "analytic:lambert+ggx,loss=cos", "analytic:lambert+ggx,loss=cbrt",
     "analytic:lambert+beckmann",      "analytic:lambert+ggx+ggx",      "analytic:lambert+blinn_phong",
     "analytic:lambert+ward",          "analytic:lambert+lafortune",    "analytic:lambert+ashikhmin_shirley",

@@ -33,6 +33,19 @@ Trial trial(const MeasurementSet& source, const std::string& spec, const TrialOp
     return measure(source, spec, options);
 }
 
+std::vector<std::string> benchmark_specs() {
+    return {
+        "tabular:res=90x90x180",  // the MERL grid in float32: the baseline
+        "tabular:res=45x45x90",          "tabular:res=45x45x90,dtype=f16",   "tabular:res=45x45x90,dtype=u8log",
+        "tabular:res=32x32x64,dtype=f16", "tabular:res=32x32x64,dtype=u8log", "tabular:res=16x16x32,dtype=u8log",
+        "bivariate:res=90x90",           "bivariate:res=90x90,dtype=u8log",  "bivariate:res=32x32,dtype=f16",
+        "svd:rank=1,space=log",          "svd:rank=2,space=log",             "svd:rank=4,space=log",
+        "svd:rank=8,space=log",          "svd:rank=4,space=cos",             "nmf:rank=1",
+        "nmf:rank=2",                    "nmf:rank=4",                       "analytic:lambert+ggx",
+        "analytic:lambert+ggx+ggx",      "analytic:lambert+beckmann",
+    };
+}
+
 std::vector<std::string> default_candidates() {
     return {
         "analytic:lambert+ggx",     "analytic:lambert+ggx+ggx", "tabular:res=16x16x32",

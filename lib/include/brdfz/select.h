@@ -68,6 +68,10 @@ struct Selection {
     const Candidate* best() const { return chosen < 0 ? nullptr : &tried[static_cast<std::size_t>(chosen)]; }
 };
 
+// The settings the compression benchmark sweeps (bench/compress_sweep, python -m brdfz.bench): every
+// kind at a few sizes, the float32 MERL-resolution table first as the baseline.
+std::vector<std::string> benchmark_specs();
+
 // Candidates from cheapest to richest: analytic fits of growing lobe count, factorisations of growing
 // rank, compact tables, the full-resolution table.
 std::vector<std::string> default_candidates();
