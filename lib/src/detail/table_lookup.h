@@ -11,12 +11,19 @@
 #include <cstddef>
 #include <initializer_list>
 #include <numbers>
+#include <string>
 
 #include "brdfz/coords.h"
 #include "brdfz/repr/tabular.h"
 #include "brdfz/table.h"
 
 namespace brdfz::detail {
+
+// The start of a table's describe(): "tabular 90x90x180", or "bivariate 90x90" for one φd bin.
+inline std::string table_shape(const GridSpec& g) {
+    return g.n_phi_d == 1 ? "bivariate " + std::to_string(g.n_theta_h) + "x" + std::to_string(g.n_theta_d)
+                          : "tabular " + g.str();
+}
 
 // Continuous bin coordinates (θh, θd, φd) of a direction pair on a grid.
 struct BinCoords {

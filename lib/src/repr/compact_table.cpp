@@ -87,8 +87,11 @@ std::array<ChannelStats, 3> channel_stats(const Table& table) {
 // Quantising ln(1 + g·f) in steps d, an error uniform in ±d/2 becomes ±d/2·(f + 1/g) in f; with
 // d = L(g)/254, the expected weighted squared error is ∝ L(g)²·Σw(f + 1/g)². Minimised over gains
 // spanning g·max = 1 (near-linear steps) to 1e10 (relative steps down to 1e-10 of the maximum).
+// A channel with a single value has range 0: its codes are all 0, and scale 1/254 keeps the unused
+// codes' decoded values finite.
 ChannelCodec log_codec_for(const ChannelStats& s) {
-    if (!(s.max > 0.0f)) return {1.0, 0.0, 1.0};  // empty or all zero: every code decodes to 0
+    constexpr double kUnitRange = 1.0 / kMaxCode;
+    if (!(s.max > 0.0f)) return {1.0, 0.0, kUnitRange};  // empty or all zero: code 0 decodes to 0
     double best = std::numeric_limits<double>::infinity(), best_gain = 1.0 / s.max;
     for (int j = 0; j <= 80; ++j) {
         const double g = std::pow(10.0, j / 8.0) / s.max;
@@ -98,7 +101,7 @@ ChannelCodec log_codec_for(const ChannelStats& s) {
     }
     const double offset = std::log1p(best_gain * s.min);
     const double range = std::log1p(best_gain * s.max) - offset;
-    return {best_gain, offset, range > 0.0 ? range / kMaxCode : 1.0};
+    return {best_gain, offset, range > 0.0 ? range / kMaxCode : kUnitRange};
 }
 
 }  // namespace
@@ -217,9 +220,7 @@ CompactTableBrdf::CompactTableBrdf(CompactTable table, Lookup lookup) : table_(s
 
 std::string CompactTableBrdf::describe() const {
     const GridSpec& g = table_.grid();
-    const std::string shape = g.n_phi_d == 1 ? "bivariate " + std::to_string(g.n_theta_h) + "x" + std::to_string(g.n_theta_d)
-                                             : "tabular " + g.str();
-    return shape + (table_.dtype() == TableDtype::F16 ? " float16" : " uint8 log") + ", bin " +
+    return detail::table_shape(g) + (table_.dtype() == TableDtype::F16 ? " float16" : " uint8 log") + ", bin " +
            (g.position == BinPosition::Start ? "start" : "centre") + ", " + lookup_name(lookup_) + " lookup";
 }
 

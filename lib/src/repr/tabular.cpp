@@ -31,9 +31,9 @@ const char* lookup_name(Lookup lookup) { return lookup == Lookup::Nearest ? "nea
 TabularBrdf::TabularBrdf(Table table, Lookup lookup) : table_(std::move(table)), lookup_(lookup) {}
 
 std::string TabularBrdf::describe() const {
-    return "tabular " + table_.grid().str() + " float32, bin " +
-           (table_.grid().position == BinPosition::Start ? "start" : "centre") + ", " + lookup_name(lookup_) +
-           " lookup";
+    const GridSpec& g = table_.grid();
+    return detail::table_shape(g) + " float32, bin " + (g.position == BinPosition::Start ? "start" : "centre") + ", " +
+           lookup_name(lookup_) + " lookup";
 }
 
 Rgb TabularBrdf::eval_above(const Vec3& wi, const Vec3& wo) const {
