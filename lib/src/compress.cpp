@@ -41,9 +41,11 @@ Lookup lookup_option(const ReprSpec& spec) {
     return parse_lookup(spec.get_choice("lookup", "linear", {"linear", "nearest"}));
 }
 
-// ss=N: each bin the mean of N points per axis (box filter; 1 point-samples). Measured in
-// bench/README.md: averaging gives the lower error on coarse grids.
-int supersample_option(const ReprSpec& spec) { return spec.get_int("ss", 2, 1, 16); }
+// ss=N: each bin the mean of N points per axis (box filter), default 1 (point samples), as measured
+// (bench/README.md, "Compact tables"): with linear lookup the box blurs what interpolation blurs again
+// (3x the error of point samples for 16x16x16 on RGL's paper_white), and for bivariate tables, whose
+// φd mean is a box anyway, ss=2 gained nothing on three of the four RGL materials at 4x the build time.
+int supersample_option(const ReprSpec& spec) { return spec.get_int("ss", 1, 1, 16); }
 
 Compressed build_tabular(const Brdf& source, const ReprSpec& spec, const CompressOptions& options) {
     const std::vector<int> res = spec.get_dims("res", {90, 90, 180});

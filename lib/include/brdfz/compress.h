@@ -4,9 +4,9 @@
 // Kinds (each documented with its options in its own header under repr/):
 //   tabular:res=AxBxC,dtype=f32|f16|u8log[,lookup=linear|nearest,ss=N]
 //                                           resampled Rusinkiewicz table (repr/tabular.h, compact_table.h),
-//                                           each bin the mean of N³ points (ss=1: point samples; default 2)
+//                                           each bin the mean of N³ points (default 1: point samples)
 //   bivariate:res=AxB,dtype=...[,lookup=...,ss=N,phi=P]   (θh, θd) table, the source averaged over P
-//                                           φd values (default 180) and N² points per bin
+//                                           φd values (default 180) and N² points per bin (default 1)
 //   analytic:MODEL[,loss=log|cos|cbrt,starts=N,seed=S]   a Ceres fit (fit/fit.h)
 // and those registered in compress.cpp's table as they land (svd, nmf, pca).
 #pragma once

@@ -5,6 +5,7 @@
 #include <cstring>
 #include <limits>
 #include <memory>
+#include <numbers>
 
 #include "brdfz/errors.h"
 #include "detail/table_lookup.h"
@@ -53,21 +54,25 @@ double half_scale_for(float max) {
     return std::ldexp(1.0, std::max(std::ilogb(max) - 14, FLT_MIN_EXP - 1));
 }
 
-// Per channel of a table: its valid values' range and cosθi²-weighted moments Σw, Σw·f, Σw·f².
+// Per channel of a table: its valid values' range and weighted moments Σw, Σw·f, Σw·f², with the
+// weights of the metrics (metrics.h): cos²θi where θi and θo are below 80°, 0 beyond. Grazing values
+// can be orders of magnitude above the rest (RGL files extrapolate there) and would otherwise decide
+// the gain for values that matter more.
 struct ChannelStats {
     float min = std::numeric_limits<float>::infinity(), max = -std::numeric_limits<float>::infinity();
     double w = 0, wf = 0, wf2 = 0;
 };
 
 std::array<ChannelStats, 3> channel_stats(const Table& table) {
+    const double kCos80 = std::cos(80.0 * std::numbers::pi / 180.0);
     const GridSpec& g = table.grid();
     std::array<ChannelStats, 3> s;
     for (int ih = 0; ih < g.n_theta_h; ++ih)
         for (int id = 0; id < g.n_theta_d; ++id)
             for (int ip = 0; ip < g.n_phi_d; ++ip) {
                 const std::size_t bin = g.index(ih, id, ip);
-                const double cos_i = from_half_diff({g.theta_h_at(ih), 0.0, g.theta_d_at(id), g.phi_d_at(ip)}).first.z;
-                const double w = cos_i > 0.0 ? cos_i * cos_i : 0.0;
+                const auto [wi, wo] = from_half_diff({g.theta_h_at(ih), 0.0, g.theta_d_at(id), g.phi_d_at(ip)});
+                const double w = wi.z > kCos80 && wo.z > kCos80 ? wi.z * wi.z : 0.0;
                 for (int ch = 0; ch < 3; ++ch) {
                     const float f = table.at(bin, ch);
                     if (std::isnan(f)) continue;
