@@ -379,6 +379,10 @@ TEST_CASE("stored codes are validated when a compact table is built from them", 
     std::array<ChannelCodec, 3> bad = unit;
     bad[1].scale = 0.3;  // not a power of two
     CHECK_THROWS_AS(CompactTable(g, TableDtype::F16, std::vector<std::uint8_t>(48, 0), bad), ValueError);
+    bad[1].scale = 0x1p113;  // 65504 times it is beyond float
+    CHECK_THROWS_AS(CompactTable(g, TableDtype::F16, std::vector<std::uint8_t>(48, 0), bad), ValueError);
+    bad[1].scale = 0x1p112;
+    CHECK_NOTHROW(CompactTable(g, TableDtype::F16, std::vector<std::uint8_t>(48, 0), bad));
     bad = log_codec;
     bad[1].gain = 0.0;
     CHECK_THROWS_AS(CompactTable(g, TableDtype::U8Log, std::vector<std::uint8_t>(24, 0), bad), ValueError);

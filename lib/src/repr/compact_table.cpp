@@ -1,5 +1,6 @@
 #include "brdfz/repr/compact_table.h"
 
+#include <algorithm>
 #include <cfloat>
 #include <cmath>
 #include <cstring>
@@ -55,11 +56,14 @@ struct LogU8Values {
 
 std::size_t code_size(TableDtype dtype) { return dtype == TableDtype::F16 ? 2 : 1; }
 
-// The power of two that puts `max` in [2^14, 2^15) (1 for an all-zero or empty channel), kept a
-// normal float so that decoding's multiply is exact.
+// Scales are powers of two in [2^-126, 2^112]: normal floats, so decoding's multiply is exact, and
+// small enough that the largest half (65504) times the scale is a finite float.
+constexpr int kMinHalfScaleExp = FLT_MIN_EXP - 1, kMaxHalfScaleExp = 112;  // FLT_MIN = 2^(FLT_MIN_EXP - 1)
+
+// The power of two that puts `max` in [2^14, 2^15) (1 for an all-zero or empty channel).
 double half_scale_for(float max) {
     if (!(max > 0.0f)) return 1.0;
-    return std::ldexp(1.0, std::max(std::ilogb(max) - 14, FLT_MIN_EXP - 1));
+    return std::ldexp(1.0, std::clamp(std::ilogb(max) - 14, kMinHalfScaleExp, kMaxHalfScaleExp));
 }
 
 // Per channel of a table: its valid values' range and weighted moments Σw, Σw·f, Σw·f², with the
@@ -183,9 +187,9 @@ CompactTable::CompactTable(GridSpec grid, TableDtype dtype, std::vector<std::uin
         const std::string which = "compact table channel " + std::to_string(ch) + ": ";
         if (dtype_ == TableDtype::F16) {
             int e = 0;
-            if (!(c.gain == 1.0 && c.offset == 0.0 && std::frexp(c.scale, &e) == 0.5 && c.scale >= FLT_MIN &&
-                  c.scale <= FLT_MAX))
-                throw ValueError(which + "a float16 table's scale must be a power of two in float range");
+            if (!(c.gain == 1.0 && c.offset == 0.0 && std::frexp(c.scale, &e) == 0.5 && e - 1 >= kMinHalfScaleExp &&
+                  e - 1 <= kMaxHalfScaleExp))
+                throw ValueError(which + "a float16 table's scale must be a power of two in [2^-126, 2^112]");
             half_scale_[ch] = static_cast<float>(c.scale);
         } else {
             if (!(std::isfinite(c.gain) && c.gain > 0.0 && std::isfinite(c.offset) && c.offset >= 0.0 &&

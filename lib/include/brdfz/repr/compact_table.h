@@ -57,7 +57,7 @@ public:
     static constexpr std::uint8_t kInvalidU8 = 255;
 
     // Quantises a float32 table; its invalid channels stay invalid. ValueError for dtype F32 (that is
-    // TabularBrdf's Table) or a value that does not fit (a negative one).
+    // TabularBrdf's Table) or a value that does not fit (negative, or above 65504·2^112 ≈ 3.4e38).
     static CompactTable encode(const Table& table, TableDtype dtype);
 
     // From stored codes: `codes` holds bins·3 elements (little-endian halves for F16) in Table's order.
