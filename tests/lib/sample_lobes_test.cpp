@@ -74,7 +74,7 @@ std::vector<double> random_params(const Model& m, std::mt19937_64& rng) {
 
 }  // namespace
 
-TEST_CASE("every lobe family has a tested sampler", "[sample][lobes]") {
+TEST_CASE("every lobe family has a tested sampler", "[sample][analytic]") {
     std::set<std::string> tested;
     for (const Case& c : cases()) {
         const Model m = Model::parse(c.model);
@@ -86,18 +86,18 @@ TEST_CASE("every lobe family has a tested sampler", "[sample][lobes]") {
     }
 }
 
-TEST_CASE("analytic samplers: chi-square, normalisation, round trip at 0/30/60/80/87 deg", "[sample][lobes]") {
+TEST_CASE("analytic samplers: chi-square, normalisation, round trip at 0/30/60/80/87 deg", "[sample][analytic][chi2]") {
     // Bonferroni over every case and angle: a 1% chance in all that any check fails by chance.
     const double p_min = 0.01 / (cases().size() * std::size(test::kThetaODeg));
     for (const Case& c : cases()) {
         const AnalyticBrdf b(c.model, c.params);
         INFO(b.describe());
-        test::check_sampler(b, 300000, p_min, 512);
+        test::check_sampler(b, 200000, p_min, 512);
     }
 }
 
 TEST_CASE("analytic samplers: 10^7 random (wo, u, parameters) give finite, non-negative pdfs and weights",
-          "[sample][lobes]") {
+          "[sample][analytic][robust]") {
     std::vector<std::string> models;
     for (const LobeType& t : lobe_types()) models.emplace_back(t.name);
     models.push_back("lambert+ggx+beckmann+lafortune2");
@@ -117,7 +117,7 @@ TEST_CASE("analytic samplers: 10^7 random (wo, u, parameters) give finite, non-n
                 failed += s.pdf == 0;
                 bad += !(std::isfinite(s.pdf) && s.pdf >= 0 && std::isfinite(s.weight[0]) && std::isfinite(s.weight[1]) &&
                          std::isfinite(s.weight[2]) && s.weight[0] >= 0 && s.weight[1] >= 0 && s.weight[2] >= 0);
-                if (k % 16 == 0 && s.pdf > 0) {
+                if (k % 64 == 0 && s.pdf > 0) {
                     const double p = b.pdf(wo, s.wi);
                     mismatched += !(std::fabs(p - s.pdf) <= 1e-9 * s.pdf);
                 }
@@ -130,7 +130,7 @@ TEST_CASE("analytic samplers: 10^7 random (wo, u, parameters) give finite, non-n
     CHECK(failed < total / 1000);  // folding keeps draws above the horizon: failures are rounding only
 }
 
-TEST_CASE("analytic samplers: lobes are chosen in proportion to their albedo", "[sample][lobes]") {
+TEST_CASE("analytic samplers: lobes are chosen in proportion to their albedo", "[sample][analytic]") {
     const AnalyticBrdf b("lambert+ggx", {0.3, 0.3, 0.3, 0.8, 0.8, 0.8, 0.2, 0.04});
     const AnalyticBrdf diffuse("lambert", {0.3, 0.3, 0.3}), glossy("ggx", {0.8, 0.8, 0.8, 0.2, 0.04});
     for (double deg : {0.0, 45.0, 80.0}) {
@@ -154,7 +154,7 @@ TEST_CASE("analytic samplers: lobes are chosen in proportion to their albedo", "
 }
 
 TEST_CASE("analytic samplers: sampled albedo matches quadrature, with far less variance than cosine sampling",
-          "[sample][lobes]") {
+          "[sample][analytic]") {
     for (const Case& c : cases()) {
         const AnalyticBrdf b(c.model, c.params);
         INFO(b.describe());
