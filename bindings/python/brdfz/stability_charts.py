@@ -62,8 +62,7 @@ def heatmap(csv_path: pathlib.Path, png: pathlib.Path) -> pathlib.Path:
     norm = mcolors.LogNorm(vmin=max(finite.min(), 1e-4), vmax=max(finite.max(), 1e-3)) if finite.size else None
 
     fig, ax = plt.subplots(figsize=(1.0 * len(materials) + 4, 0.42 * len(methods) + 2))
-    cmap = plt.get_cmap("viridis").copy()
-    cmap.set_bad("lightgrey")
+    cmap = plt.get_cmap("viridis").with_extremes(bad="lightgrey")
     im = ax.imshow(np.where(value > 0, value, np.nan), cmap=cmap, norm=norm, aspect="auto")
     for i in range(len(methods)):
         for j in range(len(materials)):
