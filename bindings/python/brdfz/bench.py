@@ -113,22 +113,32 @@ def read_csv(path: pathlib.Path) -> List[Row]:
 
 
 class Bar:
-    """A progress bar on stderr, rewritten in place: "label  37% [#######.............] 12/32 what"."""
+    """A progress bar on stderr, "label  37% [#######.............] 12/32 what", rewritten in place on a
+    terminal; elsewhere (logs) one line per finished step."""
 
     def __init__(self, label: str, total: int):
         self.label, self.total, self.done = label, max(total, 1), 0
+        self.tty = sys.stderr.isatty()
+
+    def _line(self, what: str) -> str:
+        filled = 20 * self.done // self.total
+        return (f"{self.label} {100 * self.done // self.total:3d}% [{'#' * filled}{'.' * (20 - filled)}]"
+                f" {self.done}/{self.total} {what}")
 
     def show(self, what: str) -> None:
-        filled = 20 * self.done // self.total
-        sys.stderr.write(f"\r\033[K{self.label} {100 * self.done // self.total:3d}% [{'#' * filled}{'.' * (20 - filled)}]"
-                         f" {self.done}/{self.total} {what}")
-        sys.stderr.flush()
+        if self.tty:
+            sys.stderr.write("\r\033[K" + self._line(what))
+            sys.stderr.flush()
 
     def step(self, what: str = "") -> None:
         self.done += 1
-        self.show(what)
-        if self.done >= self.total:
-            sys.stderr.write("\n")
+        if self.tty:
+            self.show(what)
+            if self.done >= self.total:
+                sys.stderr.write("\n")
+        else:
+            sys.stderr.write(self._line(what) + "\n")
+        sys.stderr.flush()
 
 
 def method(spec: str) -> str:
