@@ -244,12 +244,12 @@ private:
     std::size_t pos_ = 0;
 };
 
-std::string read_text(const std::string& path, std::size_t max_bytes) {
+std::string read_text(const std::string& path, std::size_t max_bytes, const char* kind) {
     std::error_code ec;
     const auto size = std::filesystem::file_size(path, ec);
     if (ec) throw IoError(path, "cannot open: " + ec.message());
     if (size > max_bytes)
-        throw FormatError(path, "file of " + std::to_string(size) + " bytes is larger than this kind of file can be (" +
+        throw FormatError(path, "file of " + std::to_string(size) + " bytes is larger than " + std::string(kind) + " can be (" +
                                     std::to_string(max_bytes) + ")");
     std::ifstream in(path, std::ios::binary);
     if (!in) throw IoError(path, "cannot open");
@@ -261,8 +261,8 @@ std::string read_text(const std::string& path, std::size_t max_bytes) {
 
 }  // namespace
 
-Value parse_file(const std::string& path, std::size_t max_bytes) {
-    const std::string text = read_text(path, max_bytes);
+Value parse_file(const std::string& path, std::size_t max_bytes, const char* kind) {
+    const std::string text = read_text(path, max_bytes, kind);
     return Parser(path, text).document();
 }
 

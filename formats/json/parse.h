@@ -26,7 +26,8 @@ struct Value {
 const char* kind_name(Value::Kind k);  // "an object", "a number", ...
 
 // Reads and parses a whole file of at most max_bytes (checked before reading). IoError when it cannot
-// be read; FormatError naming the file (and line and column) when it is too large or not JSON.
-Value parse_file(const std::string& path, std::size_t max_bytes);
+// be read; FormatError naming the file (and line and column) when it is too large for `kind` ("a model
+// file") or not JSON.
+Value parse_file(const std::string& path, std::size_t max_bytes, const char* kind);
 
 }  // namespace brdfz::json

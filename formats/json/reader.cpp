@@ -12,7 +12,7 @@ using json::Value;
 using json::kind_name;
 
 AnalyticBrdf read(const std::string& path) {
-    const Value doc = json::parse_file(path, kMaxFileBytes);
+    const Value doc = json::parse_file(path, kMaxFileBytes, "a model file");
     auto bad = [&](const std::string& why) -> FormatError { return FormatError(path, why); };
     if (doc.kind != Value::Kind::Object) throw bad("expected a JSON object at the top level");
     for (const std::string& k : doc.keys)

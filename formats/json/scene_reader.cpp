@@ -72,7 +72,7 @@ private:
 }  // namespace
 
 SceneDescription read(const std::string& path) {
-    const Value doc = json::parse_file(path, kMaxFileBytes);
+    const Value doc = json::parse_file(path, kMaxFileBytes, "a scene file");
     const Reader r(path);
     r.only(doc, "scene", {"format", "version", "name", "seed", "views", "lights", "environment", "pairs"});
     const Value* format = r.get(doc, "format", Value::Kind::String, "scene");

@@ -2,9 +2,13 @@
 // point behind `brdfz compress`, Python's brdfz.compress and the budget-driven selection.
 //
 // Kinds (each documented with its options in its own header under repr/):
-//   tabular:res=AxBxC,dtype=f32|f16|u8log   resampled Rusinkiewicz table (repr/tabular.h, compact_table.h)
+//   tabular:res=AxBxC,dtype=f32|f16|u8log[,lookup=linear|nearest,ss=N]
+//                                           resampled Rusinkiewicz table (repr/tabular.h, compact_table.h),
+//                                           each bin the mean of N³ points (default 1: point samples)
+//   bivariate:res=AxB,dtype=...[,lookup=...,ss=N,phi=P]   (θh, θd) table, the source averaged over P
+//                                           φd values (default 180) and N² points per bin (default 1)
 //   analytic:MODEL[,loss=log|cos|cbrt,starts=N,seed=S]   a Ceres fit (fit/fit.h)
-// and those registered in compress.cpp's table as they land (bivariate, svd, nmf, pca).
+// and those registered in compress.cpp's table as they land (svd, nmf, pca).
 #pragma once
 
 #include <functional>
