@@ -1,5 +1,5 @@
 // The compression benchmark: every representation setting over a set of materials, one CSV row each
-// (columns below; the Python charts read this file). Numbers come from brdfz::trial(), the same
+// (brdfz::kSweepCsvHeader, select.h; python -m brdfz.bench --from-csv charts it). Numbers come from brdfz::trial(), the same
 // measurement `brdfz compress` prints.
 //
 //   compress_sweep [--out sweep.csv] [--spec SPEC]... [FILE...]
@@ -23,7 +23,6 @@ namespace fs = std::filesystem;
 
 namespace {
 
-
 std::vector<fs::path> default_materials() {
     std::vector<fs::path> out;
     const auto add_dir = [&](const fs::path& dir, const std::string& ext) {
@@ -40,20 +39,6 @@ std::vector<fs::path> default_materials() {
     return out;
 }
 
-// CSV field: quoted when it holds a comma or a quote.
-std::string field(const std::string& s) {
-    if (s.find_first_of(",\"\n") == std::string::npos) return s;
-    std::string q = "\"";
-    for (char c : s) q += c == '"' ? std::string("\"\"") : std::string(1, c);
-    return q + "\"";
-}
-
-std::string num(double v) {
-    char buf[32];
-    std::snprintf(buf, sizeof buf, "%.6g", v);
-    return buf;
-}
-
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -68,27 +53,20 @@ int main(int argc, char** argv) {
     }
 
     std::ofstream csv(out_path);
-    csv << "material,format,repr,describe,bytes,input_bytes,ratio,cos_rmse,cos_rmse_rel,log_rmse,cbrt_rmse,"
-           "eval_pairs_per_s,build_s,status\n";
+    csv << brdfz::kSweepCsvHeader << "\n";
     for (const fs::path& file : files) {
         const brdfz::Loaded in = brdfz::load(file.string());
         const auto input_bytes = fs::file_size(file);
         for (const std::string& spec : specs) {
             std::fprintf(stderr, "%s  %s ...", file.stem().c_str(), spec.c_str());
-            csv << field(file.stem().string()) << "," << in.info.format << "," << field(spec) << ",";
             try {
                 const brdfz::Trial t = brdfz::trial(*in.brdf, spec);
-                std::string status = "ok";
-                for (const std::string& n : t.notes) status += "; " + n;
-                csv << field(t.describe) << "," << t.bytes << "," << input_bytes << ","
-                    << num(static_cast<double>(input_bytes) / static_cast<double>(t.bytes)) << ","
-                    << num(t.metrics.cos_rmse.mean) << "," << num(t.metrics.cos_rmse_rel.mean) << ","
-                    << num(t.metrics.log_rmse.mean) << "," << num(t.metrics.cbrt_rmse.mean) << "," << num(t.eval_rate)
-                    << "," << num(t.build_seconds) << "," << field(status) << "\n";
+                csv << brdfz::sweep_csv_row(file.stem().string(), in.info.format, spec, input_bytes, &t) << "\n";
                 std::fprintf(stderr, " %zu bytes, cos_rmse_rel %.4f, %.3g pairs/s, %.2f s\n", t.bytes,
                              t.metrics.cos_rmse_rel.mean, t.eval_rate, t.build_seconds);
             } catch (const std::exception& e) {
-                csv << ",," << input_bytes << ",,,,,,,," << field(std::string("error: ") + e.what()) << "\n";
+                csv << brdfz::sweep_csv_row(file.stem().string(), in.info.format, spec, input_bytes, nullptr, e.what())
+                    << "\n";
                 std::fprintf(stderr, " error: %s\n", e.what());
             }
             csv.flush();

@@ -24,4 +24,5 @@ PYBIND11_MODULE(_core, m) {
 
     brdfz::python::bind_brdf(m);
     brdfz::python::bind_operations(m);
+    brdfz::python::bind_select(m);
 }

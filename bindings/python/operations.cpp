@@ -26,22 +26,6 @@ namespace {
 using Path = std::filesystem::path;
 using Resolution = std::optional<std::tuple<int, int, int>>;
 
-// A library IoError about a file that does not exist becomes FileNotFoundError (an OSError), with
-// the library's message; every other error goes to the module's translator (_core.cpp).
-template <typename Fn>
-auto reading(const Path& path, Fn&& fn) {
-    try {
-        return fn();
-    } catch (const IoError& e) {
-        std::error_code ec;
-        if (!std::filesystem::exists(path, ec)) {
-            PyErr_SetString(PyExc_FileNotFoundError, e.what());
-            throw py::error_already_set();
-        }
-        throw;
-    }
-}
-
 BinPosition parse_bin_position(const std::string& name) {
     if (name == "centre") return BinPosition::Centre;
     if (name == "start") return BinPosition::Start;

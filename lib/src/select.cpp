@@ -95,4 +95,35 @@ Selection select_representation(const Brdf& source, const SelectOptions& options
     return out;
 }
 
+namespace {
+
+// CSV field: quoted when it holds a comma, a quote or a line break.
+std::string field(const std::string& s) {
+    if (s.find_first_of(",\"\n\r") == std::string::npos) return s;
+    std::string q = "\"";
+    for (char c : s) q += c == '"' ? std::string("\"\"") : std::string(1, c);
+    return q + "\"";
+}
+
+std::string num(double v) {
+    char buf[32];
+    std::snprintf(buf, sizeof buf, "%.6g", v);
+    return buf;
+}
+
+}  // namespace
+
+std::string sweep_csv_row(const std::string& material, const std::string& format, const std::string& spec,
+                          std::uintmax_t input_bytes, const Trial* trial, const std::string& error) {
+    std::string row = field(material) + "," + field(format) + "," + field(spec) + ",";
+    if (!trial) return row + ",," + std::to_string(input_bytes) + ",,,,,,,," + field("error: " + error);
+    const Trial& t = *trial;
+    std::string status = "ok";
+    for (const std::string& n : t.notes) status += "; " + n;
+    return row + field(t.describe) + "," + std::to_string(t.bytes) + "," + std::to_string(input_bytes) + "," +
+           num(static_cast<double>(input_bytes) / static_cast<double>(t.bytes)) + "," + num(t.metrics.cos_rmse.mean) +
+           "," + num(t.metrics.cos_rmse_rel.mean) + "," + num(t.metrics.log_rmse.mean) + "," +
+           num(t.metrics.cbrt_rmse.mean) + "," + num(t.eval_rate) + "," + num(t.build_seconds) + "," + field(status);
+}
+
 }  // namespace brdfz

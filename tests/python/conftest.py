@@ -27,9 +27,10 @@ def run(cli, *args, check=True):
 
 @pytest.fixture(scope="session")
 def demo_table(cli, tmp_path_factory):
-    """The demo's MERL table of the built-in material (no data files needed)."""
+    """The demo's MERL table of the built-in material (no data files needed); one cheap representation
+    instead of every one."""
     out = tmp_path_factory.mktemp("demo")
-    run(cli, "demo", "--out", out)
+    run(cli, "demo", "--out", out, "--repr", "tabular:res=8x8x16")
     return out / "coated-diffuse.binary"
 
 

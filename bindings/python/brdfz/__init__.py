@@ -16,29 +16,39 @@ the GIL). They release the GIL while they work, as do Brdf.eval / eval_cos / pdf
 """
 from __future__ import annotations
 
+import json
+import math
 import os
 import sys
-from typing import Callable, Optional, Tuple, Union
+import tempfile
+from typing import Callable, Mapping, Optional, Sequence, Tuple, Union
 
 from . import _core
 from ._core import (
     Brdf,
+    Candidate,
     ChannelMetrics,
     Compressed,
     FitReport,
     FitResult,
     FormatError,
     Metrics,
+    Scene,
+    Selection,
+    Trial,
     UnsupportedError,
     albedo,
+    benchmark_specs,
     compress_kinds,
+    default_candidates,
+    format_of,
     load,
 )
 
 __all__ = [
-    "Brdf", "ChannelMetrics", "Compressed", "FitReport", "FitResult", "FormatError", "Metrics",
-    "UnsupportedError", "albedo", "compress", "compress_kinds", "convert", "fit", "load", "metrics",
-    "save", "tabulate",
+    "Brdf", "Candidate", "ChannelMetrics", "Compressed", "FitReport", "FitResult", "FormatError", "Metrics",
+    "Scene", "Selection", "Trial", "UnsupportedError", "albedo", "benchmark_specs", "compress", "compress_kinds",
+    "convert", "default_candidates", "fit", "format_of", "load", "metrics", "read_scene", "save", "tabulate", "trial",
 ]
 
 Path = Union[str, os.PathLike]
@@ -87,12 +97,80 @@ def convert(src: Path, dst: Path, *, res: Optional[Resolution] = None, src_forma
                          bin_position=bin_position, threads=threads, progress=_hook(progress, "tabulating"))
 
 
-def compress(brdf: Brdf, spec: str, *, report: bool = False, threads: int = 0, progress: Progress = None):
+def read_scene(source: Union[Path, Mapping, Scene]) -> Scene:
+    """A scene for error budgets (docs/scene-json.md): a scene file, or a dict with the file's schema
+    ("format" and "version" may be left out). Bad members are ValueErrors naming them."""
+    if isinstance(source, Scene):
+        return source
+    if not isinstance(source, Mapping):
+        return _core.read_scene(source)
+    doc = {"format": "brdfz-scene", "version": 1, **source}
+    # One schema, one reader: the dict goes through the C++ scene file reader.
+    with tempfile.TemporaryDirectory() as tmp:
+        path = os.path.join(tmp, "scene.json")
+        with open(path, "w") as f:
+            json.dump(doc, f)
+        try:
+            return _core.read_scene(path)
+        except ValueError as e:
+            raise type(e)(str(e).replace(path, "scene dict")) from None
+
+
+def trial(brdf: Brdf, spec: str, *, measure_speed: bool = True, max_theta: float = 80.0, threads: int = 0,
+          progress: Progress = None) -> Trial:
+    """compress(brdf, spec) and measure what it achieved, as ``brdfz compress`` reports it: bytes,
+    metrics against `brdf`, eval_rate (pairs/s, one thread) and build_seconds."""
+    return _core.trial(brdf, spec, measure_speed=measure_speed, max_theta=max_theta, threads=threads,
+                       progress=_hook(progress, "compressing"))
+
+
+def _candidate_hook(progress: Progress) -> Optional[Callable[[Candidate, int, int], object]]:
+    if progress is None or progress is False:
+        return None
+    if progress is True:
+        def line(c: Candidate, index: int, total: int) -> None:
+            sys.stderr.write(f"  [{index + 1}/{total}] {c.spec:34} {c.bytes:>10} B  error {c.error:<10.4g} "
+                             f"{c.eval_rate:9.3g} pairs/s {c.build_seconds:7.2f} s  {c.reason}\n")
+            sys.stderr.flush()
+        return line
+    if callable(progress):
+        return lambda c, index, total: progress(1.0 if c.accepted else (index + 1) / total)
+    raise ValueError("progress must be True, False, None or a callable taking the fraction done")
+
+
+def compress(brdf: Brdf, spec: Optional[str] = None, *, auto: bool = False, max_error: Optional[float] = None,
+             metric: str = "log", scene: Union[Path, Mapping, Scene, None] = None,
+             candidates: Optional[Sequence[str]] = None, report: bool = False, threads: int = 0,
+             progress: Progress = None):
     """Builds the representation `spec` names, as ``brdfz compress`` spells it ("tabular:res=45x45x90",
     "analytic:lambert+ggx", "svd:rank=4", ...; see compress_kinds()). Returns the Brdf, or with
-    report=True a :class:`Compressed` holding it with its canonical spec, build_seconds and notes."""
-    built = _core.compress(brdf, spec, threads=threads, progress=_hook(progress, "compressing"))
-    return built if report else built.brdf
+    report=True a :class:`Compressed` holding it with its canonical spec, build_seconds and notes.
+
+    With auto=True (``brdfz compress --auto``) it tries `candidates` (default: default_candidates())
+    from cheapest to richest and returns the first, so the smallest, whose error in `metric` ("log":
+    log_rmse, "cos": cos_rmse_rel, "image": relative pixel RMSE; under `scene` when given, a scene
+    file or dict) is at most `max_error`; report=True returns the :class:`Selection` instead, every
+    candidate with its bytes, error, eval_rate, build_seconds and why it was rejected. No candidate
+    within the budget is a ValueError (its ``selection`` attribute holds the report). progress=True
+    prints a line per candidate."""
+    if not auto:
+        if spec is None:
+            raise ValueError("compress: give a spec, or auto=True and max_error")
+        built = _core.compress(brdf, spec, threads=threads, progress=_hook(progress, "compressing"))
+        return built if report else built.brdf
+    if spec is not None:
+        raise ValueError("compress: give a spec or auto=True, not both")
+    if max_error is None or not (math.isfinite(max_error) and max_error > 0):
+        raise ValueError("compress(auto=True): give max_error, a finite number > 0")
+    selection = _core.select_representation(
+        brdf, max_error, metric=metric, scene=None if scene is None else read_scene(scene),
+        candidates=list(candidates or []), threads=threads, on_candidate=_candidate_hook(progress))
+    if selection.chosen < 0:
+        tried = "; ".join(f"{c.spec}: {c.reason}" for c in selection.candidates)
+        error = ValueError(f"compress(auto=True): no candidate meets the budget {max_error:g} in {metric} ({tried})")
+        error.selection = selection
+        raise error
+    return selection if report else selection.brdf
 
 
 def fit(source: Union[Brdf, Path], model: str, *, loss: str = "log", starts: int = 8, seed: int = 1,

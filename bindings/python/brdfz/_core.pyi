@@ -2,11 +2,12 @@
 brdfz: measured BRDFs, compactly stored (C++ core of the brdfz package)
 """
 from __future__ import annotations
+import collections.abc
 import numpy
 import numpy.typing
 import os
 import typing
-__all__: list[str] = ['Brdf', 'ChannelMetrics', 'Compressed', 'FitReport', 'FitResult', 'FormatError', 'Metrics', 'UnsupportedError', 'albedo', 'compress', 'compress_kinds', 'convert', 'fit', 'load', 'metrics', 'save', 'tabulate']
+__all__: list[str] = ['Brdf', 'Candidate', 'ChannelMetrics', 'Compressed', 'FitReport', 'FitResult', 'FormatError', 'Metrics', 'Scene', 'Selection', 'Trial', 'UnsupportedError', 'albedo', 'benchmark_specs', 'compress', 'compress_kinds', 'convert', 'default_candidates', 'fit', 'format_of', 'load', 'metrics', 'read_scene', 'save', 'select_representation', 'tabulate', 'trial']
 class FormatError(ValueError):
     pass
 class UnsupportedError(ValueError):
@@ -219,9 +220,110 @@ class FitResult:
     @property
     def report(self) -> FitReport:
         ...
+class Trial:
+    """
+    what one representation achieved against its source (select.h)
+    """
+    def __repr__(self) -> str:
+        ...
+    @property
+    def brdf(self) -> Brdf:
+        """
+        the representation (None for a rejected candidate)
+        """
+    @property
+    def build_seconds(self) -> float:
+        ...
+    @property
+    def bytes(self) -> int:
+        """
+        Brdf.nbytes of the result
+        """
+    @property
+    def describe(self) -> str:
+        ...
+    @property
+    def eval_rate(self) -> float:
+        """
+        batch eval, pairs per second on one thread (0: not measured)
+        """
+    @property
+    def metrics(self) -> Metrics:
+        """
+        the result against the source
+        """
+    @property
+    def notes(self) -> list[str]:
+        """
+        from the builder (fit status, clamping)
+        """
+    @property
+    def spec(self) -> str:
+        """
+        canonical spec text
+        """
+class Candidate(Trial):
+    """
+    one candidate of a selection and why it was kept or not
+    """
+    def __repr__(self) -> str:
+        ...
+    @property
+    def accepted(self) -> bool:
+        ...
+    @property
+    def error(self) -> float:
+        """
+        in the selection's metric; NaN when the candidate failed
+        """
+    @property
+    def reason(self) -> str:
+        """
+        why it was rejected, or 'meets the budget'
+        """
+class Selection:
+    """
+    every candidate tried, cheapest first, and the one chosen
+    """
+    def __repr__(self) -> str:
+        ...
+    @property
+    def brdf(self) -> Brdf:
+        """
+        the chosen representation, or None
+        """
+    @property
+    def candidates(self) -> list[Candidate]:
+        ...
+    @property
+    def chosen(self) -> int:
+        """
+        index into candidates; -1 when none met the budget
+        """
+class Scene:
+    """
+    the direction pairs a scene evaluates and their weights (scene.h)
+    """
+    @property
+    def name(self) -> str:
+        ...
+    @property
+    def samples(self) -> int:
+        """
+        direction pairs
+        """
+    @property
+    def views(self) -> int:
+        """
+        views (pixels)
+        """
 def albedo(brdf: Brdf, theta_o: typing.Annotated[numpy.typing.ArrayLike, numpy.float64]) -> numpy.typing.NDArray[numpy.float64]:
     """
     directional albedo (quadrature, albedo.h) at θo in radians: shape of theta_o + (3,)
+    """
+def benchmark_specs() -> list[str]:
+    """
+    the settings the compression benchmark sweeps
     """
 def compress(brdf: Brdf, spec: str, *, threads: typing.SupportsInt | typing.SupportsIndex = 0, progress: typing.Any = None) -> Compressed:
     """
@@ -233,9 +335,17 @@ def convert(src: os.PathLike | str | bytes, dst: os.PathLike | str | bytes, *, r
     """
     as `brdfz convert SRC DST`; returns the written bins' counts
     """
+def default_candidates() -> list[str]:
+    """
+    select_representation's candidates, cheapest first
+    """
 def fit(source: typing.Any, model: str, *, loss: str = 'log', starts: typing.SupportsInt | typing.SupportsIndex = 8, seed: typing.SupportsInt | typing.SupportsIndex = 1, robust: str = 'none', robust_scale: typing.SupportsFloat | typing.SupportsIndex = 0.1, max_theta: typing.SupportsFloat | typing.SupportsIndex = 80.0, samples: typing.SupportsInt | typing.SupportsIndex = 20000, max_seconds: typing.SupportsFloat | typing.SupportsIndex = 60.0, threads: typing.SupportsInt | typing.SupportsIndex = 0, progress: typing.Any = None) -> FitResult:
     """
     fits an analytic model (e.g. 'lambert+ggx') to a Brdf or a file, as `brdfz fit`
+    """
+def format_of(path: str) -> str:
+    """
+    the format name of a file's extension ('merl', 'rgl', ...)
     """
 def load(path: os.PathLike | str | bytes, *, lookup: str = 'linear', bin_position: str = 'centre', format: str = '') -> Brdf:
     """
@@ -245,11 +355,23 @@ def metrics(reference: typing.Any, approx: Brdf, *, max_theta: typing.SupportsFl
     """
     metrics of approx against reference (a Brdf, or a file: a BRDF or Cornell/ALTA measurements)
     """
+def read_scene(path: os.PathLike | str | bytes) -> Scene:
+    """
+    a scene file (docs/scene-json.md), its samples drawn
+    """
 def save(brdf: Brdf, path: os.PathLike | str | bytes, *, res: tuple[typing.SupportsInt | typing.SupportsIndex, typing.SupportsInt | typing.SupportsIndex, typing.SupportsInt | typing.SupportsIndex] | None = None, format: str = '', threads: typing.SupportsInt | typing.SupportsIndex = 0, progress: typing.Any = None) -> dict:
     """
     writes atomically (format from the extension unless given); returns the written bins' counts
     """
+def select_representation(brdf: Brdf, max_error: typing.SupportsFloat | typing.SupportsIndex, *, metric: str = 'log', scene: Scene | None = None, candidates: collections.abc.Sequence[str] = [], measure_speed: bool = True, threads: typing.SupportsInt | typing.SupportsIndex = 0, on_candidate: typing.Any = None) -> Selection:
+    """
+    the smallest candidate within the budget (select.h); on_candidate(candidate, index, total) after each
+    """
 def tabulate(brdf: Brdf, res: tuple[typing.SupportsInt | typing.SupportsIndex, typing.SupportsInt | typing.SupportsIndex, typing.SupportsInt | typing.SupportsIndex] = (90, 90, 180), *, lookup: str = 'linear', negative: str = 'clamp', threads: typing.SupportsInt | typing.SupportsIndex = 0, progress: typing.Any = None) -> Brdf:
     """
     the Brdf evaluated on a (θh, θd, φd) Rusinkiewicz grid at bin centres, as a table
+    """
+def trial(brdf: Brdf, spec: str, *, measure_speed: bool = True, max_theta: typing.SupportsFloat | typing.SupportsIndex = 80.0, threads: typing.SupportsInt | typing.SupportsIndex = 0, progress: typing.Any = None) -> Trial:
+    """
+    compress(brdf, spec) and measure it: bytes, metrics, eval speed, build time
     """

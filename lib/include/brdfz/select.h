@@ -3,6 +3,7 @@
 // budget-driven selection alike, so all three report the same numbers.
 #pragma once
 
+#include <cstdint>
 #include <functional>
 #include <memory>
 #include <optional>
@@ -71,6 +72,16 @@ struct Selection {
 // The settings the compression benchmark sweeps (bench/compress_sweep, python -m brdfz.bench): every
 // kind at a few sizes, the float32 MERL-resolution table first as the baseline.
 std::vector<std::string> benchmark_specs();
+
+// The benchmark's CSV (bench/compress_sweep, `brdfz demo`; python -m brdfz.bench writes and reads the
+// same columns): one row per material and setting. A setting that failed has empty numbers and the
+// status "error: MESSAGE"; otherwise the status is "ok" followed by the builder's notes.
+inline constexpr const char* kSweepCsvHeader =
+    "material,format,repr,describe,bytes,input_bytes,ratio,cos_rmse,cos_rmse_rel,log_rmse,cbrt_rmse,"
+    "eval_pairs_per_s,build_s,status";
+// A line of it (no newline): `trial` measured, or `error` when trial is null.
+std::string sweep_csv_row(const std::string& material, const std::string& format, const std::string& spec,
+                          std::uintmax_t input_bytes, const Trial* trial, const std::string& error = {});
 
 // Candidates from cheapest to richest: analytic fits of growing lobe count, factorisations of growing
 // rank, compact tables, the full-resolution table.
