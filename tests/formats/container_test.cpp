@@ -444,7 +444,7 @@ TEST_CASE("Files needing unknown features are refused, naming the feature", "[co
         {
             container::h5::WriteNode root = w.root();
             root.attr("format", std::string("brdfz"));
-            root.attr("version", std::uint64_t{2});
+            root.attr("version", std::uint64_t{3});
             root.attr("min_reader_version", min_reader);
             root.attr("features", std::span<const std::string>(features));
             root.attr("feature_versions", std::span<const std::uint64_t>(since));
@@ -452,15 +452,15 @@ TEST_CASE("Files needing unknown features are refused, naming the feature", "[co
         w.close();
         return p;
     };
-    const fs::path p = future({"core", "pca"}, {1, 2}, 2);
+    const fs::path p = future({"core", "hologram"}, {1, 3}, 3);
     const std::string msg = read_error(p);
     CHECK_THROWS_AS(container::read(p.string()), UnsupportedError);
-    CHECK_THAT(msg, Catch::Contains("needs container feature 'pca' (container version 2)"));
+    CHECK_THAT(msg, Catch::Contains("needs container feature 'hologram' (container version 3)"));
     CHECK_THAT(msg, Catch::Contains("tabular"));
     CHECK_THROWS_AS(container::read_metadata(p.string()), UnsupportedError);
 
     // Known features but a newer minimum reader version.
-    CHECK_THAT(read_error(future({"core"}, {1}, 2)), Catch::Contains("needs a reader of container version 2"));
+    CHECK_THAT(read_error(future({"core"}, {1}, 3)), Catch::Contains("needs a reader of container version 3"));
 
     // An HDF5 attribute edited in place and the header resealed: the reader still catches it by
     // its own checks (a feature list whose lengths disagree).
