@@ -4,7 +4,9 @@
 // Kinds (each documented with its options in its own header under repr/):
 //   tabular:res=AxBxC,dtype=f32|f16|u8log   resampled Rusinkiewicz table (repr/tabular.h, compact_table.h)
 //   analytic:MODEL[,loss=log|cos|cbrt,starts=N,seed=S]   a Ceres fit (fit/fit.h)
-// and those registered in compress.cpp's table as they land (bivariate, svd, nmf, pca).
+//   pca:basis=FILE,k=K[,store=reference|embed,lookup=linear|nearest]   k coefficients of a shared
+//                                                   basis read from FILE (repr/pca.h)
+// and those registered in compress.cpp's table as they land (bivariate, svd, nmf).
 #pragma once
 
 #include <functional>
