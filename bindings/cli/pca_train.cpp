@@ -104,12 +104,12 @@ void add_pca_train(CLI::App& app) {
         PcaTrainOptions o = args->train;
         o.progress = progress_bar("training");
         PcaTrainReport report;
-        auto basis = std::make_shared<const PcaBasis>(train_pca_basis(ptrs, o, &report));
+        PcaBasis trained = train_pca_basis(ptrs, o, &report);
         tables.clear();
         const double train_seconds =
             std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count() - load_seconds;
-        container::write_pca_basis(args->out, basis);
-        const std::string hash = container::pca_basis_sha256(*basis);
+        const std::shared_ptr<const PcaBasis> basis = container::write_pca_basis(args->out, std::move(trained));
+        const std::string& hash = basis->origin().sha256;
         const std::uintmax_t file_bytes = std::filesystem::file_size(args->out);
 
         // Cumulative share of the training set's variance the first k components explain.

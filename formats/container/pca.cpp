@@ -210,8 +210,12 @@ std::string pca_basis_sha256(const PcaBasis& basis) {
                                 basis.variances());
 }
 
-void write_pca_basis(const std::string& path, std::shared_ptr<const PcaBasis> basis) {
-    write(path, PcaBrdf(std::move(basis), {}, Lookup::Linear, PcaBrdf::BasisStorage::Embedded));
+std::shared_ptr<const PcaBasis> write_pca_basis(const std::string& path, PcaBasis basis) {
+    // Hashed once: the storage module takes the hash from the origin.
+    basis.set_origin({path, pca_basis_sha256(basis)});
+    auto shared = std::make_shared<const PcaBasis>(std::move(basis));
+    write(path, PcaBrdf(shared, {}, Lookup::Linear, PcaBrdf::BasisStorage::Embedded));
+    return shared;
 }
 
 namespace {

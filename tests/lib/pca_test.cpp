@@ -222,9 +222,11 @@ TEST_CASE("PCA container: basis file and materials round-trip; hash and files ch
     const std::vector<Table> tables = family();
     const auto basis = trained(tables, 5);
     const fs::path basis_path = dir.path / "basis.brdfz";
-    container::write_pca_basis(basis_path.string(), basis);
+    const auto written = container::write_pca_basis(basis_path.string(), *basis);
     const auto loaded = container::read_pca_basis(basis_path.string());
     CHECK(loaded->origin().sha256 == container::pca_basis_sha256(*basis));
+    CHECK(written->origin().sha256 == loaded->origin().sha256);
+    CHECK(written->origin().path == basis_path.string());
     CHECK(loaded->origin().sha256.size() == 64);
     CHECK(std::equal(loaded->components().begin(), loaded->components().end(), basis->components().begin()));
     CHECK(std::equal(loaded->mean().begin(), loaded->mean().end(), basis->mean().begin()));
@@ -275,7 +277,7 @@ TEST_CASE("PCA container: basis file and materials round-trip; hash and files ch
 
     // A retrained basis in the basis's place: the hash no longer matches.
     std::vector<Table> fewer(tables.begin(), tables.begin() + 6);
-    container::write_pca_basis(basis_path.string(), trained(fewer, 5));
+    container::write_pca_basis(basis_path.string(), *trained(fewer, 5));
     CHECK_THROWS_AS(container::read(mat.string()), FormatError);
     CHECK_THROWS_WITH(container::read(mat.string()), Catch::Contains("content hash") && Catch::Contains("basis.brdfz"));
     // The embedded material does not depend on the basis file.
@@ -296,7 +298,7 @@ TEST_CASE("PCA container: a flipped byte in the basis file is detected", "[pca][
     const std::vector<Table> tables = family();
     const auto basis = trained(tables, 3);
     const fs::path basis_path = dir.path / "basis.brdfz", mat = dir.path / "mat.brdfz";
-    container::write_pca_basis(basis_path.string(), basis);
+    container::write_pca_basis(basis_path.string(), *basis);
     container::write(mat.string(), PcaBrdf(container::read_pca_basis(basis_path.string()), {0.5f, -0.25f}));
     const std::uintmax_t size = fs::file_size(basis_path);
     std::vector<char> bytes(size);
@@ -322,7 +324,7 @@ TEST_CASE("PCA: compress kind pca:basis=FILE,k=K", "[pca][compress]") {
     test::TempDir dir;
     const std::vector<Table> tables = family();
     const fs::path basis_path = dir.path / "basis.brdfz";
-    container::write_pca_basis(basis_path.string(), trained(tables, 6));
+    container::write_pca_basis(basis_path.string(), *trained(tables, 6));
     const std::string spec = "pca:basis=" + basis_path.string() + ",k=3";
     const Compressed c = compress(TabularBrdf(tables[1]), spec);
     const auto* pca = dynamic_cast<const PcaBrdf*>(c.brdf.get());

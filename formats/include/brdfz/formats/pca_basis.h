@@ -10,8 +10,9 @@
 
 namespace brdfz::container {
 
-// Writes atomically; IoError when writing fails.
-void write_pca_basis(const std::string& path, std::shared_ptr<const PcaBasis> basis);
+// Writes atomically; IoError when writing fails. Returns the basis with its origin set (this file and
+// its content hash), ready for materials that reference it.
+std::shared_ptr<const PcaBasis> write_pca_basis(const std::string& path, PcaBasis basis);
 
 // The embedded basis of a .brdfz file, with its origin (path and content hash) set. FormatError when
 // the file holds no PCA material or only refers to its basis; the container's own errors otherwise.

@@ -56,6 +56,7 @@ public:
     std::span<const double> variances() const { return variances_; }
     std::size_t kept_bins() const { return kept_bins_; }
     const Origin& origin() const { return origin_; }
+    void set_origin(Origin origin) { origin_ = std::move(origin); }
 
     // Bytes of the stored parameters (median, mean, components as float32; variances as float64).
     std::size_t nbytes() const;
