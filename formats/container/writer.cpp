@@ -82,6 +82,7 @@ Achieved write(const std::string& path, const Brdf& brdf, const WriteOptions& op
         }
     }
     achieved.nbytes = stored->nbytes();
+    if (options.source_metrics) achieved.metrics = options.source_metrics;
 
     std::vector<Feature> features{detail::kCore};
     for (const Feature& f : module->needs(*stored)) features.push_back(f);
@@ -123,6 +124,7 @@ Achieved write(const std::string& path, const Brdf& brdf, const WriteOptions& op
             h5::WriteNode rep = root.group("representation");
             rep.attr("type", std::string(module->type));
             rep.attr("spec", stored->describe());
+            if (!options.build_spec.empty()) rep.attr("build_spec", options.build_spec);
             module->write(rep, *stored);
             h5::WriteNode ach = root.group("achieved");
             write_achieved(ach, achieved);

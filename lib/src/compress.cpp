@@ -33,7 +33,7 @@ Compressed build_tabular(const Brdf& source, const ReprSpec& spec, const Compres
     return out;
 }
 
-Compressed build_analytic(const Brdf& source, const ReprSpec& spec, const CompressOptions& options) {
+FitOptions analytic_options(const ReprSpec& spec, const CompressOptions& options) {
     if (spec.positional().empty())
         throw ValueError("analytic: name the model, e.g. analytic:lambert+ggx");
     FitOptions fit_options;
@@ -43,7 +43,10 @@ Compressed build_analytic(const Brdf& source, const ReprSpec& spec, const Compre
     spec.finish();
     fit_options.threads = options.threads;
     fit_options.progress = options.progress;
-    FitResult fitted = fit(source, spec.positional(), fit_options);
+    return fit_options;
+}
+
+Compressed from_fit(FitResult fitted) {
     Compressed out;
     out.notes.push_back(std::string("fit ") + fit_status_name(fitted.report.status) + ": " + fitted.report.message);
     for (const std::string& w : fitted.report.warnings) out.notes.push_back(w);
@@ -86,6 +89,19 @@ Compressed build_pca(const Brdf& source, const ReprSpec& spec, const CompressOpt
     return out;
 }
 
+Compressed build_analytic(const Brdf& source, const ReprSpec& spec, const CompressOptions& options) {
+    return from_fit(fit(source, spec.positional(), analytic_options(spec, options)));
+}
+
+template <typename Build>
+Compressed timed(const ReprSpec& spec, Build build) {
+    const auto start = std::chrono::steady_clock::now();
+    Compressed out = build();
+    out.build_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    out.spec = spec.str();
+    return out;
+}
+
 struct Kind {
     const char* name;
     Builder build;
@@ -102,17 +118,19 @@ constexpr Kind kKinds[] = {
 
 Compressed compress(const Brdf& source, const std::string& text, const CompressOptions& options) {
     const ReprSpec spec = ReprSpec::parse(text);
-    for (const Kind& kind : kKinds) {
-        if (spec.kind() != kind.name) continue;
-        const auto start = std::chrono::steady_clock::now();
-        Compressed out = kind.build(source, spec, options);
-        out.build_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-        out.spec = spec.str();
-        return out;
-    }
+    for (const Kind& kind : kKinds)
+        if (spec.kind() == kind.name) return timed(spec, [&] { return kind.build(source, spec, options); });
     std::string known;
     for (const Kind& kind : kKinds) known += (known.empty() ? "" : ", ") + std::string(kind.name);
     throw ValueError("unknown representation '" + spec.kind() + "' (known: " + known + ")");
+}
+
+Compressed compress(const MeasurementSet& source, const std::string& text, const CompressOptions& options) {
+    const ReprSpec spec = ReprSpec::parse(text);
+    if (spec.kind() != "analytic")
+        throw ValueError("'" + spec.kind() + "' needs a BRDF on a grid; scattered measurements can only be fitted "
+                         "(analytic:MODEL)");
+    return timed(spec, [&] { return from_fit(fit(source, spec.positional(), analytic_options(spec, options))); });
 }
 
 std::vector<std::string> compress_kinds() {

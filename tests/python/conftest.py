@@ -48,3 +48,13 @@ def rgl_files():
     if not files:
         pytest.skip("../shared/data/rgl is missing")
     return files
+
+
+def import_brdfz():
+    """The brdfz Python package. ctest sets BRDFZ_PYTHON=1 when it built the module (then a failing
+    import is an error); elsewhere the binding tests skip without it."""
+    if os.environ.get("BRDFZ_PYTHON") == "1":
+        import brdfz
+
+        return brdfz
+    return pytest.importorskip("brdfz", reason="the brdfz Python package is not built (BRDFZ_BUILD_PYTHON=ON)")

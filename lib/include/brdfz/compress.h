@@ -15,6 +15,7 @@
 #include <vector>
 
 #include "brdfz/brdf.h"
+#include "brdfz/measurements.h"
 #include "brdfz/repr/spec.h"
 
 namespace brdfz {
@@ -34,6 +35,10 @@ struct Compressed {
 
 // ValueError for an unknown kind or a bad option (naming it); the builders' own errors pass through.
 Compressed compress(const Brdf& source, const std::string& spec, const CompressOptions& options = {});
+
+// Scattered measurements (Cornell, ALTA) have no grid to factor or resample: only `analytic` fits
+// them; ValueError for any other kind.
+Compressed compress(const MeasurementSet& source, const std::string& spec, const CompressOptions& options = {});
 
 // The kinds compress() knows, for help texts.
 std::vector<std::string> compress_kinds();
