@@ -1,6 +1,8 @@
 """brdfz pca-train: a basis from a directory of materials, its report, and one-line errors."""
 import json
 
+import pytest
+
 from conftest import run
 
 
@@ -52,3 +54,27 @@ def test_pca_train_errors_are_one_line(cli, tmp_path):
     proc = run(cli, "pca-train", empty, "-o", tmp_path / "b.brdfz", check=False)
     assert proc.returncode != 0 and "no BRDF files" in proc.stderr
     assert not (tmp_path / "b.brdfz").exists()
+
+
+def test_compress_with_a_basis_referenced_and_embedded(cli, tmp_path):
+    d = materials(tmp_path)
+    basis = tmp_path / "basis.brdfz"
+    run(cli, "pca-train", d, "-o", basis, "--res", "16x16x32", "--k-max", "4")
+    src = d / "m2.json"
+    out = tmp_path / "out" / "m2.brdfz"
+    out.parent.mkdir()
+    r = json.loads(run(cli, "compress", src, "-o", out, "--repr", f"pca:basis={basis},k=3", "--json").stdout)
+    assert r["bytes"] == 3 * 4 + 32
+    info = json.loads(run(cli, "info", out, "--json").stdout)["container"]
+    assert info["representation"] == "pca" and "pca.external-basis@2" in info["features"]
+    # What was stored evaluates like what was reported, with the basis found beside (here: above) it.
+    diff = json.loads(run(cli, "diff", src, out, "--json").stdout)
+    assert diff["cos_rmse_rel"]["mean"] == pytest.approx(r["metrics"]["cos_rmse_rel"]["mean"], rel=1e-9)
+
+    embedded = tmp_path / "embedded.brdfz"
+    run(cli, "compress", src, "-o", embedded, "--repr", f"pca:basis={basis},k=3,store=embed")
+    basis.unlink()
+    assert "pca.external-basis@2" not in json.loads(run(cli, "info", embedded, "--json").stdout)["container"]["features"]
+    proc = run(cli, "info", out, check=False)
+    assert proc.returncode != 0 and "basis.brdfz" in proc.stderr and "not found" in proc.stderr
+    assert proc.stderr.count("\n") == 1
