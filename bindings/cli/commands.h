@@ -14,5 +14,6 @@ void add_validate(CLI::App& app);
 void add_sample(CLI::App& app);
 void add_fit(CLI::App& app);
 void add_compress(CLI::App& app);
+void add_pca_train(CLI::App& app);
 
 }  // namespace brdfz::cli

@@ -17,6 +17,7 @@ int main(int argc, char** argv) {
     brdfz::cli::add_sample(app);
     brdfz::cli::add_fit(app);
     brdfz::cli::add_compress(app);
+    brdfz::cli::add_pca_train(app);
     try {
         app.parse(argc, argv);
     } catch (const CLI::ParseError& e) {

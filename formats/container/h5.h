@@ -85,6 +85,7 @@ public:
     void dataset(const std::string& name, DType type, const std::vector<std::uint64_t>& shape, const void* data);
 
     const std::string& path() const { return path_; }
+    const std::string& file() const;  // the file being written, as named to the Writer
 
 private:
     void attr_raw(const std::string& name, hid_t file_type, hid_t mem_type, std::span<const std::uint64_t> dims,
@@ -113,6 +114,8 @@ private:
     Id file_;
     std::vector<Extent> extents_;
 };
+
+inline const std::string& WriteNode::file() const { return writer_->display_path(); }
 
 class Dataset {
 public:

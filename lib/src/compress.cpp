@@ -1,10 +1,13 @@
 #include "brdfz/compress.h"
 
 #include <chrono>
+#include <optional>
 
 #include "brdfz/errors.h"
 #include "brdfz/fit/fit.h"
 #include "brdfz/repr/compact_table.h"
+#include "brdfz/formats/pca_basis.h"
+#include "brdfz/repr/pca.h"
 #include "brdfz/repr/tabular.h"
 #include "brdfz/tabulate.h"
 
@@ -89,6 +92,41 @@ Compressed from_fit(FitResult fitted) {
     return out;
 }
 
+// A PCA basis lives in a file (formats/SPEC.md), so this kind reads one: the library's formats are
+// part of the same target.
+Compressed build_pca(const Brdf& source, const ReprSpec& spec, const CompressOptions& options) {
+    const std::string file = spec.get_string("basis", "");
+    const int k = spec.get_int("k", 12, 1, 1 << 16);
+    const Lookup lookup = parse_lookup(spec.get_choice("lookup", "linear", {"linear", "nearest"}));
+    const bool embed = spec.get_choice("store", "reference", {"reference", "embed"}) == "embed";
+    spec.finish();
+    if (file.empty()) throw ValueError("pca: name the basis file (brdfz pca-train makes one), e.g. pca:basis=merl.brdfz,k=12");
+    std::shared_ptr<const PcaBasis> basis = container::read_pca_basis(file);
+    if (k > basis->k_max())
+        throw ValueError("pca: k = " + std::to_string(k) + " but basis " + file + " has " +
+                         std::to_string(basis->k_max()) + " components");
+    Compressed out;
+    // Projection needs the source on the basis's grid: a table already there is used as it is.
+    const auto* table = dynamic_cast<const TabularBrdf*>(&source);
+    std::optional<Tabulated> tabulated;
+    if (!table || !(table->table().grid() == basis->grid())) {
+        TabulateOptions tab;
+        tab.grid = basis->grid();
+        tab.threads = options.threads;
+        tab.progress = options.progress;
+        tabulated = tabulate(source, tab);
+        if (tabulated->counts.clamped > 0)
+            out.notes.push_back(std::to_string(tabulated->counts.clamped) + " negative values clamped to 0 when tabulating");
+    }
+    const Table& values = tabulated ? tabulated->table : table->table();
+    auto pca = std::make_unique<PcaBrdf>(basis, basis->project(values, k), lookup,
+                                         embed ? PcaBrdf::BasisStorage::Embedded : PcaBrdf::BasisStorage::Referenced);
+    if (pca->counts().clamped > 0)
+        out.notes.push_back(std::to_string(pca->counts().clamped) + " reconstructed bins with negative values clamped to 0");
+    out.brdf = std::move(pca);
+    return out;
+}
+
 Compressed build_analytic(const Brdf& source, const ReprSpec& spec, const CompressOptions& options) {
     return from_fit(fit(source, spec.positional(), analytic_options(spec, options)));
 }
@@ -112,6 +150,7 @@ constexpr Kind kKinds[] = {
     {"tabular", build_tabular},
     {"bivariate", build_bivariate},
     {"analytic", build_analytic},
+    {"pca", build_pca},
 };
 
 }  // namespace

@@ -8,7 +8,9 @@
 //   bivariate:res=AxB,dtype=...[,lookup=...,ss=N,phi=P]   (θh, θd) table, the source averaged over P
 //                                           φd values (default 180) and N² points per bin (default 1)
 //   analytic:MODEL[,loss=log|cos|cbrt,starts=N,seed=S]   a Ceres fit (fit/fit.h)
-// and those registered in compress.cpp's table as they land (svd, nmf, pca).
+//   pca:basis=FILE,k=K[,store=reference|embed,lookup=linear|nearest]   k coefficients of a shared
+//                                                   basis read from FILE (repr/pca.h)
+// and those registered in compress.cpp's table as they land (svd, nmf).
 #pragma once
 
 #include <functional>
