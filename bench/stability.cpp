@@ -42,7 +42,7 @@ const std::vector<std::string> kDefaultSpecs = {
     "analytic:lambert+ward",          "analytic:lambert+lafortune",    "analytic:lambert+ashikhmin_shirley",
     "tabular:res=16x16x32",           "tabular:res=16x16x32,dtype=u8log", "tabular:res=45x45x90,dtype=f16",
     "bivariate:res=90x90",            "svd:rank=2,space=log",          "svd:rank=4,space=linear",
-    "nmf:rank=2",                     "pca:k=8",
+    "nmf:rank=2",
 };
 
 struct Material {
