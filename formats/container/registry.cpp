@@ -4,7 +4,7 @@ namespace brdfz::container {
 namespace detail {
 
 std::span<const StorageModule* const> storage_modules() {
-    static const StorageModule* const kModules[] = {&tabular_storage(), &rgl_storage(), &analytic_storage()};
+    static const StorageModule* const kModules[] = {&tabular_storage(), &rgl_storage(), &analytic_storage(), &factored_storage()};
     return kModules;
 }
 

@@ -32,6 +32,7 @@ struct StorageModule {
 const StorageModule& tabular_storage();
 const StorageModule& rgl_storage();
 const StorageModule& analytic_storage();
+const StorageModule& factored_storage();
 
 // Every module, in the order the writer tries them.
 std::span<const StorageModule* const> storage_modules();

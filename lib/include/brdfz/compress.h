@@ -4,7 +4,9 @@
 // Kinds (each documented with its options in its own header under repr/):
 //   tabular:res=AxBxC,dtype=f32|f16|u8log   resampled Rusinkiewicz table (repr/tabular.h, compact_table.h)
 //   analytic:MODEL[,loss=log|cos|cbrt,starts=N,seed=S]   a Ceres fit (fit/fit.h)
-// and those registered in compress.cpp's table as they land (bivariate, svd, nmf, pca).
+//   svd:rank=K,space=linear|cos|log|cbrt,layout=h_dp|hd_p,colour=separate|shared[,res=AxBxC,iterations=N]
+//   nmf:(the same keys)                     low-rank / non-negative factorisation (repr/factored.h)
+// and those registered in compress.cpp's table as they land (bivariate, pca).
 #pragma once
 
 #include <functional>
