@@ -58,7 +58,7 @@ Compressed build_factored(FactorMethod method, const Brdf& source, const ReprSpe
     fo.space = parse_factor_space(spec.get_choice("space", "log", {"linear", "cos", "log", "cbrt"}));
     fo.layout = parse_factor_layout(spec.get_choice("layout", "h_dp", {"h_dp", "hd_p"}));
     fo.colour = parse_factor_colour(spec.get_choice("colour", "separate", {"separate", "shared"}));
-    fo.max_iterations = spec.get_int("iterations", method == FactorMethod::Svd ? 100 : 300, 1, 100000);
+    fo.max_iterations = spec.get_int("iterations", method == FactorMethod::Svd ? 50 : 100, 1, 100000);
     const auto* tabular = dynamic_cast<const TabularBrdf*>(&source);
     const bool resample = !tabular || spec.has("res");
     const std::vector<int> res = spec.get_dims("res", {90, 90, 180});

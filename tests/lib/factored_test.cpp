@@ -50,7 +50,7 @@ FactorOptions options(FactorMethod method, int rank, FactorSpace space = FactorS
     o.space = space;
     o.layout = layout;
     o.colour = colour;
-    o.max_iterations = method == FactorMethod::Nmf ? 300 : 100;
+    o.max_iterations = method == FactorMethod::Nmf ? 100 : 50;
     return o;
 }
 
@@ -113,7 +113,11 @@ TEST_CASE("factored: error falls monotonically with rank", "[factored]") {
             INFO(factor_method_name(method) << " " << factor_space_name(space));
             double previous = std::numeric_limits<double>::infinity();
             for (int rank = 1; rank <= 5; ++rank) {
-                const Factored f = factor(t, options(method, rank, space));
+                // Weighted problems converge slowly (cos: ~100 iterations at rank 3); a solver stopped
+                // early is not the property under test.
+                FactorOptions o = options(method, rank, space);
+                o.max_iterations = 300;
+                const Factored f = factor(t, o);
                 INFO("rank " << rank << " residual " << f.report.residual);
                 CHECK(f.report.residual < previous);
                 previous = f.report.residual;

@@ -138,7 +138,7 @@ using Vec = Eigen::VectorXd;
 // min ½ uᵀAu − bᵀu subject to u ≥ 0, by coordinate descent from the given u (A positive definite).
 void nnls(const Eigen::MatrixXd& a, const Vec& b, Vec& u) {
     const Eigen::Index k = u.size();
-    for (int sweep = 0; sweep < 100; ++sweep) {
+    for (int sweep = 0; sweep < 20; ++sweep) {  // warm-started: a few sweeps per outer iteration suffice
         double change = 0.0, scale = 0.0;
         for (Eigen::Index i = 0; i < k; ++i) {
             const double next = std::max(0.0, u[i] + (b[i] - a.row(i).dot(u)) / a(i, i));
@@ -146,68 +146,76 @@ void nnls(const Eigen::MatrixXd& a, const Vec& b, Vec& u) {
             u[i] = next;
             scale = std::max(scale, next);
         }
-        if (change <= 1e-12 * scale) break;
+        if (change <= 1e-9 * scale) break;
     }
 }
 
-// The data one side of an alternating step sees: row i of each channel's matrix and of the weights
-// (for the other side, the transposes), row-major so that a row is contiguous.
+// What one side of an alternating step needs, row i of each matrix being row i of that side's factor
+// (the other side sees the transposes). Row-major, so a row is contiguous.
 struct Side {
-    Mat w;
-    std::vector<Mat> x;  // one per channel, 0 where w is 0
+    Mat w;                // weights: 0 for invalid bins
+    std::vector<Mat> wx;  // per channel: w ∘ y
+    Vec xx;               // per row: Σ_c Σ_j w y², for the objective
 };
 
 // Normal equations of the colour weights s, accumulated while updating V (shared colour only).
 struct ColourSums {
-    Eigen::MatrixXd k;                 // Σ_j (v_j v_jᵀ) ∘ G_j
-    std::vector<Vec> r;                // per channel: Σ_j v_j ∘ (Uᵀ (w_j ∘ x_cj))
+    Eigen::MatrixXd k;   // Σ_j (v_j v_jᵀ) ∘ G_j
+    std::vector<Vec> r;  // per channel: Σ_j v_j ∘ (Uᵀ (w_j ∘ y_cj))
     double objective = 0.0;
 };
 
 constexpr int kChunks = 32;  // fixed work split, so results do not depend on the thread count
 
-// Updates every row of `out` given the other factor `other`: row i minimises
-//   Σ_c Σ_j w_ij (x_cij − Σ_a out_ia s_ca other_ja)²
+// Updates every row of `out` given the other factor F: row i minimises
+//   Σ_c Σ_j w_ij (y_cij − Σ_a out_ia s_ca F_ja)²
 // (non-negatively for nmf) with a ridge of 1e-10 of the mean diagonal, which only matters for rows
-// whose valid bins do not determine all components. Returns the objective after the update and the
-// colour weights' normal equations.
+// whose valid bins do not determine all components. Its normal equations are G_i ∘ (Σ_c s_c s_cᵀ)
+// with G_i = Σ_j w_ij F_j F_jᵀ: for all rows at once, one product W·P with P_j = vec(F_j F_jᵀ), and
+// the right-hand sides (W ∘ Y_c)·F. Returns the objective after the update and the colour weights'
+// normal equations.
 ColourSums update_side(Mat& out, const Mat& other, const Side& side, const Mat& s, bool nonneg, int threads) {
-    const Eigen::Index n = out.rows(), k = out.cols();
-    const int channels = static_cast<int>(side.x.size());
+    const Eigen::Index n = out.rows(), k = out.cols(), m = other.rows();
+    const int channels = static_cast<int>(side.wx.size());
     Eigen::MatrixXd s2 = Eigen::MatrixXd::Zero(k, k);
     for (int c = 0; c < channels; ++c) s2 += s.row(c).transpose() * s.row(c);
+    Mat outer(m, k * k);
+    for (Eigen::Index j = 0; j < m; ++j)
+        for (Eigen::Index a = 0; a < k; ++a)
+            for (Eigen::Index b = 0; b < k; ++b) outer(j, a * k + b) = other(j, a) * other(j, b);
 
     const int chunks = static_cast<int>(std::min<Eigen::Index>(n, kChunks));
     std::vector<ColourSums> sums(chunks);
     detail::parallel_for(chunks, threads, [&](int, int chunk) {
+        const Eigen::Index begin = n * chunk / chunks, len = n * (chunk + 1) / chunks - begin;
+        const Mat grams = side.w.middleRows(begin, len) * outer;
+        std::vector<Mat> rhs(channels);
+        for (int c = 0; c < channels; ++c) rhs[c] = side.wx[c].middleRows(begin, len) * other;
         ColourSums& acc = sums[chunk];
         acc.k = Eigen::MatrixXd::Zero(k, k);
         acc.r.assign(channels, Vec::Zero(k));
-        Mat weighted(other.rows(), k);
-        std::vector<Vec> bc(channels);
-        const Eigen::Index begin = n * chunk / chunks, end = n * (chunk + 1) / chunks;
-        for (Eigen::Index i = begin; i < end; ++i) {
-            weighted = other.array().colwise() * side.w.row(i).transpose().array();
-            const Eigen::MatrixXd g = other.transpose() * weighted;
-            Vec b = Vec::Zero(k);
-            double xx = 0.0;
-            for (int c = 0; c < channels; ++c) {
-                bc[c] = weighted.transpose() * side.x[c].row(i).transpose();
-                b += s.row(c).transpose().cwiseProduct(bc[c]);
-                xx += side.x[c].row(i).cwiseAbs2().dot(side.w.row(i));
-            }
-            const Eigen::MatrixXd a = g.cwiseProduct(s2);
-            Eigen::MatrixXd ridged = a;
+        Eigen::MatrixXd g(k, k), a(k, k), ridged(k, k);
+        Vec b(k), u(k);
+        Eigen::LDLT<Eigen::MatrixXd> ldlt(k);
+        for (Eigen::Index r = 0; r < len; ++r) {
+            g = Eigen::Map<const Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>>(
+                grams.row(r).data(), k, k);
+            b.setZero();
+            for (int c = 0; c < channels; ++c) b += s.row(c).transpose().cwiseProduct(rhs[c].row(r).transpose());
+            a = g.cwiseProduct(s2);
+            ridged = a;
             ridged.diagonal().array() += 1e-10 * a.trace() / static_cast<double>(k) + 1e-300;
-            Vec u = out.row(i).transpose();
-            if (nonneg)
+            u = out.row(begin + r).transpose();
+            if (nonneg) {
                 nnls(ridged, b, u);
-            else
-                u = ridged.ldlt().solve(b);
-            out.row(i) = u.transpose();
-            acc.objective += std::max(0.0, xx - 2.0 * u.dot(b) + u.dot(a * u));
+            } else {
+                ldlt.compute(ridged);
+                u = ldlt.solve(b);
+            }
+            out.row(begin + r) = u.transpose();
+            acc.objective += std::max(0.0, side.xx[begin + r] - 2.0 * u.dot(b) + u.dot(a * u));
             acc.k += (u * u.transpose()).cwiseProduct(g);
-            for (int c = 0; c < channels; ++c) acc.r[c] += u.cwiseProduct(bc[c]);
+            for (int c = 0; c < channels; ++c) acc.r[c] += u.cwiseProduct(rhs[c].row(r).transpose());
         }
     });
     ColourSums total{Eigen::MatrixXd::Zero(k, k), std::vector<Vec>(channels, Vec::Zero(k)), 0.0};
@@ -218,6 +226,14 @@ ColourSums update_side(Mat& out, const Mat& other, const Side& side, const Mat& 
     }
     return total;
 }
+
+// A table's valid bins in one layout and transform space: the values y (rows × columns, 0 where
+// invalid) and the two Sides.
+struct Data {
+    std::vector<Mat> y;
+    Side rows, cols;
+    std::size_t valid = 0;
+};
 
 struct Solved {
     Mat u, v, s;  // rows × k, columns × k, channels × k
@@ -257,20 +273,44 @@ void canonical_svd(Solved& r) {
     r.v = qv.householderQ() * Eigen::MatrixXd::Identity(r.v.rows(), k) * core.matrixV() * root.asDiagonal();
 }
 
+// NNDSVD (Boutsidis & Gallopoulos 2008): each SVD component u vᵀ replaced by the larger (by norm
+// product) of its positive part u₊v₊ᵀ and negated negative part u₋v₋ᵀ, a non-negative start close to
+// the truncated SVD. The leading component of a non-negative matrix is one-signed already.
+void nndsvd(Mat& u, Mat& v) {
+    for (Eigen::Index j = 0; j < u.cols(); ++j) {
+        const Vec up = u.col(j).cwiseMax(0.0), un = (-u.col(j)).cwiseMax(0.0);
+        const Vec vp = v.col(j).cwiseMax(0.0), vn = (-v.col(j)).cwiseMax(0.0);
+        const double mp = up.norm() * vp.norm(), mn = un.norm() * vn.norm();
+        // u.col(j) and v.col(j) carry √σ each: keep the product's scale, σ·m/(|u|·|v|).
+        const double scale = std::sqrt(u.col(j).norm() * v.col(j).norm());
+        const bool pos = mp >= mn;
+        const Vec& a = pos ? up : un;
+        const Vec& b = pos ? vp : vn;
+        const double m = pos ? mp : mn;
+        if (!(m > 0.0)) {
+            u.col(j).setZero();
+            v.col(j).setZero();
+            continue;
+        }
+        const double g = scale * std::sqrt(m / (u.col(j).norm() * v.col(j).norm()));
+        u.col(j) = g * a / a.norm();
+        v.col(j) = g * b / b.norm();
+    }
+}
+
 // One factorisation of `channels` matrices sharing U and V (colour weights s updated when there is
 // more than one channel). `step(i)` reports progress after iteration i.
-Solved solve(const Side& rows, const Side& cols, int k, bool nonneg, const FactorOptions& o,
-             const std::function<void(int)>& step) {
-    const int channels = static_cast<int>(rows.x.size());
+Solved solve(const Data& d, int k, bool nonneg, const FactorOptions& o, const std::function<void(int)>& step) {
+    const Side &rows = d.rows, &cols = d.cols;
+    const int channels = static_cast<int>(d.y.size());
     const Eigen::Index nr = rows.w.rows(), nc = cols.w.rows();
     Solved r;
-    r.norm = 0.0;
-    for (int c = 0; c < channels; ++c) r.norm += rows.x[c].cwiseAbs2().cwiseProduct(rows.w).sum();
+    r.norm = rows.xx.sum();
 
     // Start: the rank-k SVD of the channels' mean, invalid entries filled with their row's weighted
-    // mean (zeros would pull every component towards them); nmf starts from its absolute values.
+    // mean (zeros would pull every component towards them); nmf starts from its NNDSVD.
     Mat mean = Mat::Zero(nr, nc);
-    for (int c = 0; c < channels; ++c) mean += rows.x[c] / channels;
+    for (int c = 0; c < channels; ++c) mean += d.y[c] / channels;
     for (Eigen::Index i = 0; i < nr; ++i) {
         const double wsum = rows.w.row(i).sum();
         const double fill = wsum > 0.0 ? mean.row(i).dot(rows.w.row(i)) / wsum : 0.0;
@@ -281,15 +321,12 @@ Solved solve(const Side& rows, const Side& cols, int k, bool nonneg, const Facto
     const Vec root = svd.singularValues().head(k).cwiseSqrt();
     r.u = svd.matrixU().leftCols(k) * root.asDiagonal();
     r.v = svd.matrixV().leftCols(k) * root.asDiagonal();
-    if (nonneg) {
-        r.u = r.u.cwiseAbs();
-        r.v = r.v.cwiseAbs();
-    }
+    if (nonneg) nndsvd(r.u, r.v);
     r.s = Mat::Ones(channels, k);
     if (channels > 1) {  // each channel's share of the mean
         const double base = mean.cwiseProduct(rows.w).sum();
         for (int c = 0; c < channels; ++c) {
-            const double ratio = base > 0.0 ? rows.x[c].cwiseProduct(rows.w).sum() / base : 1.0;
+            const double ratio = base > 0.0 ? rows.wx[c].sum() / base : 1.0;
             r.s.row(c).setConstant(ratio > 0.0 ? ratio : 1.0);
         }
     }
@@ -328,17 +365,12 @@ Solved solve(const Side& rows, const Side& cols, int k, bool nonneg, const Facto
     return r;
 }
 
-// A table's valid bins in one layout and transform space: the two Sides (rows and transposed).
-struct Data {
-    Side rows, cols;
-    std::size_t valid = 0;
-};
-
 Data prepare(const Table& table, const FactorOptions& o, int rows, int cols, const std::vector<int>& channels) {
     const GridSpec& g = table.grid();
+    const int nch = static_cast<int>(channels.size());
     Data d;
-    d.rows.w = Mat::Zero(rows, cols);
-    d.rows.x.assign(channels.size(), Mat::Zero(rows, cols));
+    Mat w = Mat::Zero(rows, cols);
+    d.y.assign(nch, Mat::Zero(rows, cols));
     for (std::size_t bin = 0; bin < table.bins(); ++bin) {
         bool ok = true;
         for (int c = 0; c < 3; ++c) {
@@ -346,21 +378,31 @@ Data prepare(const Table& table, const FactorOptions& o, int rows, int cols, con
             ok = ok && std::isfinite(f) && f >= 0.0f;
         }
         if (!ok) continue;
-        double w = 1.0;
+        double weight = 1.0;
         if (o.space == FactorSpace::Cos) {
             const int ip = static_cast<int>(bin % g.n_phi_d), id = static_cast<int>(bin / g.n_phi_d % g.n_theta_d),
                       ih = static_cast<int>(bin / g.n_phi_d / g.n_theta_d);
             const double cos_i = from_half_diff({g.theta_h_at(ih), 0.0, g.theta_d_at(id), g.phi_d_at(ip)}).first.z;
-            w = cos_i > 0.0 ? cos_i * cos_i : 0.0;
+            weight = cos_i > 0.0 ? cos_i * cos_i : 0.0;
         }
-        if (!(w > 0.0)) continue;
+        if (!(weight > 0.0)) continue;
         ++d.valid;
         const Eigen::Index i = static_cast<Eigen::Index>(bin / cols), j = static_cast<Eigen::Index>(bin % cols);
-        d.rows.w(i, j) = w;
-        for (std::size_t c = 0; c < channels.size(); ++c) d.rows.x[c](i, j) = to_space(o.space, table.at(bin, channels[c]));
+        w(i, j) = weight;
+        for (int c = 0; c < nch; ++c) d.y[c](i, j) = to_space(o.space, table.at(bin, channels[c]));
     }
-    d.cols.w = d.rows.w.transpose();
-    for (const Mat& x : d.rows.x) d.cols.x.push_back(x.transpose());
+    d.rows.xx = Vec::Zero(rows);
+    d.cols.xx = Vec::Zero(cols);
+    for (int c = 0; c < nch; ++c) {
+        const Mat wx = w.cwiseProduct(d.y[c]);
+        const Mat wxx = wx.cwiseProduct(d.y[c]);
+        d.rows.xx += wxx.rowwise().sum();
+        d.cols.xx += wxx.colwise().sum().transpose();
+        d.rows.wx.push_back(wx);
+        d.cols.wx.push_back(wx.transpose());
+    }
+    d.cols.w = w.transpose();
+    d.rows.w = std::move(w);
     return d;
 }
 
@@ -508,7 +550,7 @@ Factored factor(const Table& table, const FactorOptions& o) {
         const std::vector<int> channels = shared ? std::vector<int>{0, 1, 2} : std::vector<int>{solve_index};
         const Data d = prepare(table, o, rows, cols, channels);
         if (d.valid == 0) throw ValueError(std::string(method) + ": the table has no valid bins to factor");
-        const Solved r = solve(d.rows, d.cols, k, nonneg, o, step(solve_index));
+        const Solved r = solve(d, k, nonneg, o, step(solve_index));
         report.valid_bins = d.valid;
         report.iterations = std::max(report.iterations, r.iterations);
         report.converged = report.converged && r.converged;

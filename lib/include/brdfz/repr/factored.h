@@ -108,15 +108,17 @@ private:
 // Options of factor(). The spec-string kinds (compress.h) `svd:...` and `nmf:...` map onto these:
 //   rank=K (default 4), space=linear|cos|log|cbrt (default log), layout=h_dp|hd_p (default h_dp),
 //   colour=separate|shared (default separate), res=AxBxC (default: the source table's own grid, or
-//   90x90x180 for a source that is not a table), iterations=N (default 100 svd, 300 nmf).
+//   90x90x180 for a source that is not a table), iterations=N (default 50 svd, 100 nmf).
+// Alternating least squares gains little after a few tens of iterations (gold-metallic-paint, rank 4,
+// log: residual 0.00957 after 20 svd iterations, 0.00941 after 100), hence the caps and tolerance.
 struct FactorOptions {
     FactorMethod method = FactorMethod::Svd;
     int rank = 4;
     FactorSpace space = FactorSpace::Log;
     FactorLayout layout = FactorLayout::HxDP;
     FactorColour colour = FactorColour::Separate;
-    int max_iterations = 100;
-    double tolerance = 1e-7;  // stop when one iteration lowers the weighted residual by less than this, relatively
+    int max_iterations = 50;
+    double tolerance = 1e-4;  // stop when an iteration lowers Σ w·(y − ŷ)² by less than this fraction
     int threads = 0;          // 0: one per hardware thread
     // Fraction done (0..1] after each iteration, from the calling thread.
     std::function<void(double)> progress;
