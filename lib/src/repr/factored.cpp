@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <type_traits>
 
 #include "brdfz/coords.h"
 #include "brdfz/errors.h"
@@ -102,31 +103,93 @@ inline CornersHDxP corners_hdxp(const GridSpec& g, const detail::Corners& k, std
             {1.0 - k.p.t, k.p.t}};
 }
 
-// y_c = Σ_j mix[c][j] · (Σ_r rw_r U[r][j]) · (Σ_c cw_c V[c][j]), then back to values.
-template <int NR, int NC>
-inline Rgb blend(const Factors& f, const float* mix, const FactorCorners<NR, NC>& k, std::uint64_t& clamped) {
-    const int m = f.row_width();
+// The transform-space values y_c = Σ_j s_cj · (Σ_r rw_r U[r][j]) · (Σ_c cw_c V[c][j]). Separate colour
+// sums each channel's own components (no multiplications by a one-hot mix); shared colour weights the
+// rank products by s_cj (`mix`).
+template <bool Shared, int NR, int NC>
+inline void blend(const Factors& f, const float* mix, const FactorCorners<NR, NC>& k, double y[3]) {
+    const int rank = f.rank, m = Shared ? rank : 3 * rank;
     const float* u = f.u.data();
     const float* v = f.v.data();
-    double y0 = 0.0, y1 = 0.0, y2 = 0.0;
-    for (int j = 0; j < m; ++j) {
+    const auto product = [&](int j) {
         double a = 0.0, b = 0.0;
         for (int r = 0; r < NR; ++r) a += k.rw[r] * u[k.r[r] + j];
         for (int c = 0; c < NC; ++c) b += k.cw[c] * v[k.c[c] + j];
-        const double p = a * b;
-        y0 += mix[j] * p;
-        y1 += mix[m + j] * p;
-        y2 += mix[2 * m + j] * p;
+        return a * b;
+    };
+    if constexpr (Shared) {
+        y[0] = y[1] = y[2] = 0.0;
+        for (int j = 0; j < rank; ++j) {
+            const double p = product(j);
+            for (int c = 0; c < 3; ++c) y[c] += mix[c * m + j] * p;
+        }
+    } else {
+        for (int c = 0; c < 3; ++c) {
+            double sum = 0.0;
+            for (int j = c * rank; j < (c + 1) * rank; ++j) sum += product(j);
+            y[c] = sum;
+        }
     }
-    return {from_space(f.space, y0, clamped), from_space(f.space, y1, clamped), from_space(f.space, y2, clamped)};
 }
 
-inline Rgb eval_pair(const Factors& f, const float* mix, const detail::BinCoords& c, const Vec3& wi, const Vec3& wo,
-                     std::uint64_t& clamped) {
+template <FactorLayout L>
+using CornersOf = std::conditional_t<L == FactorLayout::HxDP, CornersHxDP, CornersHDxP>;
+
+template <FactorLayout L>
+inline CornersOf<L> factor_corners(const Factors& f, const detail::BinCoords& c, const Vec3& wi, const Vec3& wo) {
     const detail::Corners k = detail::linear_corners(f.grid, c, wi, wo);
     const std::size_t m = static_cast<std::size_t>(f.row_width());
-    if (f.layout == FactorLayout::HxDP) return blend(f, mix, corners_hxdp(f.grid, k, m), clamped);
-    return blend(f, mix, corners_hdxp(f.grid, k, m), clamped);
+    if constexpr (L == FactorLayout::HxDP)
+        return corners_hxdp(f.grid, k, m);
+    else
+        return corners_hdxp(f.grid, k, m);
+}
+
+inline Rgb to_values(FactorSpace space, const double y[3], std::uint64_t& clamped) {
+    return {from_space(space, y[0], clamped), from_space(space, y[1], clamped), from_space(space, y[2], clamped)};
+}
+
+// Blocks of pairs in three passes, as the tabular kernel: (1) the coordinates, branch-free so the
+// compiler vectorises them; (2) the corners, prefetching the factor rows (large factors miss the
+// cache); (3) the blends.
+template <FactorLayout L, bool Shared>
+void eval_pairs(const Factors& f, const float* mix, const Vec3* wi, const Vec3* wo, Rgb* out, std::size_t n,
+                std::uint64_t& clamped) {
+    constexpr std::size_t kBlock = 64;
+    detail::BinCoords coords[kBlock];
+    CornersOf<L> corners[kBlock];
+    bool above[kBlock];
+    const float* u = f.u.data();
+    const float* v = f.v.data();
+    for (std::size_t start = 0; start < n; start += kBlock) {
+        const std::size_t m = std::min(kBlock, n - start);
+        const Vec3* a = wi + start;
+        const Vec3* b = wo + start;
+        for (std::size_t k = 0; k < m; ++k) coords[k] = detail::fast_bin_coords(f.grid, a[k], b[k]);
+        for (std::size_t k = 0; k < m; ++k) above[k] = (a[k].z > 0.0) & (b[k].z > 0.0);
+        for (std::size_t k = 0; k < m; ++k) {
+            if (!above[k]) continue;
+            const CornersOf<L>& c = corners[k] = factor_corners<L>(f, coords[k], a[k], b[k]);
+            for (std::size_t r : c.r) __builtin_prefetch(u + r);
+            for (std::size_t col : c.c) __builtin_prefetch(v + col);
+        }
+        for (std::size_t k = 0; k < m; ++k) {
+            if (!above[k]) {
+                out[start + k] = Rgb{};
+                continue;
+            }
+            double y[3];
+            blend<Shared>(f, mix, corners[k], y);
+            out[start + k] = to_values(f.space, y, clamped);
+        }
+    }
+}
+
+template <FactorLayout L, bool Shared>
+Rgb eval_one(const Factors& f, const float* mix, const Vec3& wi, const Vec3& wo, std::uint64_t& clamped) {
+    double y[3];
+    blend<Shared>(f, mix, factor_corners<L>(f, detail::fast_bin_coords(f.grid, wi, wo), wi, wo), y);
+    return to_values(f.space, y, clamped);
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -484,24 +547,29 @@ Table FactoredBrdf::reconstruct(std::size_t* clamped) const {
 
 Rgb FactoredBrdf::eval_above(const Vec3& wi, const Vec3& wo) const {
     std::uint64_t clamped = 0;
-    const Rgb f = eval_pair(f_, mix_.data(), detail::fast_bin_coords(f_.grid, wi, wo), wi, wo, clamped);
+    const bool shared = f_.colour == FactorColour::Shared;
+    const Rgb f = f_.layout == FactorLayout::HxDP
+                      ? (shared ? eval_one<FactorLayout::HxDP, true>(f_, mix_.data(), wi, wo, clamped)
+                                : eval_one<FactorLayout::HxDP, false>(f_, mix_.data(), wi, wo, clamped))
+                      : (shared ? eval_one<FactorLayout::HDxP, true>(f_, mix_.data(), wi, wo, clamped)
+                                : eval_one<FactorLayout::HDxP, false>(f_, mix_.data(), wi, wo, clamped));
     if (clamped) clamped_.fetch_add(clamped, std::memory_order_relaxed);
     return f;
 }
 
-// Blocks of pairs: the coordinates first, branch-free so the compiler vectorises them, then the blends.
 void FactoredBrdf::eval_batch(const Vec3* wi, const Vec3* wo, Rgb* out, std::size_t n) const {
-    constexpr std::size_t kBlock = 64;
-    detail::BinCoords coords[kBlock];
     std::uint64_t clamped = 0;
-    for (std::size_t start = 0; start < n; start += kBlock) {
-        const std::size_t m = std::min(kBlock, n - start);
-        const Vec3* a = wi + start;
-        const Vec3* b = wo + start;
-        for (std::size_t k = 0; k < m; ++k) coords[k] = detail::fast_bin_coords(f_.grid, a[k], b[k]);
-        for (std::size_t k = 0; k < m; ++k)
-            out[start + k] = (a[k].z > 0.0) & (b[k].z > 0.0) ? eval_pair(f_, mix_.data(), coords[k], a[k], b[k], clamped)
-                                                             : Rgb{};
+    const bool shared = f_.colour == FactorColour::Shared;
+    if (f_.layout == FactorLayout::HxDP) {
+        if (shared)
+            eval_pairs<FactorLayout::HxDP, true>(f_, mix_.data(), wi, wo, out, n, clamped);
+        else
+            eval_pairs<FactorLayout::HxDP, false>(f_, mix_.data(), wi, wo, out, n, clamped);
+    } else {
+        if (shared)
+            eval_pairs<FactorLayout::HDxP, true>(f_, mix_.data(), wi, wo, out, n, clamped);
+        else
+            eval_pairs<FactorLayout::HDxP, false>(f_, mix_.data(), wi, wo, out, n, clamped);
     }
     if (clamped) clamped_.fetch_add(clamped, std::memory_order_relaxed);
 }
