@@ -7,6 +7,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <numbers>
+#include <filesystem>
 #include <string>
 #include <vector>
 
@@ -50,6 +51,34 @@ inline Args parse_args(int argc, char** argv, int default_reps) {
         std::fprintf(stderr, "usage: %s [FILE.binary] [--reps N]   (N >= 1, default %d)\n", argv[0], default_reps);
         std::exit(2);
     }
+    return args;
+}
+
+// "[--out FILE.csv] [--spec SPEC]... [FILE...]", the command line of the sweeps over representations
+// (compress_sweep, stability). No --spec: the program's defaults. A bad command line prints the usage
+// and exits.
+struct SweepArgs {
+    std::string out;
+    std::vector<std::string> specs;
+    std::vector<std::filesystem::path> files;
+};
+
+inline SweepArgs parse_sweep_args(int argc, char** argv, const char* default_out, const std::vector<std::string>& default_specs) {
+    SweepArgs args{default_out, {}, {}};
+    for (int i = 1; i < argc; ++i) {
+        const std::string a = argv[i];
+        if (a == "--out" && i + 1 < argc) {
+            args.out = argv[++i];
+        } else if (a == "--spec" && i + 1 < argc) {
+            args.specs.emplace_back(argv[++i]);
+        } else if (!a.empty() && a[0] != '-') {
+            args.files.emplace_back(a);
+        } else {
+            std::fprintf(stderr, "usage: %s [--out FILE.csv] [--spec SPEC]... [FILE...]\n", argv[0]);
+            std::exit(2);
+        }
+    }
+    if (args.specs.empty()) args.specs = default_specs;
     return args;
 }
 

@@ -186,6 +186,8 @@ ValidityCounts save(const Brdf& brdf, const std::string& path, const SaveOptions
         w.grid = options.grid;
         w.threads = options.threads;
         w.progress = options.progress;
+        w.build_spec = options.build_spec;
+        w.source_metrics = options.source_metrics;
         return container::write(path, brdf, w).counts;
     }
     if (format == "json") {

@@ -13,5 +13,6 @@ void add_demo(CLI::App& app);
 void add_validate(CLI::App& app);
 void add_sample(CLI::App& app);
 void add_fit(CLI::App& app);
+void add_compress(CLI::App& app);
 
 }  // namespace brdfz::cli

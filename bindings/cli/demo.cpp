@@ -1,14 +1,18 @@
 // brdfz demo: the main job on the embedded default material, with no data files.
 // A built-in coated-diffuse BRDF is measured by the virtual gonioreflectometer at MERL resolution,
 // written as a MERL table, read back (checked bit-identical), reported, and compared with the
-// analytic original.
+// analytic original; then every setting of the compression benchmark is built from the table and
+// measured (table printed, CSV written for scripts/demo's charts: python -m brdfz.bench --from-csv).
 #include <chrono>
+#include <cstdio>
 #include <filesystem>
+#include <fstream>
 #include <iostream>
 
 #include "brdfz/errors.h"
 #include "brdfz/formats/merl.h"
 #include "brdfz/metrics.h"
+#include "brdfz/select.h"
 #include "brdfz/repr/analytic/coated_diffuse.h"
 #include "brdfz/tabulate.h"
 #include "commands.h"
@@ -19,9 +23,12 @@ namespace brdfz::cli {
 
 void add_demo(CLI::App& app) {
     auto out_dir = std::make_shared<std::string>("brdfz-demo");
+    auto specs = std::make_shared<std::vector<std::string>>();
     CLI::App* cmd = app.add_subcommand("demo", "run the pipeline on a built-in material (no data files needed)");
     cmd->add_option("--out", *out_dir, "output folder")->capture_default_str();
-    cmd->callback([out_dir] {
+    cmd->add_option("--repr", *specs, "a representation to build and measure (repeatable; default: every setting of "
+                                      "the compression benchmark)");
+    cmd->callback([out_dir, specs] {
         using clock = std::chrono::steady_clock;
         const CoatedDiffuse material;
         std::cout << "material: " << material.describe() << "\n\n";
@@ -51,6 +58,35 @@ void add_demo(CLI::App& app) {
 
         std::cout << "\n4. table (linear lookup) against the analytic material, sampled between the table's samples\n";
         print_metrics(compare(material, *loaded.brdf), false, std::cout);
+
+        const std::string csv_path = (std::filesystem::path(*out_dir) / "representations.csv").string();
+        std::cout << "\n5. every representation of the table, as `brdfz compress --repr SPEC` measures it (one thread "
+                     "for eval speed)\n";
+        char line[256];
+        std::snprintf(line, sizeof line, "   %-34s %10s %10s %12s %10s %12s %8s\n", "setting", "bytes", "ratio",
+                      "cos_rmse_rel", "log_rmse", "eval pairs/s", "build s");
+        std::cout << line;
+        std::ofstream csv(csv_path);
+        csv << kSweepCsvHeader << "\n";
+        const auto input_bytes = std::filesystem::file_size(path);
+        for (const std::string& spec : specs->empty() ? benchmark_specs() : *specs) {
+            std::snprintf(line, sizeof line, "   %-34s ", spec.c_str());
+            std::cout << line << std::flush;  // the fits take seconds: show what is being built
+            try {
+                const Trial r = trial(*loaded.brdf, spec);
+                csv << sweep_csv_row("coated-diffuse", "merl", spec, input_bytes, &r) << "\n";
+                std::snprintf(line, sizeof line, "%10zu %9.0fx %12.4g %10.4g %12.3g %8.2f\n", r.bytes,
+                              static_cast<double>(input_bytes) / static_cast<double>(r.bytes),
+                              r.metrics.cos_rmse_rel.mean, r.metrics.log_rmse.mean, r.eval_rate, r.build_seconds);
+                std::cout << line;
+            } catch (const Error& e) {
+                csv << sweep_csv_row("coated-diffuse", "merl", spec, input_bytes, nullptr, e.what()) << "\n";
+                std::cout << "failed: " << e.what() << "\n";
+            }
+        }
+        csv.close();
+        if (!csv) throw IoError(csv_path, "cannot write");
+        std::cout << "   wrote " << csv_path << "\n";
         std::cout << "\noutputs are in " << std::filesystem::absolute(*out_dir).string() << "\n";
     });
 }

@@ -65,18 +65,8 @@ void print_report(const std::string& in, const FitResult& r, RobustLoss robust, 
         j.end_array();
         j.key("seconds").value(p.seconds);
         if (p.metrics) {
-            const std::pair<const char*, const PerChannel*> rows[] = {{"cos_rmse", &p.metrics->cos_rmse},
-                                                                      {"cos_rmse_rel", &p.metrics->cos_rmse_rel},
-                                                                      {"log_rmse", &p.metrics->log_rmse},
-                                                                      {"cbrt_rmse", &p.metrics->cbrt_rmse}};
-            j.key("metrics").begin_object();
-            for (const auto& [name, v] : rows) {
-                j.key(name).begin_object();
-                j.key("r").value(v->r).key("g").value(v->g).key("b").value(v->b).key("mean").value(v->mean);
-                j.end_object();
-            }
-            j.key("samples").value(p.metrics->samples);
-            j.end_object();
+            j.key("metrics");
+            write_metrics(j, *p.metrics);
         }
         j.end_object();
         os << "\n";

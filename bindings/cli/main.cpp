@@ -16,6 +16,7 @@ int main(int argc, char** argv) {
     brdfz::cli::add_validate(app);
     brdfz::cli::add_sample(app);
     brdfz::cli::add_fit(app);
+    brdfz::cli::add_compress(app);
     try {
         app.parse(argc, argv);
     } catch (const CLI::ParseError& e) {

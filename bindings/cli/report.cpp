@@ -1,5 +1,6 @@
 #include "report.h"
 
+#include <array>
 #include <cstdio>
 #include <numbers>
 
@@ -31,6 +32,7 @@ void container_json(JsonWriter& j, const container::Metadata& m) {
     j.end_object();
     j.key("units").value(m.units).key("cosine").value(m.cosine).key("conventions").value(m.conventions);
     j.key("representation").value(m.representation).key("spec").value(m.spec);
+    if (!m.build_spec.empty()) j.key("build_spec").value(m.build_spec);
     j.key("achieved").begin_object();
     j.key("lossless").value(m.achieved.lossless).key("nbytes").value(std::size_t{m.achieved.nbytes});
     if (m.achieved.metrics) {
@@ -61,8 +63,10 @@ void container_text(const container::Metadata& m, std::ostream& os) {
         os << m.source.file << " (" << m.source.format << ")\n";
     if (!m.source.sha256.empty()) os << "  sha256     " << m.source.sha256 << "\n";
     os << "  values     " << m.units << ", cosine " << m.cosine << "; " << m.conventions << "\n"
-       << "  stores     " << m.representation << ": " << m.spec << "\n"
-       << "  achieved   " << (m.achieved.lossless ? "lossless" : "tabulated") << ", " << m.achieved.nbytes << " bytes";
+       << "  stores     " << m.representation << ": " << m.spec << "\n";
+    if (!m.build_spec.empty()) os << "  built by   brdfz compress --repr " << m.build_spec << "\n";
+    os
+       << "  achieved   " << (m.achieved.lossless ? "stored as given" : "tabulated") << ", " << m.achieved.nbytes << " bytes";
     if (m.achieved.metrics)
         os << ", cos_rmse " << fixed(m.achieved.metrics->cos_rmse.mean) << ", cos_rmse_rel "
            << fixed(m.achieved.metrics->cos_rmse_rel.mean) << " against the source";
@@ -151,23 +155,32 @@ void print_info(const std::string& path, const Loaded& loaded, bool json, std::o
     if (container) container_text(*container, os);
 }
 
+namespace {
+std::array<std::pair<const char*, const PerChannel*>, 4> metric_rows(const Metrics& m) {
+    return {{{"cos_rmse", &m.cos_rmse}, {"cos_rmse_rel", &m.cos_rmse_rel}, {"log_rmse", &m.log_rmse}, {"cbrt_rmse", &m.cbrt_rmse}}};
+}
+}  // namespace
+
+void write_metrics(JsonWriter& j, const Metrics& m) {
+    j.begin_object();
+    for (const auto& [name, v] : metric_rows(m)) {
+        j.key(name).begin_object();
+        j.key("r").value(v->r).key("g").value(v->g).key("b").value(v->b).key("mean").value(v->mean);
+        j.end_object();
+    }
+    j.key("samples").value(m.samples);
+    j.key("negatives").value(m.negatives);
+    j.end_object();
+}
+
 void print_metrics(const Metrics& m, bool json, std::ostream& os) {
-    const std::pair<const char*, const PerChannel*> rows[] = {
-        {"cos_rmse", &m.cos_rmse}, {"cos_rmse_rel", &m.cos_rmse_rel}, {"log_rmse", &m.log_rmse}, {"cbrt_rmse", &m.cbrt_rmse}};
     if (json) {
         JsonWriter j(os);
-        j.begin_object();
-        for (const auto& [name, v] : rows) {
-            j.key(name).begin_object();
-            j.key("r").value(v->r).key("g").value(v->g).key("b").value(v->b).key("mean").value(v->mean);
-            j.end_object();
-        }
-        j.key("samples").value(m.samples);
-        j.key("negatives").value(m.negatives);
-        j.end_object();
+        write_metrics(j, m);
         os << "\n";
         return;
     }
+    const auto rows = metric_rows(m);
     os << "  metric         r            g            b            mean\n";
     for (const auto& [name, v] : rows) {
         char buf[128];

@@ -9,7 +9,7 @@
 namespace brdfz::container::detail {
 namespace {
 
-const Feature kFactored{"factored", 1};
+const Feature kFactored{"factored", 2};
 
 std::vector<Feature> needs(const Brdf& brdf) {
     if (!dynamic_cast<const FactoredBrdf*>(&brdf)) return {};

@@ -31,9 +31,24 @@ std::string hdf5_message() {
     return msg.empty() ? std::string() : " (HDF5: " + msg + ")";
 }
 
+// HDF5 (before 1.14.4) has no predefined half type: derive it from float32 the way h5py does, so that
+// h5py and numpy read it as float16. Locked: shared for the process, closed when the library shuts down.
+hid_t half_type() {
+    static const hid_t t = [] {
+        const hid_t h = H5Tcopy(H5T_IEEE_F32LE);
+        H5Tset_fields(h, 15, 10, 5, 0, 10);
+        H5Tset_size(h, 2);
+        H5Tset_ebias(h, 15);
+        H5Tlock(h);
+        return h;
+    }();
+    return t;
+}
+
 hid_t file_type(DType t) {
     switch (t) {
         case DType::U8: return H5T_STD_U8LE;
+        case DType::F16: return half_type();
         case DType::U32: return H5T_STD_U32LE;
         case DType::U64: return H5T_STD_U64LE;
         case DType::F32: return H5T_IEEE_F32LE;
@@ -112,6 +127,7 @@ const char* dtype_name(DType t) {
         case DType::U8: return "uint8";
         case DType::U32: return "uint32";
         case DType::U64: return "uint64";
+        case DType::F16: return "float16";
         case DType::F32: return "float32";
         case DType::F64: return "float64";
     }
@@ -121,6 +137,7 @@ const char* dtype_name(DType t) {
 std::size_t dtype_size(DType t) {
     switch (t) {
         case DType::U8: return 1;
+        case DType::F16: return 2;
         case DType::U32: case DType::F32: return 4;
         case DType::U64: case DType::F64: return 8;
     }
@@ -483,13 +500,13 @@ Dataset::Dataset(const Reader& reader, Id id, std::string path)
     Id s(H5Dget_space(id_.get()), &H5Sclose);
     if (t.get() < 0 || s.get() < 0) fail("cannot read the dataset's type and shape");
     bool known = false;
-    for (DType c : {DType::U8, DType::U32, DType::U64, DType::F32, DType::F64}) {
+    for (DType c : {DType::U8, DType::U32, DType::U64, DType::F16, DType::F32, DType::F64}) {
         if (H5Tequal(t.get(), file_type(c)) > 0) {
             type_ = c;
             known = true;
         }
     }
-    if (!known) fail("unsupported element type (expected little-endian uint8/32/64 or float32/64)");
+    if (!known) fail("unsupported element type (expected little-endian uint8/32/64 or float16/32/64)");
     const int rank = H5Sget_simple_extent_ndims(s.get());
     if (rank < 1 || rank > 8) fail("unsupported rank " + std::to_string(rank));
     std::vector<hsize_t> dims(rank);

@@ -80,6 +80,12 @@ void read_rest(const h5::ReadNode& root, Metadata& m) {
     }
 }
 
+void read_representation_attrs(const h5::ReadNode& rep, Metadata& m) {
+    m.representation = rep.str("type");
+    m.spec = rep.str("spec");
+    if (rep.has_attr("build_spec")) m.build_spec = rep.str("build_spec");
+}
+
 }  // namespace
 
 ReadResult read(const std::string& path, Lookup lookup) {
@@ -89,8 +95,7 @@ ReadResult read(const std::string& path, Lookup lookup) {
     out.meta = read_header(root);
     read_rest(root, out.meta);
     const h5::ReadNode rep = root.group("representation");
-    out.meta.representation = rep.str("type");
-    out.meta.spec = rep.str("spec");
+    read_representation_attrs(rep, out.meta);
     const detail::StorageModule* module = detail::find_storage(out.meta.representation);
     if (!module) throw FormatError(path, "/representation: unknown type '" + out.meta.representation + "'");
     out.brdf = module->read(rep, detail::ReadContext{lookup});
@@ -103,8 +108,7 @@ Metadata read_metadata(const std::string& path) {
     Metadata m = read_header(root);
     read_rest(root, m);
     const h5::ReadNode rep = root.group("representation");
-    m.representation = rep.str("type");
-    m.spec = rep.str("spec");
+    read_representation_attrs(rep, m);
     for (const std::string& name : rep.datasets()) {
         const h5::Dataset d = rep.dataset(name);
         m.datasets.push_back({d.path(), h5::dtype_name(d.type()), d.shape(), d.stored_crc()});

@@ -1,9 +1,10 @@
-// Tabular storage: a Rusinkiewicz table (any resolution) as one dataset "values" of shape
-// [nθh, nθd, nφd, 3] in MERL's bin order with RGB interleaved, exactly Table's memory layout, so
-// reading is a single read into the table. Invalid entries are stored as the table holds them (NaN).
-// Element types: float32 now; float16 and 8-bit quantised tables will be further features
-// ("tabular.float16", "tabular.uint8" with per-channel scale and offset attributes; formats/SPEC.md).
+// Tabular storage: a Rusinkiewicz table (any resolution; one φd bin for a bivariate table) as one
+// dataset "values" of shape [nθh, nθd, nφd, 3] in MERL's bin order with RGB interleaved, exactly the
+// memory layout of Table and CompactTable, so reading is a single read into the table. Element types:
+// float32 (TabularBrdf; invalid entries NaN as the table holds them), float16 and uint8 log-quantised
+// codes (CompactTableBrdf) with their per-channel decoding parameters as attributes (formats/SPEC.md).
 #include "brdfz/errors.h"
+#include "brdfz/repr/compact_table.h"
 #include "storage.h"
 
 namespace brdfz::container::detail {
@@ -11,31 +12,76 @@ namespace {
 
 const Feature kTabular{"tabular", 1};
 const Feature kFloat32{"tabular.float32", 1};
+const Feature kFloat16{"tabular.float16", 2};
+const Feature kUint8Log{"tabular.uint8-log", 2};
 
 const char* position_name(BinPosition p) { return p == BinPosition::Centre ? "centre" : "start"; }
 
 std::vector<Feature> needs(const Brdf& brdf) {
-    if (!dynamic_cast<const TabularBrdf*>(&brdf)) return {};
-    return {kTabular, kFloat32};
+    if (dynamic_cast<const TabularBrdf*>(&brdf)) return {kTabular, kFloat32};
+    if (const auto* c = dynamic_cast<const CompactTableBrdf*>(&brdf))
+        return {kTabular, c->table().dtype() == TableDtype::F16 ? kFloat16 : kUint8Log};
+    return {};
 }
 
-void write(h5::WriteNode& rep, const Brdf& brdf) {
-    const Table& t = dynamic_cast<const TabularBrdf&>(brdf).table();
-    const GridSpec& g = t.grid();
+void write_grid(h5::WriteNode& rep, const GridSpec& g) {
     const std::uint64_t dims[3] = {static_cast<std::uint64_t>(g.n_theta_h), static_cast<std::uint64_t>(g.n_theta_d),
                                    static_cast<std::uint64_t>(g.n_phi_d)};
     rep.attr("grid", std::span<const std::uint64_t>(dims));
     rep.attr("bin_position", std::string(position_name(g.position)));
     rep.attr("theta_h_axis", std::string("sqrt"));
+}
+
+std::vector<std::uint64_t> values_shape(const GridSpec& g) {
+    return {static_cast<std::uint64_t>(g.n_theta_h), static_cast<std::uint64_t>(g.n_theta_d),
+            static_cast<std::uint64_t>(g.n_phi_d), 3};
+}
+
+void write_codec(h5::WriteNode& rep, const char* name, const CompactTable& t, double ChannelCodec::*field) {
+    const double v[3] = {t.codecs()[0].*field, t.codecs()[1].*field, t.codecs()[2].*field};
+    rep.attr(name, std::span<const double>(v));
+}
+
+void write(h5::WriteNode& rep, const Brdf& brdf) {
+    if (const auto* c = dynamic_cast<const CompactTableBrdf*>(&brdf)) {
+        const CompactTable& t = c->table();
+        write_grid(rep, t.grid());
+        if (t.dtype() == TableDtype::F16) {
+            rep.attr("dtype", std::string("float16"));
+            rep.attr("invalid", std::string("nan"));
+            write_codec(rep, "scale", t, &ChannelCodec::scale);
+            rep.dataset("values", h5::DType::F16, values_shape(t.grid()), t.codes().data());
+        } else {
+            rep.attr("dtype", std::string("uint8"));
+            rep.attr("transform", std::string("log1p"));
+            rep.attr("invalid", std::string("255"));
+            write_codec(rep, "gain", t, &ChannelCodec::gain);
+            write_codec(rep, "offset", t, &ChannelCodec::offset);
+            write_codec(rep, "scale", t, &ChannelCodec::scale);
+            rep.dataset("values", h5::DType::U8, values_shape(t.grid()), t.codes().data());
+        }
+        return;
+    }
+    const Table& t = dynamic_cast<const TabularBrdf&>(brdf).table();
+    write_grid(rep, t.grid());
     rep.attr("dtype", std::string("float32"));
     rep.attr("invalid", std::string("nan"));
-    rep.dataset("values", h5::DType::F32, {dims[0], dims[1], dims[2], 3}, t.data());
+    rep.dataset("values", h5::DType::F32, values_shape(t.grid()), t.data());
+}
+
+// One codec field of the three channels.
+std::array<double, 3> read_codec(const h5::ReadNode& rep, const char* name) {
+    const std::vector<double> v = rep.f64s(name);
+    if (v.size() != 3)
+        throw FormatError(rep.file(), rep.path() + ": attribute '" + name + "' has " + std::to_string(v.size()) +
+                                          " entries, expected 3");
+    return {v[0], v[1], v[2]};
 }
 
 std::unique_ptr<Brdf> read(const h5::ReadNode& rep, const ReadContext& ctx) {
     const auto bad = [&](const std::string& what) { throw FormatError(rep.file(), rep.path() + ": " + what); };
     const std::string dtype = rep.str("dtype");
-    if (dtype != "float32") bad("unsupported table element type '" + dtype + "'");
+    if (dtype != "float32" && dtype != "float16" && dtype != "uint8") bad("unsupported table element type '" + dtype + "'");
     const std::vector<std::uint64_t> dims = rep.u64s("grid");
     if (dims.size() != 3) bad("attribute 'grid' has " + std::to_string(dims.size()) + " entries, expected 3");
     for (std::uint64_t d : dims)
@@ -49,20 +95,41 @@ std::unique_ptr<Brdf> read(const h5::ReadNode& rep, const ReadContext& ctx) {
     const GridSpec grid{static_cast<int>(dims[0]), static_cast<int>(dims[1]), static_cast<int>(dims[2]),
                         position == "centre" ? BinPosition::Centre : BinPosition::Start};
     const h5::Dataset values = rep.dataset("values");
-    const std::vector<std::uint64_t> expected{dims[0], dims[1], dims[2], 3};
-    if (values.type() != h5::DType::F32 || values.shape() != expected)
-        bad("dataset 'values' is not a float32 array of shape " + grid.str() + "x3");
+    const h5::DType type = dtype == "float32" ? h5::DType::F32 : dtype == "float16" ? h5::DType::F16 : h5::DType::U8;
+    if (values.type() != type || values.shape() != values_shape(grid))
+        bad("dataset 'values' is not a " + dtype + " array of shape " + grid.str() + "x3");
     // Shape checked against the grid, and its size against the file, before the table is allocated;
     // every entry is then read.
-    Table table(grid, Table::Uninitialized{});
-    values.read(table.data());
-    return std::make_unique<TabularBrdf>(std::move(table), ctx.lookup);
+    if (type == h5::DType::F32) {
+        Table table(grid, Table::Uninitialized{});
+        values.read(table.data());
+        return std::make_unique<TabularBrdf>(std::move(table), ctx.lookup);
+    }
+    std::array<ChannelCodec, 3> codecs;
+    if (type == h5::DType::F16) {
+        const std::array<double, 3> scale = read_codec(rep, "scale");
+        for (int ch = 0; ch < 3; ++ch) codecs[ch].scale = scale[ch];
+    } else {
+        if (rep.str("transform") != "log1p") bad("unknown uint8 transform '" + rep.str("transform") + "'");
+        const std::array<double, 3> gain = read_codec(rep, "gain"), offset = read_codec(rep, "offset"),
+                                    scale = read_codec(rep, "scale");
+        for (int ch = 0; ch < 3; ++ch) codecs[ch] = {gain[ch], offset[ch], scale[ch]};
+    }
+    std::vector<std::uint8_t> codes(values.nbytes());
+    values.read(codes.data());
+    try {
+        return std::make_unique<CompactTableBrdf>(
+            CompactTable(grid, dtype == "float16" ? TableDtype::F16 : TableDtype::U8Log, std::move(codes), codecs),
+            ctx.lookup);
+    } catch (const ValueError& e) {
+        throw FormatError(rep.file(), rep.path() + ": " + e.what());
+    }
 }
 
 }  // namespace
 
 const StorageModule& tabular_storage() {
-    static const StorageModule m{"tabular", {kTabular, kFloat32}, &needs, &write, &read};
+    static const StorageModule m{"tabular", {kTabular, kFloat32, kFloat16, kUint8Log}, &needs, &write, &read};
     return m;
 }
 

@@ -2,6 +2,7 @@
 #include <filesystem>
 
 #include "brdfz/errors.h"
+#include "brdfz/repr/compact_table.h"
 #include "brdfz/tabulate.h"
 #include "checksum.h"
 #include "detail/atomic_path.h"
@@ -51,8 +52,10 @@ Achieved write(const std::string& path, const Brdf& brdf, const WriteOptions& op
     // Stored as it is when a module knows the object and no resampling is asked for; a table asked
     // for on its own grid is also stored as it is.
     const auto* table = dynamic_cast<const TabularBrdf*>(&brdf);
+    const auto* compact = dynamic_cast<const CompactTableBrdf*>(&brdf);
     const StorageModule* module = nullptr;
-    if (!options.grid || (table && *options.grid == table->table().grid()))
+    if (!options.grid || (table && *options.grid == table->table().grid()) ||
+        (compact && *options.grid == compact->table().grid()))
         for (const StorageModule* m : detail::storage_modules())
             if (!m->needs(brdf).empty()) {
                 module = m;
@@ -65,6 +68,7 @@ Achieved write(const std::string& path, const Brdf& brdf, const WriteOptions& op
     if (module) {
         achieved.lossless = true;
         if (table) achieved.counts.valid = table->table().valid_bins();
+        if (compact) achieved.counts.valid = compact->table().valid_bins();
     } else {
         TabulateOptions t;
         t.grid = options.grid.value_or(GridSpec{});
@@ -82,6 +86,7 @@ Achieved write(const std::string& path, const Brdf& brdf, const WriteOptions& op
         }
     }
     achieved.nbytes = stored->nbytes();
+    if (options.source_metrics) achieved.metrics = options.source_metrics;
 
     std::vector<Feature> features{detail::kCore};
     for (const Feature& f : module->needs(*stored)) features.push_back(f);
@@ -123,6 +128,7 @@ Achieved write(const std::string& path, const Brdf& brdf, const WriteOptions& op
             h5::WriteNode rep = root.group("representation");
             rep.attr("type", std::string(module->type));
             rep.attr("spec", stored->describe());
+            if (!options.build_spec.empty()) rep.attr("build_spec", options.build_spec);
             module->write(rep, *stored);
             h5::WriteNode ach = root.group("achieved");
             write_achieved(ach, achieved);

@@ -1,5 +1,6 @@
 #include "brdfz/brdf.h"
 
+#include <algorithm>
 #include <cmath>
 #include <numbers>
 
@@ -32,15 +33,24 @@ void Brdf::eval_batch(const Vec3* wi, const Vec3* wo, Rgb* out, std::size_t n) c
     for (std::size_t k = 0; k < n; ++k) out[k] = eval(wi[k], wo[k]);
 }
 
-BrdfSample Brdf::sample(const Vec3& wo, double u1, double u2) const {
+BrdfSample Brdf::draw(const Vec3& wo, double u1, double u2) const {
     if (!(wo.z > 0.0 && u1 >= 0.0 && u1 < 1.0 && u2 >= 0.0 && u2 < 1.0)) return {};
-    BrdfSample s = sample_above(wo, u1, u2);
+    const BrdfSample s = sample_above(wo, u1, u2);
     if (!(s.wi.z > 0.0 && s.pdf > 0.0 && std::isfinite(s.pdf))) return {};
-    // A sampler that knows f sets the weight itself; otherwise evaluate it.
-    if (s.weight == Rgb{0.0, 0.0, 0.0}) {
-        s.weight = eval_above(s.wi, wo);
-        for (double& c : s.weight) c *= s.wi.z / s.pdf;
-    }
+    return s;
+}
+
+namespace {
+// A sampler that knows f sets the weight itself; otherwise it is left to the caller.
+bool needs_weight(const BrdfSample& s) { return s.pdf > 0.0 && s.weight == Rgb{0.0, 0.0, 0.0}; }
+void set_weight(BrdfSample& s, const Rgb& f) {
+    for (int c = 0; c < 3; ++c) s.weight[c] = f[c] * s.wi.z / s.pdf;
+}
+}  // namespace
+
+BrdfSample Brdf::sample(const Vec3& wo, double u1, double u2) const {
+    BrdfSample s = draw(wo, u1, u2);
+    if (needs_weight(s)) set_weight(s, eval_above(s.wi, wo));
     return s;
 }
 
@@ -54,7 +64,22 @@ void Brdf::sample(std::span<const Vec3> wo, std::span<const std::array<double, 2
     if (wo.size() != u.size() || wo.size() != out.size())
         throw ValueError("sample: batch sizes differ (wo " + std::to_string(wo.size()) + ", u " +
                          std::to_string(u.size()) + ", out " + std::to_string(out.size()) + ")");
-    for (std::size_t k = 0; k < wo.size(); ++k) out[k] = sample(wo[k], u[k][0], u[k][1]);
+    // Draw a block, then evaluate the weights it needs in one batch (eval_batch is the fast kernel).
+    constexpr std::size_t kBlock = 64;
+    Vec3 wi[kBlock], wos[kBlock];
+    Rgb f[kBlock];
+    std::size_t slot[kBlock];
+    for (std::size_t start = 0; start < wo.size(); start += kBlock) {
+        const std::size_t m = std::min(kBlock, wo.size() - start);
+        std::size_t pending = 0;
+        for (std::size_t k = 0; k < m; ++k) {
+            BrdfSample& s = out[start + k] = draw(wo[start + k], u[start + k][0], u[start + k][1]);
+            if (!needs_weight(s)) continue;
+            wi[pending] = s.wi, wos[pending] = wo[start + k], slot[pending++] = start + k;
+        }
+        eval_batch(wi, wos, f, pending);
+        for (std::size_t j = 0; j < pending; ++j) set_weight(out[slot[j]], f[j]);
+    }
 }
 
 void Brdf::pdf(std::span<const Vec3> wo, std::span<const Vec3> wi, std::span<double> out) const {

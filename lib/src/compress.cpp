@@ -4,6 +4,7 @@
 
 #include "brdfz/errors.h"
 #include "brdfz/fit/fit.h"
+#include "brdfz/repr/compact_table.h"
 #include "brdfz/repr/factored.h"
 #include "brdfz/repr/tabular.h"
 #include "brdfz/tabulate.h"
@@ -13,25 +14,62 @@ namespace {
 
 using Builder = Compressed (*)(const Brdf& source, const ReprSpec& spec, const CompressOptions& options);
 
-Compressed build_tabular(const Brdf& source, const ReprSpec& spec, const CompressOptions& options) {
-    const std::vector<int> res = spec.get_dims("res", {90, 90, 180});
-    const Lookup lookup = parse_lookup(spec.get_choice("lookup", "linear", {"linear", "nearest"}));
-    spec.get_choice("dtype", "f32", {"f32"});
-    spec.finish();
+// Tabulates `source` on `grid` (box-filtered by `supersample`) and keeps the table in `dtype`.
+Compressed build_table(const Brdf& source, const GridSpec& grid, std::array<int, 3> supersample, TableDtype dtype,
+                       Lookup lookup, const CompressOptions& options) {
     TabulateOptions tab;
-    tab.grid = GridSpec{res[0], res[1], res[2], BinPosition::Centre};
+    tab.grid = grid;
     tab.grid.validate();
+    tab.supersample = supersample;
     tab.threads = options.threads;
     tab.progress = options.progress;
     Tabulated t = tabulate(source, tab);
     Compressed out;
     if (t.counts.clamped > 0)
         out.notes.push_back(std::to_string(t.counts.clamped) + " negative values clamped to 0");
-    out.brdf = std::make_unique<TabularBrdf>(std::move(t.table), lookup);
+    if (dtype == TableDtype::F32)
+        out.brdf = std::make_unique<TabularBrdf>(std::move(t.table), lookup);
+    else
+        out.brdf = std::make_unique<CompactTableBrdf>(CompactTable::encode(t.table, dtype), lookup);
     return out;
 }
 
-Compressed build_analytic(const Brdf& source, const ReprSpec& spec, const CompressOptions& options) {
+TableDtype dtype_option(const ReprSpec& spec) {
+    return parse_table_dtype(spec.get_choice("dtype", "f32", {"f32", "f16", "u8log"}));
+}
+
+Lookup lookup_option(const ReprSpec& spec) {
+    return parse_lookup(spec.get_choice("lookup", "linear", {"linear", "nearest"}));
+}
+
+// ss=N: each bin the mean of N points per axis (box filter), default 1 (point samples), as measured
+// (bench/README.md, "Compact tables"): with linear lookup the box blurs what interpolation blurs again
+// (3x the error of point samples for 16x16x16 on RGL's paper_white), and for bivariate tables, whose
+// φd mean is a box anyway, ss=2 gained nothing on three of the four RGL materials at 4x the build time.
+int supersample_option(const ReprSpec& spec) { return spec.get_int("ss", 1, 1, 16); }
+
+Compressed build_tabular(const Brdf& source, const ReprSpec& spec, const CompressOptions& options) {
+    const std::vector<int> res = spec.get_dims("res", {90, 90, 180});
+    const TableDtype dtype = dtype_option(spec);
+    const Lookup lookup = lookup_option(spec);
+    const int ss = supersample_option(spec);
+    spec.finish();
+    return build_table(source, GridSpec{res[0], res[1], res[2], BinPosition::Centre}, {ss, ss, ss}, dtype, lookup,
+                       options);
+}
+
+// Romeiro et al. 2008's bivariate table: θh × θd, the source averaged over phi=N values of φd.
+Compressed build_bivariate(const Brdf& source, const ReprSpec& spec, const CompressOptions& options) {
+    const std::vector<int> res = spec.get_dims("res", {90, 90});
+    const TableDtype dtype = dtype_option(spec);
+    const Lookup lookup = lookup_option(spec);
+    const int ss = supersample_option(spec);
+    const int phi = spec.get_int("phi", 180, 1, GridSpec::kMaxAxis);
+    spec.finish();
+    return build_table(source, GridSpec{res[0], res[1], 1, BinPosition::Centre}, {ss, ss, phi}, dtype, lookup, options);
+}
+
+FitOptions analytic_options(const ReprSpec& spec, const CompressOptions& options) {
     if (spec.positional().empty())
         throw ValueError("analytic: name the model, e.g. analytic:lambert+ggx");
     FitOptions fit_options;
@@ -41,7 +79,10 @@ Compressed build_analytic(const Brdf& source, const ReprSpec& spec, const Compre
     spec.finish();
     fit_options.threads = options.threads;
     fit_options.progress = options.progress;
-    FitResult fitted = fit(source, spec.positional(), fit_options);
+    return fit_options;
+}
+
+Compressed from_fit(FitResult fitted) {
     Compressed out;
     out.notes.push_back(std::string("fit ") + fit_status_name(fitted.report.status) + ": " + fitted.report.message);
     for (const std::string& w : fitted.report.warnings) out.notes.push_back(w);
@@ -97,6 +138,19 @@ Compressed build_nmf(const Brdf& source, const ReprSpec& spec, const CompressOpt
     return build_factored(FactorMethod::Nmf, source, spec, options);
 }
 
+Compressed build_analytic(const Brdf& source, const ReprSpec& spec, const CompressOptions& options) {
+    return from_fit(fit(source, spec.positional(), analytic_options(spec, options)));
+}
+
+template <typename Build>
+Compressed timed(const ReprSpec& spec, Build build) {
+    const auto start = std::chrono::steady_clock::now();
+    Compressed out = build();
+    out.build_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    out.spec = spec.str();
+    return out;
+}
+
 struct Kind {
     const char* name;
     Builder build;
@@ -105,6 +159,7 @@ struct Kind {
 // One line per representation kind.
 constexpr Kind kKinds[] = {
     {"tabular", build_tabular},
+    {"bivariate", build_bivariate},
     {"analytic", build_analytic},
     {"svd", build_svd},
     {"nmf", build_nmf},
@@ -114,17 +169,19 @@ constexpr Kind kKinds[] = {
 
 Compressed compress(const Brdf& source, const std::string& text, const CompressOptions& options) {
     const ReprSpec spec = ReprSpec::parse(text);
-    for (const Kind& kind : kKinds) {
-        if (spec.kind() != kind.name) continue;
-        const auto start = std::chrono::steady_clock::now();
-        Compressed out = kind.build(source, spec, options);
-        out.build_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-        out.spec = spec.str();
-        return out;
-    }
+    for (const Kind& kind : kKinds)
+        if (spec.kind() == kind.name) return timed(spec, [&] { return kind.build(source, spec, options); });
     std::string known;
     for (const Kind& kind : kKinds) known += (known.empty() ? "" : ", ") + std::string(kind.name);
     throw ValueError("unknown representation '" + spec.kind() + "' (known: " + known + ")");
+}
+
+Compressed compress(const MeasurementSet& source, const std::string& text, const CompressOptions& options) {
+    const ReprSpec spec = ReprSpec::parse(text);
+    if (spec.kind() != "analytic")
+        throw ValueError("'" + spec.kind() + "' needs a BRDF on a grid; scattered measurements can only be fitted "
+                         "(analytic:MODEL)");
+    return timed(spec, [&] { return from_fit(fit(source, spec.positional(), analytic_options(spec, options))); });
 }
 
 std::vector<std::string> compress_kinds() {

@@ -1,7 +1,10 @@
 #include "brdfz/metrics.h"
 
+#include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <numbers>
+#include <random>
 #include <vector>
 
 #include "brdfz/errors.h"
@@ -126,6 +129,32 @@ Metrics compare(const MeasurementSet& reference, const Brdf& approx, const Metri
         if (finite) add_sample(total, ref[k], app[k], wi[k].z);
     }
     return to_metrics(total);
+}
+
+double eval_rate(const Brdf& brdf, std::size_t pairs, int reps) {
+    if (pairs == 0 || reps < 1) throw ValueError("eval_rate: needs at least one pair and one run");
+    std::mt19937_64 rng(7);
+    std::uniform_real_distribution<double> u(0.0, 1.0);
+    const auto hemisphere = [&] {
+        const double z = u(rng), phi = 2.0 * std::numbers::pi * u(rng);
+        const double r = std::sqrt(std::max(0.0, 1.0 - z * z));
+        return Vec3{r * std::cos(phi), r * std::sin(phi), z};
+    };
+    std::vector<Vec3> wi(pairs), wo(pairs);
+    for (std::size_t k = 0; k < pairs; ++k) {
+        wi[k] = hemisphere();
+        wo[k] = hemisphere();
+    }
+    std::vector<Rgb> out(pairs);
+    brdf.eval(wi, wo, out);
+    std::vector<double> seconds;
+    for (int r = 0; r < reps; ++r) {
+        const auto start = std::chrono::steady_clock::now();
+        brdf.eval(wi, wo, out);
+        seconds.push_back(std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
+    }
+    std::nth_element(seconds.begin(), seconds.begin() + reps / 2, seconds.end());
+    return static_cast<double>(pairs) / std::max(seconds[reps / 2], 1e-9);
 }
 
 }  // namespace brdfz

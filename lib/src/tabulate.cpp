@@ -1,13 +1,17 @@
 #include "brdfz/tabulate.h"
 
 #include <cmath>
+#include <numbers>
 #include <vector>
 
+#include "brdfz/errors.h"
 #include "detail/grid_sweep.h"
 
 namespace brdfz {
+namespace {
 
-Tabulated tabulate(const Brdf& brdf, const TabulateOptions& options) {
+// The point-sampled table on options.grid.
+Tabulated tabulate_points(const Brdf& brdf, const TabulateOptions& options) {
     const GridSpec& g = options.grid;
     Tabulated result{Table(g), {}};
     const int workers = detail::resolve_threads(options.threads);
@@ -67,6 +71,61 @@ Tabulated tabulate(const Brdf& brdf, const TabulateOptions& options) {
         result.counts.below_horizon += n.below_horizon;
     }
     return result;
+}
+
+// Box filter: point-sample a grid `supersample` times finer (whose bins nest exactly in the coarse
+// ones, the square-root θh axis included), then average each coarse bin's valid fine bins, leaving out
+// grazing points unless the bin has no others.
+Tabulated tabulate_boxes(const Brdf& brdf, const TabulateOptions& options) {
+    const GridSpec& g = options.grid;
+    const auto [sh, sd, sp] = options.supersample;
+    TabulateOptions fine_options = options;
+    fine_options.grid = GridSpec{g.n_theta_h * sh, g.n_theta_d * sd, g.n_phi_d * sp, BinPosition::Centre};
+    fine_options.grid.validate();
+    Tabulated fine = tabulate_points(brdf, fine_options);
+    const Table& f = fine.table;
+    const GridSpec& fg = f.grid();
+    const double min_cos = std::cos(options.box_max_theta_deg * std::numbers::pi / 180.0);
+    Tabulated result{Table(g), fine.counts};
+    result.counts.valid = 0;
+    for (int ih = 0; ih < g.n_theta_h; ++ih)
+        for (int id = 0; id < g.n_theta_d; ++id)
+            for (int ip = 0; ip < g.n_phi_d; ++ip) {
+                double sum[3] = {0, 0, 0}, graze_sum[3] = {0, 0, 0};
+                int n = 0, graze_n = 0;
+                for (int a = 0; a < sh; ++a)
+                    for (int b = 0; b < sd; ++b)
+                        for (int c = 0; c < sp; ++c) {
+                            const int jh = ih * sh + a, jd = id * sd + b, jp = ip * sp + c;
+                            const std::size_t bin = fg.index(jh, jd, jp);
+                            if (!f.valid(bin)) continue;
+                            const auto [wi, wo] = from_half_diff({fg.theta_h_at(jh), 0.0, fg.theta_d_at(jd), fg.phi_d_at(jp)});
+                            const bool grazing = !(wi.z > min_cos && wo.z > min_cos);
+                            (grazing ? graze_n : n) += 1;
+                            for (int ch = 0; ch < 3; ++ch) (grazing ? graze_sum : sum)[ch] += f.at(bin, ch);
+                        }
+                if (n == 0 && graze_n == 0) continue;
+                ++result.counts.valid;
+                const double* s = n > 0 ? sum : graze_sum;
+                const int m = n > 0 ? n : graze_n;
+                result.table.set(g.index(ih, id, ip), {s[0] / m, s[1] / m, s[2] / m});
+            }
+    return result;
+}
+
+}  // namespace
+
+Tabulated tabulate(const Brdf& brdf, const TabulateOptions& options) {
+    options.grid.validate();
+    const auto [sh, sd, sp] = options.supersample;
+    if (sh < 1 || sd < 1 || sp < 1)
+        throw ValueError("tabulate: supersampling factors must be >= 1");
+    if (sh == 1 && sd == 1 && sp == 1) return tabulate_points(brdf, options);
+    if (!(options.box_max_theta_deg > 0.0 && options.box_max_theta_deg <= 90.0))
+        throw ValueError("tabulate: box_max_theta_deg must be in (0, 90]");
+    if (options.grid.position != BinPosition::Centre)
+        throw ValueError("tabulate: supersampling averages over whole bins, so it needs bin centres");
+    return tabulate_boxes(brdf, options);
 }
 
 }  // namespace brdfz

@@ -18,6 +18,7 @@
 #include "brdfz/formats/rgl.h"
 #include "brdfz/repr/analytic/coated_diffuse.h"
 #include "brdfz/repr/analytic/model.h"
+#include "brdfz/repr/compact_table.h"
 #include "container/checksum.h"
 #include "container/h5.h"
 #include "test_util.h"
@@ -193,6 +194,52 @@ TEST_CASE("Tables round-trip through .brdfz bit for bit", "[container]") {
     // No temporary files are left behind.
     for (const auto& e : fs::directory_iterator(dir.path))
         CHECK(e.path().string().find(".tmp-") == std::string::npos);
+}
+
+TEST_CASE("Compact tables (float16, u8log, bivariate) round-trip through .brdfz bit for bit", "[container][compact]") {
+    test::TempDir dir;
+    const std::vector<Vec3> wi{normalize(Vec3{0.3, -0.2, 0.9}), normalize(Vec3{-0.7, 0.1, 0.2}), {0, 0, 1}},
+        wo{normalize(Vec3{-0.1, 0.4, 0.8}), normalize(Vec3{0.6, 0.5, 0.3}), normalize(Vec3{0.9, 0, 0.1})};
+    for (const GridSpec& g : {GridSpec{7, 5, 11, BinPosition::Start}, GridSpec{32, 16, 1, BinPosition::Centre}})
+        for (TableDtype dtype : {TableDtype::F16, TableDtype::U8Log}) {
+            INFO(g.str() << " " << table_dtype_name(dtype));
+            const CompactTableBrdf table(CompactTable::encode(random_table(g, 4), dtype), Lookup::Nearest);
+            const fs::path p = dir.path / ("c" + g.str() + table_dtype_name(dtype) + ".brdfz");
+            const container::Achieved a = container::write(p.string(), table);
+            CHECK(a.lossless);
+            CHECK(a.nbytes == table.nbytes());
+            CHECK(a.nbytes == g.bins() * 3 * (dtype == TableDtype::F16 ? 2 : 1) + 72);
+
+            const container::ReadResult r = container::read(p.string(), Lookup::Nearest);
+            const auto* back = dynamic_cast<const CompactTableBrdf*>(r.brdf.get());
+            REQUIRE(back);
+            CHECK(back->table() == table.table());  // grid, codes and codec parameters, bit for bit
+            for (std::size_t k = 0; k < wi.size(); ++k) CHECK(back->eval(wi[k], wo[k]) == table.eval(wi[k], wo[k]));
+            CHECK(r.meta.version == 2);
+            CHECK(r.meta.min_reader_version == 2);
+            const container::Feature element =
+                dtype == TableDtype::F16 ? container::Feature{"tabular.float16", 2} : container::Feature{"tabular.uint8-log", 2};
+            CHECK(r.meta.features == std::vector<container::Feature>{{"core", 1}, {"tabular", 1}, element});
+            CHECK(r.meta.spec == table.describe());
+            CHECK(r.meta.achieved.counts.valid == table.table().valid_bins());
+            const container::Metadata meta = container::read_metadata(p.string());
+            REQUIRE(meta.datasets.size() == 1);
+            CHECK(meta.datasets[0].dtype == (dtype == TableDtype::F16 ? "float16" : "uint8"));
+            CHECK(meta.datasets[0].shape == std::vector<std::uint64_t>{std::uint64_t(g.n_theta_h), std::uint64_t(g.n_theta_d),
+                                                                        std::uint64_t(g.n_phi_d), 3});
+
+            // A flipped byte in the codes is detected and the dataset named.
+            std::vector<unsigned char> bytes = slurp(p);
+            const auto extents = extents_of(bytes);
+            REQUIRE(extents.size() == 1);
+            for (std::uint64_t at : {extents[0].first, extents[0].first + extents[0].second - 1}) {
+                std::vector<unsigned char> b = bytes;
+                b[at] ^= 0x04;
+                const fs::path bad = dir.path / "bad.brdfz";
+                spit(bad, b);
+                CHECK_THAT(read_error(bad), Catch::Contains("dataset /representation/values is corrupt"));
+            }
+        }
 }
 
 TEST_CASE("Metadata lists datasets and records the source", "[container]") {
@@ -444,7 +491,7 @@ TEST_CASE("Files needing unknown features are refused, naming the feature", "[co
         {
             container::h5::WriteNode root = w.root();
             root.attr("format", std::string("brdfz"));
-            root.attr("version", std::uint64_t{2});
+            root.attr("version", std::uint64_t{container::kVersion + 1});
             root.attr("min_reader_version", min_reader);
             root.attr("features", std::span<const std::string>(features));
             root.attr("feature_versions", std::span<const std::uint64_t>(since));
@@ -452,15 +499,17 @@ TEST_CASE("Files needing unknown features are refused, naming the feature", "[co
         w.close();
         return p;
     };
-    const fs::path p = future({"core", "pca"}, {1, 2}, 2);
+    const std::uint64_t next = container::kVersion + 1;
+    const fs::path p = future({"core", "hologram"}, {1, next}, next);
     const std::string msg = read_error(p);
     CHECK_THROWS_AS(container::read(p.string()), UnsupportedError);
-    CHECK_THAT(msg, Catch::Contains("needs container feature 'pca' (container version 2)"));
+    CHECK_THAT(msg, Catch::Contains("needs container feature 'hologram' (container version " + std::to_string(next) + ")"));
     CHECK_THAT(msg, Catch::Contains("tabular"));
     CHECK_THROWS_AS(container::read_metadata(p.string()), UnsupportedError);
 
     // Known features but a newer minimum reader version.
-    CHECK_THAT(read_error(future({"core"}, {1}, 2)), Catch::Contains("needs a reader of container version 2"));
+    CHECK_THAT(read_error(future({"core"}, {1}, next)),
+               Catch::Contains("needs a reader of container version " + std::to_string(next)));
 
     // An HDF5 attribute edited in place and the header resealed: the reader still catches it by
     // its own checks (a feature list whose lengths disagree).

@@ -72,6 +72,11 @@ int main(int argc, char** argv) try {
          "{\"format\": \"brdfz-analytic\", \"version\": 1, \"model\": \"lambert+ggx\", \"parameters\": "
          "{\"lambert.rho_r\": 0.1, \"lambert.rho_g\": 0.2, \"lambert.rho_b\": 0.3, \"ggx.ks_r\": 1, \"ggx.ks_g\": 1, "
          "\"ggx.ks_b\": 1, \"ggx.alpha\": 0.1, \"ggx.f0\": 0.04}, \"provenance\": {\"source\": \"seed\"}}\n");
+    text(dir / "json" / "scene.json",
+         "{\"format\": \"brdfz-scene\", \"version\": 1, \"name\": \"s\", \"seed\": 3, \"views\": [{\"axis\": [0, 0, 1], "
+         "\"max_angle_deg\": 20, \"count\": 4}], \"lights\": [{\"direction\": [0, 0.1, 1], \"spread_deg\": 2, "
+         "\"intensity\": 1, \"samples\": 2}], \"environment\": {\"radiance\": 0.1, \"samples\": 4}, "
+         "\"pairs\": [{\"wi\": [0, 0.5, 1], \"wo\": [0, -0.5, 1], \"weight\": 2}]}\n");
     return 0;
 } catch (const std::exception& e) {
     std::fprintf(stderr, "fuzz_seeds: %s\n", e.what());

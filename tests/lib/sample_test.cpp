@@ -1,9 +1,13 @@
 #include <catch2/catch.hpp>
 
+#include <array>
 #include <cmath>
 #include <random>
+#include <vector>
 
+#include "brdfz/errors.h"
 #include "brdfz/repr/analytic/coated_diffuse.h"
+#include "brdfz/repr/analytic/model.h"
 #include "brdfz/repr/tabular.h"
 #include "brdfz/tabulate.h"
 #include "brdfz/formats/io.h"
@@ -20,27 +24,9 @@ TabularBrdf tabulated(double alpha) {
     return TabularBrdf(tabulate(CoatedDiffuse(p)).table);
 }
 
-const double kThetaODeg[] = {0, 30, 60, 80, 87};
-
-// χ² at the view elevations (Bonferroni-corrected 1% level), pdf normalisation, round trip.
+// Bonferroni-corrected 1% level over the five view elevations.
 void check_sampler(const Brdf& b, std::size_t samples) {
-    const double alpha = 0.01 / std::size(kThetaODeg);
-    for (double deg : kThetaODeg) {
-        INFO("theta_o = " << deg);
-        const Vec3 wo = spherical_direction(deg * M_PI / 180, 0.4);
-        const test::Chi2Result r = test::chi2_test(b, wo, samples);
-        CHECK(r.p_value > alpha);
-        CHECK(test::pdf_integral(b, wo) == Approx(1.0).margin(0.01));
-        std::mt19937_64 rng(7);
-        std::uniform_real_distribution<double> u(0, 1);
-        for (int k = 0; k < 1000; ++k) {
-            const BrdfSample s = b.sample(wo, u(rng), u(rng));
-            if (s.pdf == 0) continue;
-            REQUIRE(s.pdf == Approx(b.pdf(wo, s.wi)).epsilon(1e-9));
-            const Rgb f = b.eval(s.wi, wo);
-            REQUIRE(s.weight[0] == Approx(f[0] * s.wi.z / s.pdf).epsilon(1e-9));
-        }
-    }
+    test::check_sampler(b, samples, 0.01 / std::size(test::kThetaODeg));
 }
 
 }  // namespace
@@ -108,4 +94,33 @@ TEST_CASE("the chi-square test rejects a sampler whose pdf is wrong", "[sample]"
     };
     const TabularBrdf t = tabulated(0.12);
     CHECK(test::chi2_test(Mismatched(t), spherical_direction(0.5, 0.0), 100000).p_value < 1e-6);
+}
+
+TEST_CASE("batch sampling gives what one-at-a-time sampling gives", "[sample]") {
+    const TabularBrdf t = tabulated(0.05);
+    const AnalyticBrdf a("lambert+ggx", {0.2, 0.3, 0.4, 0.9, 0.9, 0.9, 0.1, 0.04});
+    std::mt19937_64 rng(4);
+    std::uniform_real_distribution<double> u(0, 1);
+    std::normal_distribution<double> n;
+    const std::size_t count = 1000;  // several blocks of the batch path, and a partial one
+    std::vector<Vec3> wo(count);
+    std::vector<std::array<double, 2>> us(count);
+    for (std::size_t k = 0; k < count; ++k) {
+        wo[k] = normalize({n(rng), n(rng), n(rng)});
+        if (k % 3) wo[k].z = std::fabs(wo[k].z);  // a third below the horizon: failed samples in the batch
+        us[k] = {u(rng), u(rng)};
+    }
+    for (const Brdf* b : {static_cast<const Brdf*>(&t), static_cast<const Brdf*>(&a)}) {
+        INFO(b->describe());
+        std::vector<BrdfSample> out(count);
+        b->sample(wo, us, out);
+        for (std::size_t k = 0; k < count; ++k) {
+            const BrdfSample s = b->sample(wo[k], us[k][0], us[k][1]);
+            REQUIRE(out[k].pdf == s.pdf);
+            REQUIRE(out[k].wi.x == s.wi.x);
+            for (int c = 0; c < 3; ++c) REQUIRE(out[k].weight[c] == Approx(s.weight[c]).epsilon(1e-12));
+        }
+    }
+    std::vector<BrdfSample> short_out(count - 1);
+    CHECK_THROWS_AS(t.sample(wo, us, short_out), ValueError);
 }

@@ -27,9 +27,10 @@ def run(cli, *args, check=True):
 
 @pytest.fixture(scope="session")
 def demo_table(cli, tmp_path_factory):
-    """The demo's MERL table of the built-in material (no data files needed)."""
+    """The demo's MERL table of the built-in material (no data files needed); one cheap representation
+    instead of every one."""
     out = tmp_path_factory.mktemp("demo")
-    run(cli, "demo", "--out", out)
+    run(cli, "demo", "--out", out, "--repr", "tabular:res=8x8x16")
     return out / "coated-diffuse.binary"
 
 
@@ -48,3 +49,13 @@ def rgl_files():
     if not files:
         pytest.skip("../shared/data/rgl is missing")
     return files
+
+
+def import_brdfz():
+    """The brdfz Python package. ctest sets BRDFZ_PYTHON=1 when it built the module (then a failing
+    import is an error); elsewhere the binding tests skip without it."""
+    if os.environ.get("BRDFZ_PYTHON") == "1":
+        import brdfz
+
+        return brdfz
+    return pytest.importorskip("brdfz", reason="the brdfz Python package is not built (BRDFZ_BUILD_PYTHON=ON)")

@@ -54,6 +54,7 @@ public:
     // Density of sample(wo, ·) at wi, per unit solid angle; 0 below the horizon.
     double pdf(const Vec3& wo, const Vec3& wi) const;
     // Batches: out[k] = sample(wo[k], u[k][0], u[k][1]) / pdf(wo[k], wi[k]); equal lengths or ValueError.
+    // The batch sample evaluates the weights with the batch eval kernel.
     void sample(std::span<const Vec3> wo, std::span<const std::array<double, 2>> u, std::span<BrdfSample> out) const;
     void pdf(std::span<const Vec3> wo, std::span<const Vec3> wi, std::span<double> out) const;
 
@@ -75,6 +76,10 @@ protected:
     virtual BrdfSample sample_above(const Vec3& wo, double u1, double u2) const;
     // Density for wo and wi above the horizon, consistent with sample_above. Default cosθi/π.
     virtual double pdf_above(const Vec3& wo, const Vec3& wi) const;
+
+private:
+    // sample() without the weight when the sampler left it unset: a failed draw is returned as {}.
+    BrdfSample draw(const Vec3& wo, double u1, double u2) const;
 };
 
 }  // namespace brdfz

@@ -2,11 +2,15 @@
 // point behind `brdfz compress`, Python's brdfz.compress and the budget-driven selection.
 //
 // Kinds (each documented with its options in its own header under repr/):
-//   tabular:res=AxBxC,dtype=f32|f16|u8log   resampled Rusinkiewicz table (repr/tabular.h, compact_table.h)
+//   tabular:res=AxBxC,dtype=f32|f16|u8log[,lookup=linear|nearest,ss=N]
+//                                           resampled Rusinkiewicz table (repr/tabular.h, compact_table.h),
+//                                           each bin the mean of N³ points (default 1: point samples)
+//   bivariate:res=AxB,dtype=...[,lookup=...,ss=N,phi=P]   (θh, θd) table, the source averaged over P
+//                                           φd values (default 180) and N² points per bin (default 1)
 //   analytic:MODEL[,loss=log|cos|cbrt,starts=N,seed=S]   a Ceres fit (fit/fit.h)
 //   svd:rank=K,space=linear|cos|log|cbrt,layout=h_dp|hd_p,colour=separate|shared[,res=AxBxC,iterations=N]
 //   nmf:(the same keys)                     low-rank / non-negative factorisation (repr/factored.h)
-// and those registered in compress.cpp's table as they land (bivariate, pca).
+// and those registered in compress.cpp's table as they land (pca).
 #pragma once
 
 #include <functional>
@@ -15,6 +19,7 @@
 #include <vector>
 
 #include "brdfz/brdf.h"
+#include "brdfz/measurements.h"
 #include "brdfz/repr/spec.h"
 
 namespace brdfz {
@@ -34,6 +39,10 @@ struct Compressed {
 
 // ValueError for an unknown kind or a bad option (naming it); the builders' own errors pass through.
 Compressed compress(const Brdf& source, const std::string& spec, const CompressOptions& options = {});
+
+// Scattered measurements (Cornell, ALTA) have no grid to factor or resample: only `analytic` fits
+// them; ValueError for any other kind.
+Compressed compress(const MeasurementSet& source, const std::string& spec, const CompressOptions& options = {});
 
 // The kinds compress() knows, for help texts.
 std::vector<std::string> compress_kinds();

@@ -3,6 +3,7 @@
 // Sources are taken as isotropic: bins are evaluated at φh = 0.
 #pragma once
 
+#include <array>
 #include <functional>
 
 #include "brdfz/brdf.h"
@@ -19,11 +20,22 @@ enum class NegativePolicy {
 struct TabulateOptions {
     GridSpec grid{};
     NegativePolicy negative = NegativePolicy::Clamp;
+    // Box filter: with supersample = {a, b, c} a bin's value is the mean of the valid values at a·b·c
+    // points spread evenly over it (the centres of its a×b×c equal sub-bins along the square-root θh,
+    // θd and φd axes) instead of the value at its sample point; {1, 1, 1} point-samples. Needs bin
+    // centres. One φd bin with c = 180 averages over φd: a bivariate (θh, θd) table.
+    std::array<int, 3> supersample{1, 1, 1};
+    // Box filter: points with θi or θo above this angle are left out of a bin's mean unless the bin has
+    // no other valid point. Grazing values are the least reliable (extrapolated in RGL files) and can be
+    // orders of magnitude larger than the rest (10^5 against 0.3 in RGL's paper_white), so they would
+    // dominate the mean. 90: no cut.
+    double box_max_theta_deg = 80.0;
     int threads = 0;  // 0: one per hardware thread
     // Called with the fraction done (0..1] after each θh slice, from a worker thread under a lock.
     std::function<void(double)> progress;
 };
 
+// With supersampling, counts.valid counts bins that got a value, the other classes count points.
 struct Tabulated {
     Table table;
     ValidityCounts counts;

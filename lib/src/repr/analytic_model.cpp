@@ -4,6 +4,7 @@
 #include <charconv>
 #include <cmath>
 #include <cstdio>
+#include <memory>
 
 #include "brdfz/errors.h"
 #include "brdfz/repr/analytic/catalogue.h"
@@ -150,6 +151,21 @@ void AnalyticBrdf::eval_batch(const Vec3* wi, const Vec3* wo, Rgb* out, std::siz
             out[base + k] = {above ? r[k] : 0.0, above ? g[k] : 0.0, above ? b[k] : 0.0};
         }
     }
+}
+
+const LobeMixture& AnalyticBrdf::sampler() const {
+    return sampler_.get([this] { return std::make_unique<LobeMixture>(model_, params_); });
+}
+
+BrdfSample AnalyticBrdf::sample_above(const Vec3& wo, double u1, double u2) const {
+    // Non-finite directions have no sample (their eval is 0).
+    if (!std::isfinite(wo.x + wo.y + wo.z)) return {};
+    return sampler().sample(wo, u1, u2);
+}
+
+double AnalyticBrdf::pdf_above(const Vec3& wo, const Vec3& wi) const {
+    if (!finite_pair(wi, wo)) return 0.0;
+    return sampler().pdf(wo, wi);
 }
 
 }  // namespace brdfz

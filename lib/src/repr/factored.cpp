@@ -9,7 +9,7 @@
 
 #include "brdfz/coords.h"
 #include "brdfz/errors.h"
-#include "detail/bin_coords.h"
+#include "detail/table_lookup.h"
 #include "detail/grid_sweep.h"
 
 namespace brdfz {

@@ -11,8 +11,16 @@ namespace {
 // Index of the CDF interval holding u: the largest i with cdf[i] <= u, among intervals of non-zero
 // width, so a sample never lands in an empty cell.
 int find_interval(const float* cdf, int n, double u) {
-    int i = static_cast<int>(std::upper_bound(cdf, cdf + n + 1, static_cast<float>(u)) - cdf) - 1;
-    i = std::clamp(i, 0, n - 1);
+    // Branch-free binary search (the compare selects, no jump): u is random, so a branchy search
+    // mispredicts about every other step. Finds the largest i in [0, n-1] with cdf[i] <= u, or 0.
+    const float x = static_cast<float>(u);
+    const float* base = cdf;
+    for (int len = n; len > 1;) {
+        const int half = len / 2;
+        base = base[half] <= x ? base + half : base;
+        len -= half;
+    }
+    int i = static_cast<int>(base - cdf);
     while (i > 0 && cdf[i + 1] == cdf[i]) --i;
     while (i < n - 1 && cdf[i + 1] == cdf[i]) ++i;
     return i;

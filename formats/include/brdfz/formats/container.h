@@ -23,7 +23,7 @@
 namespace brdfz::container {
 
 // The container version this library writes, and the newest it reads.
-inline constexpr std::uint32_t kVersion = 1;
+inline constexpr std::uint32_t kVersion = 2;
 
 // A feature a file uses and the container version that introduced it.
 struct Feature {
@@ -68,6 +68,7 @@ struct Metadata {
     std::string conventions;  // frame and direction conventions (brdf.h)
     std::string representation;  // storage module: "tabular", "rgl", ...
     std::string spec;            // the representation's describe() when written
+    std::string build_spec;      // the compress() spec that built it ("svd:rank=4"); empty if none
     Achieved achieved;
     std::vector<DatasetInfo> datasets;  // read_metadata: shapes and stored checksums, not verified
 };
@@ -80,6 +81,11 @@ struct WriteOptions {
     // else on 90x90x180; set resamples onto this grid.
     std::optional<GridSpec> grid;
     bool metrics = true;  // when not stored exactly, compare the stored form with the source
+    // The compress() spec that built `brdf`, recorded as /representation's build_spec.
+    std::string build_spec;
+    // Metrics of `brdf` against the original it approximates (compress's source), recorded as the
+    // achieved metrics in place of the writer's own comparison.
+    std::optional<Metrics> source_metrics;
     int threads = 0;
     std::function<void(double)> progress;
 };

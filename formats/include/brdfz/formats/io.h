@@ -16,6 +16,7 @@
 
 #include "brdfz/brdf.h"
 #include "brdfz/measurements.h"
+#include "brdfz/metrics.h"
 #include "brdfz/repr/tabular.h"
 #include "brdfz/table.h"
 
@@ -59,6 +60,9 @@ struct SaveOptions {
     std::string format;
     // File the BRDF was read from and its format, recorded by writers that keep provenance (.brdfz).
     std::string source, source_format;
+    // .brdfz: the compress() spec that built the BRDF, and its metrics against the original (container.h).
+    std::string build_spec;
+    std::optional<Metrics> source_metrics;
 };
 
 // "merl" / "rgl" / "cornell" / "alta" from the extension; FormatError naming the file otherwise.

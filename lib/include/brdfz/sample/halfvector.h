@@ -20,7 +20,10 @@ struct HalfVectorSamplerOptions {
     int n_theta_o = 32;       // view-elevation slices over [0°, kMaxThetaODeg]
     int n_theta_h = 64;       // cells along y = √(θh / (π/2))
     int n_phi = 64;           // cells along |φh − φo| ∈ [0, π]
-    double cosine_share = 0.1;  // probability of a cosine-weighted sample (defensive mixture)
+    // Probability of a cosine-weighted sample (defensive mixture). On sharp data it sets the albedo
+    // estimate's variance floor, ≈ share/(1 − share)·ρ² (bench/README.md: 0.05 against 0.1 halves it on
+    // chrome and phenolic, which then beat a fitted lambert+ggx proxy's sampler; 0.02 loses on lit pixels).
+    double cosine_share = 0.05;
     int threads = 0;          // 0: one per hardware thread, for building
 };
 

@@ -14,6 +14,8 @@
 
 #include "brdfz/brdf.h"
 #include "brdfz/repr/analytic/lobe.h"
+#include "brdfz/sample/lazy.h"
+#include "brdfz/sample/lobes.h"
 
 namespace brdfz {
 
@@ -59,6 +61,8 @@ public:
 
     const Model& model() const { return model_; }
     std::span<const double> params() const { return params_; }
+    // The lobe-mixture importance sampler (sample/lobes.h), built on first use.
+    const LobeMixture& sampler() const;
 
     int channels() const override { return 3; }
     std::size_t nbytes() const override { return params_.size() * sizeof(double); }
@@ -67,10 +71,13 @@ public:
 protected:
     Rgb eval_above(const Vec3& wi, const Vec3& wo) const override;
     void eval_batch(const Vec3* wi, const Vec3* wo, Rgb* out, std::size_t n) const override;
+    BrdfSample sample_above(const Vec3& wo, double u1, double u2) const override;
+    double pdf_above(const Vec3& wo, const Vec3& wi) const override;
 
 private:
     Model model_;
     std::vector<double> params_;
+    Lazy<LobeMixture> sampler_;
 };
 
 }  // namespace brdfz

@@ -1,0 +1,203 @@
+// brdfz compress IN -o OUT --repr SPEC
+// brdfz compress IN -o OUT --auto --max-error E [--metric log|cos|image] [--scene SCENE.json]
+// Builds a compact representation (compress.h) of any BRDF file, or fits scattered measurements
+// (analytic only), writes it (.brdfz keeps the representation itself; table formats tabulate it) and
+// reports what it achieved: bytes, ratio to the input file, the metrics against the input, batch
+// eval speed and build time. --auto tries candidates from cheapest to richest (select.h) and keeps the
+// smallest that meets the error budget, reporting every candidate; exit status 2, nothing written,
+// when none does.
+#include <cmath>
+#include <filesystem>
+#include <iostream>
+
+#include "brdfz/errors.h"
+#include "brdfz/formats/scene_json.h"
+#include "brdfz/select.h"
+#include "commands.h"
+#include "output.h"
+#include "report.h"
+
+namespace brdfz::cli {
+namespace {
+
+struct Outcome {
+    std::string in, out;
+    std::uintmax_t input_bytes = 0;
+    const Trial* trial = nullptr;
+};
+
+double ratio_of(const Outcome& o) {
+    return o.trial->bytes ? static_cast<double>(o.input_bytes) / static_cast<double>(o.trial->bytes) : 0.0;
+}
+
+void write_trial_keys(JsonWriter& j, const Outcome& o) {
+    const Trial& t = *o.trial;
+    j.key("input").value(o.in).key("output").value(o.out);
+    j.key("repr").value(t.spec).key("describe").value(t.describe);
+    j.key("input_bytes").value(static_cast<std::size_t>(o.input_bytes));
+    j.key("bytes").value(t.bytes).key("ratio").value(ratio_of(o));
+    j.key("build_seconds").value(t.build_seconds);
+    j.key("eval_pairs_per_second").value(t.eval_rate);
+    j.key("notes").begin_array();
+    for (const std::string& n : t.notes) j.value(n);
+    j.end_array();
+    j.key("metrics");
+    write_metrics(j, t.metrics);
+}
+
+void print_trial(const Outcome& o, std::ostream& os) {
+    const Trial& t = *o.trial;
+    char line[256];
+    os << "compressed " << o.in << " with " << t.spec << "\n  stores       " << t.describe << "\n";
+    std::snprintf(line, sizeof line, "  bytes        %zu (input file %ju bytes: %.1fx smaller)\n", t.bytes, o.input_bytes,
+                  ratio_of(o));
+    os << line;
+    std::snprintf(line, sizeof line, "  build time   %.3f s\n  eval speed   %.3g pairs/s (batch, one thread)\n",
+                  t.build_seconds, t.eval_rate);
+    os << line << "  against the input\n";
+    print_metrics(t.metrics, false, os);
+    for (const std::string& n : t.notes) os << "  note: " << n << "\n";
+    os << "  wrote " << o.out << "\n";
+}
+
+void print_candidate(const Candidate& c, std::ostream& os) {
+    char line[512];
+    std::snprintf(line, sizeof line, "  %-34s %10zu B  error %-10.4g %9.3g pairs/s %7.2f s  %s\n", c.trial.spec.c_str(),
+                  c.trial.bytes, c.error, c.trial.eval_rate, c.trial.build_seconds, c.reason.c_str());
+    os << line;
+}
+
+void write_candidates(JsonWriter& j, const Selection& s) {
+    j.key("candidates").begin_array();
+    for (const Candidate& c : s.tried) {
+        j.begin_object();
+        j.key("repr").value(c.trial.spec).key("bytes").value(c.trial.bytes).key("error").value(c.error);
+        j.key("eval_pairs_per_second").value(c.trial.eval_rate).key("build_seconds").value(c.trial.build_seconds);
+        j.key("accepted").value(c.accepted).key("reason").value(c.reason);
+        j.end_object();
+    }
+    j.end_array();
+}
+
+}  // namespace
+
+void add_compress(CLI::App& app) {
+    struct Args {
+        std::string in, out, repr, metric = "log", scene;
+        std::vector<std::string> candidates;
+        bool json = false, automatic = false;
+        double max_error = 0;
+        int threads = 0;
+        LoadOptions load;
+    };
+    auto args = std::make_shared<Args>();
+    CLI::App* cmd = app.add_subcommand("compress", "build a compact representation and report bytes, error and speed");
+    cmd->add_option("IN", args->in, "BRDF file, or measurements (.brdf, .dat: analytic only)")->required();
+    cmd->add_option("-o,--out", args->out, "output: .brdfz keeps the representation; table formats tabulate it")
+        ->required();
+    CLI::Option* repr = cmd->add_option("--repr", args->repr, "representation spec KIND[:KEY=VALUE,...]; kinds: " + [] {
+        std::string kinds;
+        for (const std::string& k : compress_kinds()) kinds += (kinds.empty() ? "" : ", ") + k;
+        return kinds;
+    }());
+    CLI::Option* automatic =
+        cmd->add_flag("--auto", args->automatic, "choose the smallest candidate that meets --max-error")->excludes(repr);
+    cmd->add_option("--max-error", args->max_error, "error budget of --auto (unitless, in --metric)")->needs(automatic);
+    cmd->add_option("--metric", args->metric, "error of --auto: log (log_rmse), cos (cos_rmse_rel) or image "
+                                              "(relative pixel RMSE)")
+        ->capture_default_str()
+        ->needs(automatic);
+    cmd->add_option("--scene", args->scene, "scene file (docs/scene-json.md): measure the error where it looks")
+        ->needs(automatic);
+    cmd->add_option("--candidate", args->candidates, "a candidate spec for --auto (repeatable; default: cheapest "
+                                                     "to richest of every kind)")
+        ->needs(automatic);
+    cmd->add_option("--threads", args->threads, "0: one per hardware thread")->capture_default_str();
+    cmd->add_flag("--json", args->json, "print the report as JSON");
+    add_load_options(cmd, args->load);
+    cmd->callback([args] {
+        if (!args->automatic && args->repr.empty()) throw ValueError("compress: give --repr SPEC or --auto --max-error E");
+        if (args->automatic && !(args->max_error > 0.0)) throw ValueError("compress --auto: give --max-error E > 0");
+        // Check what can be checked before spending time on loading and building.
+        if (!args->automatic) ReprSpec::parse(args->repr);
+        format_of(args->out);
+        SelectOptions select;
+        if (args->automatic) {
+            select.max_error = args->max_error;
+            select.metric = parse_scene_metric(args->metric);
+            select.candidates = args->candidates;
+            if (!args->scene.empty()) select.scene = build_scene(scene_json::read(args->scene));
+        }
+        TrialOptions options;
+        options.compress.threads = args->threads;
+        options.metrics.threads = args->threads;
+        Outcome o;
+        o.in = args->in;
+        o.input_bytes = std::filesystem::file_size(args->in);
+        SaveOptions save_options;
+        save_options.source = args->in;
+
+        Trial single;
+        Selection selection;
+        if (holds_measurements(args->in)) {
+            if (args->automatic) throw ValueError("compress --auto needs a BRDF on a grid; scattered measurements can only be fitted (--repr analytic:MODEL)");
+            const LoadedMeasurements in = load_measurements(args->in);
+            options.compress.progress = progress_bar("compressing");
+            single = trial(in.set, args->repr, options);
+            save_options.source_format = in.info.format;
+        } else {
+            const Loaded in = load(args->in, args->load);
+            save_options.source_format = in.info.format;
+            if (args->automatic) {
+                select.trial = options;
+                if (!args->json)
+                    std::cout << "trying candidates for " << args->in << " (budget " << args->max_error << " in "
+                              << args->metric << (args->scene.empty() ? "" : " under " + args->scene) << ")\n";
+                select.on_candidate = [&](const Candidate& c) {
+                    if (!args->json) print_candidate(c, std::cout), std::cout.flush();
+                };
+                selection = select_representation(*in.brdf, select);
+            } else {
+                options.compress.progress = progress_bar("compressing");
+                single = trial(*in.brdf, args->repr, options);
+            }
+        }
+        if (args->automatic && !selection.best()) {
+            if (args->json) {
+                JsonWriter j(std::cout);
+                j.begin_object().key("input").value(o.in).key("chosen").value(std::string());
+                write_candidates(j, selection);
+                j.end_object();
+                std::cout << "\n";
+            }
+            std::cout.flush();
+            std::cerr << "brdfz: " << args->in << ": no candidate meets the budget " << args->max_error
+                      << "; nothing written\n";
+            throw CLI::RuntimeError(2);
+        }
+        o.trial = args->automatic ? &selection.best()->trial : &single;
+        save_options.build_spec = o.trial->spec;
+        save_options.source_metrics = o.trial->metrics;
+        save_options.threads = args->threads;
+        save(*o.trial->brdf, args->out, save_options);
+        o.out = args->out;
+        if (args->json) {
+            JsonWriter j(std::cout);
+            j.begin_object();
+            write_trial_keys(j, o);
+            if (args->automatic) {
+                j.key("chosen").value(o.trial->spec).key("error").value(selection.best()->error);
+                j.key("max_error").value(args->max_error).key("metric").value(args->metric);
+                j.key("scene").value(args->scene);
+                write_candidates(j, selection);
+            }
+            j.end_object();
+            std::cout << "\n";
+        } else {
+            if (args->automatic) std::cout << "chose " << o.trial->spec << "\n";
+            print_trial(o, std::cout);
+        }
+    });
+}
+
+}  // namespace brdfz::cli

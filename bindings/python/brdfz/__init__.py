@@ -1,0 +1,200 @@
+"""brdfz: measured BRDFs, compactly stored.
+
+Every measured or compressed BRDF is a :class:`Brdf`. Directions follow brdf.h: the normal is +z,
+``wi`` (incident light) and ``wo`` (outgoing) both point away from the surface; ``eval`` returns
+f_r without the cosine, ``eval_cos`` f_r·cosθi. Arrays are numpy arrays of shape (N, 3) (``u``:
+(N, 2)), float32 or float64; results are float64. Rows are normalised as the ``brdfz`` command
+normalises them; a zero or non-finite row is a ValueError.
+
+Errors: library errors keep their message and arrive as ValueError (bad arguments),
+:class:`FormatError` and :class:`UnsupportedError` (both ValueError subclasses: bad or unhandled
+files), OSError (FileNotFoundError when the file read does not exist).
+
+Long operations (compress, fit, tabulate, save, convert) take ``progress``: True prints
+"label NN%" on stderr, a callable receives the fraction done (0..1] (from a worker thread, holding
+the GIL). They release the GIL while they work, as do Brdf.eval / eval_cos / pdf / sample.
+"""
+from __future__ import annotations
+
+import json
+import math
+import os
+import sys
+import tempfile
+from typing import Callable, Mapping, Optional, Sequence, Tuple, Union
+
+from . import _core
+from ._core import (
+    Brdf,
+    Candidate,
+    ChannelMetrics,
+    Compressed,
+    FitReport,
+    FitResult,
+    FormatError,
+    Metrics,
+    Scene,
+    Selection,
+    Trial,
+    UnsupportedError,
+    albedo,
+    benchmark_specs,
+    compress_kinds,
+    default_candidates,
+    format_of,
+    load,
+)
+
+__all__ = [
+    "Brdf", "Candidate", "ChannelMetrics", "Compressed", "FitReport", "FitResult", "FormatError", "Metrics",
+    "Scene", "Selection", "Trial", "UnsupportedError", "albedo", "benchmark_specs", "compress", "compress_kinds",
+    "convert", "default_candidates", "fit", "format_of", "load", "metrics", "read_scene", "save", "tabulate", "trial",
+]
+
+Path = Union[str, os.PathLike]
+Progress = Union[bool, Callable[[float], object], None]
+Resolution = Tuple[int, int, int]
+
+
+class _StderrBar:
+    """"label NN%" on stderr, rewritten in place; a new line at 100%."""
+
+    def __init__(self, label: str):
+        self.label = label
+        self.last = -1
+
+    def __call__(self, fraction: float) -> None:
+        pct = int(fraction * 100)
+        if pct == self.last:
+            return
+        self.last = pct
+        sys.stderr.write(f"\r{self.label} {pct}%" + ("\n" if pct >= 100 else ""))
+        sys.stderr.flush()
+
+
+def _hook(progress: Progress, label: str) -> Optional[Callable[[float], object]]:
+    if progress is None or progress is False:
+        return None
+    if progress is True:
+        return _StderrBar(label)
+    if callable(progress):
+        return progress
+    raise ValueError("progress must be True, False, None or a callable taking the fraction done")
+
+
+def save(brdf: Brdf, path: Path, *, res: Optional[Resolution] = None, format: str = "", threads: int = 0,
+         progress: Progress = None) -> dict:
+    """Writes `brdf` atomically (format from the extension unless `format` names one). A format that
+    stores tables tabulates other representations on `res` (default: the table's own grid, or
+    90x90x180). Returns the written bins' validity counts."""
+    return _core.save(brdf, path, res=res, format=format, threads=threads, progress=_hook(progress, "tabulating"))
+
+
+def convert(src: Path, dst: Path, *, res: Optional[Resolution] = None, src_format: str = "", dst_format: str = "",
+            lookup: str = "linear", bin_position: str = "centre", threads: int = 0, progress: Progress = None) -> dict:
+    """As ``brdfz convert SRC DST``: load, tabulate where the output format needs it, write atomically."""
+    return _core.convert(src, dst, res=res, src_format=src_format, dst_format=dst_format, lookup=lookup,
+                         bin_position=bin_position, threads=threads, progress=_hook(progress, "tabulating"))
+
+
+def read_scene(source: Union[Path, Mapping, Scene]) -> Scene:
+    """A scene for error budgets (docs/scene-json.md): a scene file, or a dict with the file's schema
+    ("format" and "version" may be left out). Bad members are ValueErrors naming them."""
+    if isinstance(source, Scene):
+        return source
+    if not isinstance(source, Mapping):
+        return _core.read_scene(source)
+    doc = {"format": "brdfz-scene", "version": 1, **source}
+    # One schema, one reader: the dict goes through the C++ scene file reader.
+    with tempfile.TemporaryDirectory() as tmp:
+        path = os.path.join(tmp, "scene.json")
+        with open(path, "w") as f:
+            json.dump(doc, f)
+        try:
+            return _core.read_scene(path)
+        except ValueError as e:
+            raise type(e)(str(e).replace(path, "scene dict")) from None
+
+
+def trial(brdf: Brdf, spec: str, *, measure_speed: bool = True, max_theta: float = 80.0, threads: int = 0,
+          progress: Progress = None) -> Trial:
+    """compress(brdf, spec) and measure what it achieved, as ``brdfz compress`` reports it: bytes,
+    metrics against `brdf`, eval_rate (pairs/s, one thread) and build_seconds."""
+    return _core.trial(brdf, spec, measure_speed=measure_speed, max_theta=max_theta, threads=threads,
+                       progress=_hook(progress, "compressing"))
+
+
+def _candidate_hook(progress: Progress) -> Optional[Callable[[Candidate, int, int], object]]:
+    if progress is None or progress is False:
+        return None
+    if progress is True:
+        def line(c: Candidate, index: int, total: int) -> None:
+            sys.stderr.write(f"  [{index + 1}/{total}] {c.spec:34} {c.bytes:>10} B  error {c.error:<10.4g} "
+                             f"{c.eval_rate:9.3g} pairs/s {c.build_seconds:7.2f} s  {c.reason}\n")
+            sys.stderr.flush()
+        return line
+    if callable(progress):
+        return lambda c, index, total: progress(1.0 if c.accepted else (index + 1) / total)
+    raise ValueError("progress must be True, False, None or a callable taking the fraction done")
+
+
+def compress(brdf: Brdf, spec: Optional[str] = None, *, auto: bool = False, max_error: Optional[float] = None,
+             metric: str = "log", scene: Union[Path, Mapping, Scene, None] = None,
+             candidates: Optional[Sequence[str]] = None, report: bool = False, threads: int = 0,
+             progress: Progress = None):
+    """Builds the representation `spec` names, as ``brdfz compress`` spells it ("tabular:res=45x45x90",
+    "analytic:lambert+ggx", "svd:rank=4", ...; see compress_kinds()). Returns the Brdf, or with
+    report=True a :class:`Compressed` holding it with its canonical spec, build_seconds and notes.
+
+    With auto=True (``brdfz compress --auto``) it tries `candidates` (default: default_candidates())
+    from cheapest to richest and returns the first, so the smallest, whose error in `metric` ("log":
+    log_rmse, "cos": cos_rmse_rel, "image": relative pixel RMSE; under `scene` when given, a scene
+    file or dict) is at most `max_error`; report=True returns the :class:`Selection` instead, every
+    candidate with its bytes, error, eval_rate, build_seconds and why it was rejected. No candidate
+    within the budget is a ValueError (its ``selection`` attribute holds the report). progress=True
+    prints a line per candidate."""
+    if not auto:
+        if spec is None:
+            raise ValueError("compress: give a spec, or auto=True and max_error")
+        built = _core.compress(brdf, spec, threads=threads, progress=_hook(progress, "compressing"))
+        return built if report else built.brdf
+    if spec is not None:
+        raise ValueError("compress: give a spec or auto=True, not both")
+    if max_error is None or not (math.isfinite(max_error) and max_error > 0):
+        raise ValueError("compress(auto=True): give max_error, a finite number > 0")
+    selection = _core.select_representation(
+        brdf, max_error, metric=metric, scene=None if scene is None else read_scene(scene),
+        candidates=list(candidates or []), threads=threads, on_candidate=_candidate_hook(progress))
+    if selection.chosen < 0:
+        tried = "; ".join(f"{c.spec}: {c.reason}" for c in selection.candidates)
+        error = ValueError(f"compress(auto=True): no candidate meets the budget {max_error:g} in {metric} ({tried})")
+        error.selection = selection
+        raise error
+    return selection if report else selection.brdf
+
+
+def fit(source: Union[Brdf, Path], model: str, *, loss: str = "log", starts: int = 8, seed: int = 1,
+        robust: str = "none", robust_scale: float = 0.1, max_theta: float = 80.0, samples: int = 20000,
+        max_seconds: float = 60.0, threads: int = 0, progress: Progress = None) -> FitResult:
+    """Fits an analytic model ("lambert+ggx", lobes joined by '+') to a Brdf or a file (a BRDF, or
+    Cornell / ALTA measurements), with the options of ``brdfz fit``. The result holds the model as a
+    Brdf (``.brdf``, its ``parameters`` by name) and the report (``.report.status``, ``.message``,
+    ``.metrics``, ...); check the status before trusting the model."""
+    return _core.fit(source, model, loss=loss, starts=starts, seed=seed, robust=robust, robust_scale=robust_scale,
+                     max_theta=max_theta, samples=samples, max_seconds=max_seconds, threads=threads,
+                     progress=_hook(progress, "fitting"))
+
+
+def metrics(reference: Union[Brdf, Path], approx: Brdf, *, max_theta: float = 80.0, threads: int = 0) -> Metrics:
+    """cos_rmse, cos_rmse_rel, log_rmse and cbrt_rmse of `approx` against `reference` (a Brdf, or a
+    file: a BRDF or Cornell / ALTA measurements), as ``brdfz diff``."""
+    return _core.metrics(reference, approx, max_theta=max_theta, threads=threads)
+
+
+def tabulate(brdf: Brdf, res: Resolution = (90, 90, 180), *, lookup: str = "linear", negative: str = "clamp",
+             threads: int = 0, progress: Progress = None) -> Brdf:
+    """`brdf` evaluated at the bin centres of a (θh, θd, φd) Rusinkiewicz grid, as a table Brdf
+    (its values: ``.table``). Negative values are clamped to 0 or, with negative="invalidate",
+    marked invalid."""
+    return _core.tabulate(brdf, res, lookup=lookup, negative=negative, threads=threads,
+                          progress=_hook(progress, "tabulating"))

@@ -1,0 +1,377 @@
+"""
+brdfz: measured BRDFs, compactly stored (C++ core of the brdfz package)
+"""
+from __future__ import annotations
+import collections.abc
+import numpy
+import numpy.typing
+import os
+import typing
+__all__: list[str] = ['Brdf', 'Candidate', 'ChannelMetrics', 'Compressed', 'FitReport', 'FitResult', 'FormatError', 'Metrics', 'Scene', 'Selection', 'Trial', 'UnsupportedError', 'albedo', 'benchmark_specs', 'compress', 'compress_kinds', 'convert', 'default_candidates', 'fit', 'format_of', 'load', 'metrics', 'read_scene', 'save', 'select_representation', 'tabulate', 'trial']
+class FormatError(ValueError):
+    pass
+class UnsupportedError(ValueError):
+    pass
+class Brdf:
+    """
+    A measured or compressed BRDF (brdf.h: normal +z, wi and wo pointing away)
+    """
+    def __repr__(self) -> str:
+        ...
+    def describe(self) -> str:
+        """
+        one line saying what this is
+        """
+    def eval(self, wi: numpy.typing.NDArray[numpy.floating], wo: numpy.typing.NDArray[numpy.floating]) -> numpy.typing.NDArray[numpy.float64]:
+        """
+        f_r (1/sr, no cosine) at direction pairs: wi, wo of shape (N, 3) -> (N, 3) float64
+        """
+    def eval_cos(self, wi: numpy.typing.NDArray[numpy.floating], wo: numpy.typing.NDArray[numpy.floating]) -> numpy.typing.NDArray[numpy.float64]:
+        """
+        f_r·cosθi at direction pairs -> (N, 3) float64
+        """
+    def pdf(self, wo: numpy.typing.NDArray[numpy.floating], wi: numpy.typing.NDArray[numpy.floating]) -> numpy.typing.NDArray[numpy.float64]:
+        """
+        density of sample(wo, ·) at wi per unit solid angle -> (N,)
+        """
+    def sample(self, wo: numpy.typing.NDArray[numpy.floating], u: numpy.typing.NDArray[numpy.floating]) -> tuple[numpy.typing.NDArray[numpy.float64], numpy.typing.NDArray[numpy.float64], numpy.typing.NDArray[numpy.float64]]:
+        """
+        draws wi for each wo from u in [0, 1)^2 of shape (N, 2) -> (wi (N, 3), pdf (N,), weight (N, 3)); weight = f·cosθi/pdf, failed samples have pdf 0 and weight 0
+        """
+    @property
+    def channels(self) -> int:
+        """
+        1 (monochrome, repeated in r, g, b) or 3
+        """
+    @property
+    def nbytes(self) -> int:
+        """
+        exact size of the stored parameters in bytes
+        """
+    @property
+    def parameters(self) -> dict[str, float] | None:
+        """
+        an analytic model's parameters by name; None otherwise
+        """
+    @property
+    def table(self) -> numpy.typing.NDArray[numpy.float32] | None:
+        """
+        a table's values (θh, θd, φd, 3) float32, NaN where invalid; None otherwise
+        """
+class Compressed:
+    """
+    what compress() built and what it achieved
+    """
+    def __repr__(self) -> str:
+        ...
+    @property
+    def brdf(self) -> Brdf:
+        ...
+    @property
+    def build_seconds(self) -> float:
+        """
+        wall time of the build
+        """
+    @property
+    def notes(self) -> list[str]:
+        """
+        what the builder wants the user to know (fit status, clamping)
+        """
+    @property
+    def spec(self) -> str:
+        """
+        canonical spec text
+        """
+class ChannelMetrics:
+    """
+    one metric per channel and their mean
+    """
+    def __repr__(self) -> str:
+        ...
+    def to_dict(self) -> dict:
+        ...
+    @property
+    def b(self) -> float:
+        ...
+    @property
+    def g(self) -> float:
+        ...
+    @property
+    def mean(self) -> float:
+        ...
+    @property
+    def r(self) -> float:
+        ...
+class Metrics:
+    """
+    error metrics of an approximation against a reference (metrics.h)
+    """
+    def __repr__(self) -> str:
+        ...
+    def to_dict(self) -> dict:
+        ...
+    @property
+    def cbrt_rmse(self) -> ChannelMetrics:
+        ...
+    @property
+    def cos_rmse(self) -> ChannelMetrics:
+        ...
+    @property
+    def cos_rmse_rel(self) -> ChannelMetrics:
+        ...
+    @property
+    def log_rmse(self) -> ChannelMetrics:
+        ...
+    @property
+    def negatives(self) -> int:
+        """
+        channel values below 0 taken as 0 by log_rmse
+        """
+    @property
+    def samples(self) -> int:
+        """
+        bins (or measurements) compared
+        """
+class FitReport:
+    """
+    how a fit went (fit/fit.h)
+    """
+    def __repr__(self) -> str:
+        ...
+    @property
+    def at_bounds(self) -> list[str]:
+        ...
+    @property
+    def best_start(self) -> int:
+        ...
+    @property
+    def channel_cost(self) -> typing.Annotated[list[float], "FixedSize(3)"]:
+        ...
+    @property
+    def excluded_cutoff(self) -> int:
+        ...
+    @property
+    def excluded_invalid(self) -> int:
+        ...
+    @property
+    def final_cost(self) -> float:
+        ...
+    @property
+    def grid_bins(self) -> int:
+        ...
+    @property
+    def initial_cost(self) -> float:
+        ...
+    @property
+    def iterations(self) -> int:
+        ...
+    @property
+    def loss(self) -> str:
+        ...
+    @property
+    def message(self) -> str:
+        ...
+    @property
+    def metrics(self) -> Metrics | None:
+        """
+        the model against the input, or None
+        """
+    @property
+    def model(self) -> str:
+        ...
+    @property
+    def samples(self) -> int:
+        ...
+    @property
+    def seconds(self) -> float:
+        ...
+    @property
+    def start_costs(self) -> list[float]:
+        ...
+    @property
+    def starts(self) -> int:
+        ...
+    @property
+    def status(self) -> str:
+        """
+        converged, hit_bounds, no_convergence or insufficient_data
+        """
+    @property
+    def termination(self) -> str:
+        ...
+    @property
+    def total_iterations(self) -> int:
+        ...
+    @property
+    def unexplained(self) -> float:
+        ...
+    @property
+    def warnings(self) -> list[str]:
+        ...
+class FitResult:
+    """
+    a fitted model and its report
+    """
+    def __repr__(self) -> str:
+        ...
+    @property
+    def brdf(self) -> Brdf:
+        ...
+    @property
+    def report(self) -> FitReport:
+        ...
+class Trial:
+    """
+    what one representation achieved against its source (select.h)
+    """
+    def __repr__(self) -> str:
+        ...
+    @property
+    def brdf(self) -> Brdf:
+        """
+        the representation (None for a rejected candidate)
+        """
+    @property
+    def build_seconds(self) -> float:
+        ...
+    @property
+    def bytes(self) -> int:
+        """
+        Brdf.nbytes of the result
+        """
+    @property
+    def describe(self) -> str:
+        ...
+    @property
+    def eval_rate(self) -> float:
+        """
+        batch eval, pairs per second on one thread (0: not measured)
+        """
+    @property
+    def metrics(self) -> Metrics:
+        """
+        the result against the source
+        """
+    @property
+    def notes(self) -> list[str]:
+        """
+        from the builder (fit status, clamping)
+        """
+    @property
+    def spec(self) -> str:
+        """
+        canonical spec text
+        """
+class Candidate(Trial):
+    """
+    one candidate of a selection and why it was kept or not
+    """
+    def __repr__(self) -> str:
+        ...
+    @property
+    def accepted(self) -> bool:
+        ...
+    @property
+    def error(self) -> float:
+        """
+        in the selection's metric; NaN when the candidate failed
+        """
+    @property
+    def reason(self) -> str:
+        """
+        why it was rejected, or 'meets the budget'
+        """
+class Selection:
+    """
+    every candidate tried, cheapest first, and the one chosen
+    """
+    def __repr__(self) -> str:
+        ...
+    @property
+    def brdf(self) -> Brdf:
+        """
+        the chosen representation, or None
+        """
+    @property
+    def candidates(self) -> list[Candidate]:
+        ...
+    @property
+    def chosen(self) -> int:
+        """
+        index into candidates; -1 when none met the budget
+        """
+class Scene:
+    """
+    the direction pairs a scene evaluates and their weights (scene.h)
+    """
+    @property
+    def name(self) -> str:
+        ...
+    @property
+    def samples(self) -> int:
+        """
+        direction pairs
+        """
+    @property
+    def views(self) -> int:
+        """
+        views (pixels)
+        """
+def albedo(brdf: Brdf, theta_o: typing.Annotated[numpy.typing.ArrayLike, numpy.float64]) -> numpy.typing.NDArray[numpy.float64]:
+    """
+    directional albedo (quadrature, albedo.h) at θo in radians: shape of theta_o + (3,)
+    """
+def benchmark_specs() -> list[str]:
+    """
+    the settings the compression benchmark sweeps
+    """
+def compress(brdf: Brdf, spec: str, *, threads: typing.SupportsInt | typing.SupportsIndex = 0, progress: typing.Any = None) -> Compressed:
+    """
+    builds the representation SPEC names (as `brdfz compress`)
+    """
+def compress_kinds() -> list[str]:
+    ...
+def convert(src: os.PathLike | str | bytes, dst: os.PathLike | str | bytes, *, res: tuple[typing.SupportsInt | typing.SupportsIndex, typing.SupportsInt | typing.SupportsIndex, typing.SupportsInt | typing.SupportsIndex] | None = None, src_format: str = '', dst_format: str = '', lookup: str = 'linear', bin_position: str = 'centre', threads: typing.SupportsInt | typing.SupportsIndex = 0, progress: typing.Any = None) -> dict:
+    """
+    as `brdfz convert SRC DST`; returns the written bins' counts
+    """
+def default_candidates() -> list[str]:
+    """
+    select_representation's candidates, cheapest first
+    """
+def fit(source: typing.Any, model: str, *, loss: str = 'log', starts: typing.SupportsInt | typing.SupportsIndex = 8, seed: typing.SupportsInt | typing.SupportsIndex = 1, robust: str = 'none', robust_scale: typing.SupportsFloat | typing.SupportsIndex = 0.1, max_theta: typing.SupportsFloat | typing.SupportsIndex = 80.0, samples: typing.SupportsInt | typing.SupportsIndex = 20000, max_seconds: typing.SupportsFloat | typing.SupportsIndex = 60.0, threads: typing.SupportsInt | typing.SupportsIndex = 0, progress: typing.Any = None) -> FitResult:
+    """
+    fits an analytic model (e.g. 'lambert+ggx') to a Brdf or a file, as `brdfz fit`
+    """
+def format_of(path: str) -> str:
+    """
+    the format name of a file's extension ('merl', 'rgl', ...)
+    """
+def load(path: os.PathLike | str | bytes, *, lookup: str = 'linear', bin_position: str = 'centre', format: str = '') -> Brdf:
+    """
+    a BRDF file (.binary, .bsdf, .brdfz, .exr, .json; format overrides the extension)
+    """
+def metrics(reference: typing.Any, approx: Brdf, *, max_theta: typing.SupportsFloat | typing.SupportsIndex = 80.0, threads: typing.SupportsInt | typing.SupportsIndex = 0) -> Metrics:
+    """
+    metrics of approx against reference (a Brdf, or a file: a BRDF or Cornell/ALTA measurements)
+    """
+def read_scene(path: os.PathLike | str | bytes) -> Scene:
+    """
+    a scene file (docs/scene-json.md), its samples drawn
+    """
+def save(brdf: Brdf, path: os.PathLike | str | bytes, *, res: tuple[typing.SupportsInt | typing.SupportsIndex, typing.SupportsInt | typing.SupportsIndex, typing.SupportsInt | typing.SupportsIndex] | None = None, format: str = '', threads: typing.SupportsInt | typing.SupportsIndex = 0, progress: typing.Any = None) -> dict:
+    """
+    writes atomically (format from the extension unless given); returns the written bins' counts
+    """
+def select_representation(brdf: Brdf, max_error: typing.SupportsFloat | typing.SupportsIndex, *, metric: str = 'log', scene: Scene | None = None, candidates: collections.abc.Sequence[str] = [], measure_speed: bool = True, threads: typing.SupportsInt | typing.SupportsIndex = 0, on_candidate: typing.Any = None) -> Selection:
+    """
+    the smallest candidate within the budget (select.h); on_candidate(candidate, index, total) after each
+    """
+def tabulate(brdf: Brdf, res: tuple[typing.SupportsInt | typing.SupportsIndex, typing.SupportsInt | typing.SupportsIndex, typing.SupportsInt | typing.SupportsIndex] = (90, 90, 180), *, lookup: str = 'linear', negative: str = 'clamp', threads: typing.SupportsInt | typing.SupportsIndex = 0, progress: typing.Any = None) -> Brdf:
+    """
+    the Brdf evaluated on a (θh, θd, φd) Rusinkiewicz grid at bin centres, as a table
+    """
+def trial(brdf: Brdf, spec: str, *, measure_speed: bool = True, max_theta: typing.SupportsFloat | typing.SupportsIndex = 80.0, threads: typing.SupportsInt | typing.SupportsIndex = 0, progress: typing.Any = None) -> Trial:
+    """
+    compress(brdf, spec) and measure it: bytes, metrics, eval speed, build time
+    """

@@ -1,0 +1,1 @@
+"""Runnable examples: python -m brdfz.examples.mitsuba_sphere FILE.bsdf"""

@@ -1,0 +1,339 @@
+// Module-level functions: load / save / convert, compress, fit, metrics, tabulate, albedo. Each
+// releases the GIL while the library works; long ones take a progress callable (module.h).
+#include <pybind11/numpy.h>
+#include <pybind11/stl.h>
+#include <pybind11/stl/filesystem.h>
+
+#include <filesystem>
+#include <numbers>
+#include <optional>
+#include <variant>
+
+#include "brdfz/albedo.h"
+#include "brdfz/compress.h"
+#include "brdfz/errors.h"
+#include "brdfz/fit/fit.h"
+#include "brdfz/formats/io.h"
+#include "brdfz/metrics.h"
+#include "brdfz/repr/analytic/model.h"
+#include "brdfz/repr/tabular.h"
+#include "brdfz/tabulate.h"
+#include "module.h"
+
+namespace brdfz::python {
+namespace {
+
+using Path = std::filesystem::path;
+using Resolution = std::optional<std::tuple<int, int, int>>;
+
+BinPosition parse_bin_position(const std::string& name) {
+    if (name == "centre") return BinPosition::Centre;
+    if (name == "start") return BinPosition::Start;
+    throw ValueError("bin_position must be 'centre' or 'start', not '" + name + "'");
+}
+
+NegativePolicy parse_negative(const std::string& name) {
+    if (name == "clamp") return NegativePolicy::Clamp;
+    if (name == "invalidate") return NegativePolicy::Invalidate;
+    throw ValueError("negative must be 'clamp' or 'invalidate', not '" + name + "'");
+}
+
+GridSpec grid_of(const std::tuple<int, int, int>& res) {
+    GridSpec g{std::get<0>(res), std::get<1>(res), std::get<2>(res), BinPosition::Centre};
+    g.validate();
+    return g;
+}
+
+LoadOptions load_options(const std::string& lookup, const std::string& bin_position) {
+    LoadOptions o;
+    o.lookup = parse_lookup(lookup);
+    o.position = parse_bin_position(bin_position);
+    return o;
+}
+
+BrdfPtr load_brdf(const Path& path, const std::string& format, const LoadOptions& options) {
+    return reading(path, [&] {
+        py::gil_scoped_release release;
+        const std::string p = path.string();
+        return BrdfPtr(load_as(format.empty() ? format_of(p) : format, p, options).brdf);
+    });
+}
+
+py::dict counts_dict(const ValidityCounts& c) {
+    py::dict d;
+    d["valid"] = c.valid;
+    d["negative"] = c.negative;
+    d["nan"] = c.nan;
+    d["inf"] = c.inf;
+    d["clamped"] = c.clamped;
+    d["below_horizon"] = c.below_horizon;
+    return d;
+}
+
+// compress()'s result with the Brdf shared, as Python holds every Brdf.
+struct Built {
+    BrdfPtr brdf;
+    std::string spec;
+    double build_seconds;
+    std::vector<std::string> notes;
+};
+
+// fit()'s result, the model shared as a Brdf.
+struct Fitted {
+    BrdfPtr brdf;
+    FitReport report;
+};
+
+// What fit and metrics take as data: a Brdf, or a file (scattered measurements or a BRDF).
+using Data = std::variant<BrdfPtr, MeasurementSet>;
+
+Data data_of(const py::handle& obj) {
+    if (py::isinstance<Brdf>(obj)) return obj.cast<BrdfPtr>();
+    if (!py::isinstance<py::str>(obj) && !py::hasattr(obj, "__fspath__"))
+        throw py::type_error("expected a brdfz.Brdf or a path, got " + py::str(py::type::of(obj)).cast<std::string>());
+    const Path path = obj.cast<Path>();
+    return reading(path, [&]() -> Data {
+        py::gil_scoped_release release;
+        const std::string p = path.string();
+        if (holds_measurements(p)) return load_measurements(p).set;
+        return BrdfPtr(load(p).brdf);
+    });
+}
+
+py::dict per_channel_dict(const PerChannel& c) {
+    py::dict d;
+    d["r"] = c.r;
+    d["g"] = c.g;
+    d["b"] = c.b;
+    d["mean"] = c.mean;
+    return d;
+}
+
+}  // namespace
+
+void bind_operations(py::module_& m) {
+    m.def("load", [](const Path& path, const std::string& lookup, const std::string& bin_position,
+                     const std::string& format) { return load_brdf(path, format, load_options(lookup, bin_position)); },
+          py::arg("path"), py::kw_only(), py::arg("lookup") = "linear", py::arg("bin_position") = "centre",
+          py::arg("format") = "", "a BRDF file (.binary, .bsdf, .brdfz, .exr, .json; format overrides the extension)");
+
+    m.def("save", [](const BrdfPtr& brdf, const Path& path, const Resolution& res, const std::string& format,
+                     int threads, py::object progress) {
+              SaveOptions o;
+              if (res) o.grid = grid_of(*res);
+              o.format = format;
+              o.threads = threads;
+              Progress bar(std::move(progress));
+              o.progress = bar.hook();
+              ValidityCounts c;
+              {
+                  py::gil_scoped_release release;
+                  c = save(*brdf, path.string(), o);
+              }
+              bar.rethrow();
+              return counts_dict(c);
+          },
+          py::arg("brdf"), py::arg("path"), py::kw_only(), py::arg("res") = py::none(), py::arg("format") = "",
+          py::arg("threads") = 0, py::arg("progress") = py::none(),
+          "writes atomically (format from the extension unless given); returns the written bins' counts");
+
+    m.def("convert", [](const Path& src, const Path& dst, const Resolution& res, const std::string& src_format,
+                        const std::string& dst_format, const std::string& lookup, const std::string& bin_position,
+                        int threads, py::object progress) {
+              const std::string from = src_format.empty() ? format_of(src.string()) : src_format;
+              const BrdfPtr in = load_brdf(src, from, load_options(lookup, bin_position));
+              SaveOptions o;
+              if (res) o.grid = grid_of(*res);
+              o.format = dst_format;
+              o.source = src.string();
+              o.source_format = from;
+              o.threads = threads;
+              Progress bar(std::move(progress));
+              o.progress = bar.hook();
+              ValidityCounts c;
+              {
+                  py::gil_scoped_release release;
+                  c = save(*in, dst.string(), o);
+              }
+              bar.rethrow();
+              return counts_dict(c);
+          },
+          py::arg("src"), py::arg("dst"), py::kw_only(), py::arg("res") = py::none(), py::arg("src_format") = "",
+          py::arg("dst_format") = "", py::arg("lookup") = "linear", py::arg("bin_position") = "centre",
+          py::arg("threads") = 0, py::arg("progress") = py::none(), "as `brdfz convert SRC DST`; returns the written bins' counts");
+
+    py::class_<Built>(m, "Compressed", "what compress() built and what it achieved")
+        .def_readonly("brdf", &Built::brdf)
+        .def_readonly("spec", &Built::spec, "canonical spec text")
+        .def_readonly("build_seconds", &Built::build_seconds, "wall time of the build")
+        .def_readonly("notes", &Built::notes, "what the builder wants the user to know (fit status, clamping)")
+        .def("__repr__", [](const Built& c) {
+            return "<brdfz.Compressed " + c.spec + ": " + c.brdf->describe() + ", " + std::to_string(c.brdf->nbytes()) + " bytes>";
+        });
+    m.def("compress", [](const BrdfPtr& brdf, const std::string& spec, int threads, py::object progress) {
+              CompressOptions o;
+              o.threads = threads;
+              Progress bar(std::move(progress));
+              o.progress = bar.hook();
+              Compressed c;
+              {
+                  py::gil_scoped_release release;
+                  c = compress(*brdf, spec, o);
+              }
+              bar.rethrow();
+              return Built{BrdfPtr(std::move(c.brdf)), c.spec, c.build_seconds, c.notes};
+          },
+          py::arg("brdf"), py::arg("spec"), py::kw_only(), py::arg("threads") = 0, py::arg("progress") = py::none(),
+          "builds the representation SPEC names (as `brdfz compress`)");
+    m.def("compress_kinds", &compress_kinds);
+
+    py::class_<PerChannel>(m, "ChannelMetrics", "one metric per channel and their mean")
+        .def_readonly("r", &PerChannel::r)
+        .def_readonly("g", &PerChannel::g)
+        .def_readonly("b", &PerChannel::b)
+        .def_readonly("mean", &PerChannel::mean)
+        .def("to_dict", &per_channel_dict)
+        .def("__repr__", [](const PerChannel& c) {
+            return py::str("ChannelMetrics(r={:.6g}, g={:.6g}, b={:.6g}, mean={:.6g})").format(c.r, c.g, c.b, c.mean);
+        });
+    py::class_<Metrics>(m, "Metrics", "error metrics of an approximation against a reference (metrics.h)")
+        .def_readonly("cos_rmse", &Metrics::cos_rmse)
+        .def_readonly("cos_rmse_rel", &Metrics::cos_rmse_rel)
+        .def_readonly("log_rmse", &Metrics::log_rmse)
+        .def_readonly("cbrt_rmse", &Metrics::cbrt_rmse)
+        .def_readonly("samples", &Metrics::samples, "bins (or measurements) compared")
+        .def_readonly("negatives", &Metrics::negatives, "channel values below 0 taken as 0 by log_rmse")
+        .def("to_dict", [](const Metrics& x) {
+            py::dict d;
+            d["cos_rmse"] = per_channel_dict(x.cos_rmse);
+            d["cos_rmse_rel"] = per_channel_dict(x.cos_rmse_rel);
+            d["log_rmse"] = per_channel_dict(x.log_rmse);
+            d["cbrt_rmse"] = per_channel_dict(x.cbrt_rmse);
+            d["samples"] = x.samples;
+            d["negatives"] = x.negatives;
+            return d;
+        })
+        .def("__repr__", [](const Metrics& x) {
+            return py::str("Metrics(cos_rmse={:.6g}, cos_rmse_rel={:.6g}, log_rmse={:.6g}, cbrt_rmse={:.6g}, samples={})")
+                .format(x.cos_rmse.mean, x.cos_rmse_rel.mean, x.log_rmse.mean, x.cbrt_rmse.mean, x.samples);
+        });
+    m.def("metrics", [](const py::object& reference, const BrdfPtr& approx, double max_theta, int threads) {
+              const Data ref = data_of(reference);
+              MetricOptions o;
+              o.max_theta_deg = max_theta;
+              o.threads = threads;
+              py::gil_scoped_release release;
+              if (const auto* set = std::get_if<MeasurementSet>(&ref)) return compare(*set, *approx, o);
+              return compare(*std::get<BrdfPtr>(ref), *approx, o);
+          },
+          py::arg("reference"), py::arg("approx"), py::kw_only(), py::arg("max_theta") = 80.0, py::arg("threads") = 0,
+          "metrics of approx against reference (a Brdf, or a file: a BRDF or Cornell/ALTA measurements)");
+
+    py::class_<FitReport>(m, "FitReport", "how a fit went (fit/fit.h)")
+        .def_property_readonly("status", [](const FitReport& r) { return fit_status_name(r.status); },
+                               "converged, hit_bounds, no_convergence or insufficient_data")
+        .def_readonly("message", &FitReport::message)
+        .def_readonly("warnings", &FitReport::warnings)
+        .def_readonly("at_bounds", &FitReport::at_bounds)
+        .def_readonly("model", &FitReport::model)
+        .def_property_readonly("loss", [](const FitReport& r) { return fit_loss_name(r.loss); })
+        .def_readonly("samples", &FitReport::samples)
+        .def_readonly("excluded_cutoff", &FitReport::excluded_cutoff)
+        .def_readonly("excluded_invalid", &FitReport::excluded_invalid)
+        .def_readonly("grid_bins", &FitReport::grid_bins)
+        .def_readonly("channel_cost", &FitReport::channel_cost)
+        .def_readonly("initial_cost", &FitReport::initial_cost)
+        .def_readonly("final_cost", &FitReport::final_cost)
+        .def_readonly("iterations", &FitReport::iterations)
+        .def_readonly("total_iterations", &FitReport::total_iterations)
+        .def_readonly("termination", &FitReport::termination)
+        .def_readonly("seconds", &FitReport::seconds)
+        .def_readonly("starts", &FitReport::starts)
+        .def_readonly("best_start", &FitReport::best_start)
+        .def_readonly("start_costs", &FitReport::start_costs)
+        .def_readonly("unexplained", &FitReport::unexplained)
+        .def_readonly("metrics", &FitReport::metrics, "the model against the input, or None")
+        .def("__repr__", [](const FitReport& r) {
+            return "<brdfz.FitReport " + r.model + ": " + fit_status_name(r.status) + ", " + r.message + ">";
+        });
+    py::class_<Fitted>(m, "FitResult", "a fitted model and its report")
+        .def_readonly("brdf", &Fitted::brdf)
+        .def_readonly("report", &Fitted::report)
+        .def("__repr__", [](const Fitted& f) { return "<brdfz.FitResult " + f.brdf->describe() + ": " + fit_status_name(f.report.status) + ">"; });
+    m.def("fit", [](const py::object& source, const std::string& model, const std::string& loss, int starts,
+                    std::uint64_t seed, const std::string& robust, double robust_scale, double max_theta,
+                    std::size_t samples, double max_seconds, int threads, py::object progress) {
+              FitOptions o;
+              o.loss = parse_fit_loss(loss);
+              o.starts = starts;
+              o.seed = seed;
+              o.robust = parse_robust_loss(robust);
+              o.robust_scale = robust_scale;
+              o.max_theta_deg = max_theta;
+              o.sampling.max_samples = samples;
+              o.max_seconds = max_seconds;
+              o.threads = threads;
+              Model::parse(model);  // a bad model string fails before any loading
+              const Data data = data_of(source);
+              Progress bar(std::move(progress));
+              o.progress = bar.hook();
+              std::optional<FitResult> r;
+              {
+                  py::gil_scoped_release release;
+                  if (const auto* set = std::get_if<MeasurementSet>(&data))
+                      r.emplace(fit(*set, model, o));
+                  else
+                      r.emplace(fit(*std::get<BrdfPtr>(data), model, o));
+              }
+              bar.rethrow();
+              return Fitted{std::make_shared<AnalyticBrdf>(std::move(r->model)), std::move(r->report)};
+          },
+          py::arg("source"), py::arg("model"), py::kw_only(), py::arg("loss") = "log", py::arg("starts") = 8,
+          py::arg("seed") = 1, py::arg("robust") = "none", py::arg("robust_scale") = 0.1, py::arg("max_theta") = 80.0,
+          py::arg("samples") = 20000, py::arg("max_seconds") = 60.0, py::arg("threads") = 0,
+          py::arg("progress") = py::none(),
+          "fits an analytic model (e.g. 'lambert+ggx') to a Brdf or a file, as `brdfz fit`");
+
+    m.def("tabulate", [](const BrdfPtr& brdf, const std::tuple<int, int, int>& res, const std::string& lookup,
+                         const std::string& negative, int threads, py::object progress) {
+              TabulateOptions o;
+              o.grid = grid_of(res);
+              o.negative = parse_negative(negative);
+              o.threads = threads;
+              const Lookup l = parse_lookup(lookup);
+              Progress bar(std::move(progress));
+              o.progress = bar.hook();
+              BrdfPtr out;
+              {
+                  py::gil_scoped_release release;
+                  out = std::make_shared<TabularBrdf>(tabulate(*brdf, o).table, l);
+              }
+              bar.rethrow();
+              return out;
+          },
+          py::arg("brdf"), py::arg("res") = std::make_tuple(90, 90, 180), py::kw_only(), py::arg("lookup") = "linear",
+          py::arg("negative") = "clamp", py::arg("threads") = 0, py::arg("progress") = py::none(),
+          "the Brdf evaluated on a (θh, θd, φd) Rusinkiewicz grid at bin centres, as a table");
+
+    m.def("albedo", [](const BrdfPtr& brdf, const py::array_t<double, py::array::forcecast>& theta_o) {
+              const py::ssize_t n = theta_o.size();
+              const double* t = theta_o.data();
+              for (py::ssize_t k = 0; k < n; ++k)
+                  if (!(t[k] >= 0.0 && t[k] < std::numbers::pi / 2))
+                      throw ValueError("albedo: theta_o must lie in [0, pi/2) radians, got " + std::to_string(t[k]));
+              std::vector<py::ssize_t> shape(theta_o.shape(), theta_o.shape() + theta_o.ndim());
+              shape.push_back(3);
+              py::array_t<double> out(shape);
+              double* rho = out.mutable_data();
+              py::gil_scoped_release release;
+              for (py::ssize_t k = 0; k < n; ++k) {
+                  const Rgb a = directional_albedo(*brdf, t[k]);
+                  for (int c = 0; c < 3; ++c) rho[3 * k + c] = a[c];
+              }
+              return out;
+          },
+          py::arg("brdf"), py::arg("theta_o"),
+          "directional albedo (quadrature, albedo.h) at θo in radians: shape of theta_o + (3,)");
+}
+
+}  // namespace brdfz::python

@@ -1,0 +1,177 @@
+// Measuring and choosing representations (brdfz/select.h): trial, select_representation, scenes and
+// the benchmark's settings. Results are copied into plain structs holding the Brdf shared, as Python
+// holds every Brdf (module.h); a rejected candidate keeps no Brdf, as in the library.
+#include <pybind11/stl.h>
+#include <pybind11/stl/filesystem.h>
+
+#include <filesystem>
+#include <optional>
+
+#include "brdfz/formats/io.h"
+#include "brdfz/formats/scene_json.h"
+#include "brdfz/select.h"
+#include "module.h"
+
+namespace brdfz::python {
+namespace {
+
+using Path = std::filesystem::path;
+
+// What trial() measured, the Brdf shared (None for a rejected candidate).
+struct TrialResult {
+    BrdfPtr brdf;
+    std::string spec, describe;
+    std::size_t bytes = 0;
+    Metrics metrics;
+    double eval_rate = 0, build_seconds = 0;
+    std::vector<std::string> notes;
+};
+
+struct CandidateResult : TrialResult {
+    double error = 0;
+    bool accepted = false;
+    std::string reason;
+};
+
+struct SelectionResult {
+    std::vector<CandidateResult> candidates;
+    int chosen = -1;
+    BrdfPtr brdf;  // the chosen candidate's, or None
+};
+
+// The measurements of a trial or candidate, without its Brdf.
+TrialResult summary_of(const Trial& t) {
+    return {nullptr, t.spec, t.describe, t.bytes, t.metrics, t.eval_rate, t.build_seconds, t.notes};
+}
+
+CandidateResult summary_of(const Candidate& c) {
+    CandidateResult r;
+    static_cast<TrialResult&>(r) = summary_of(c.trial);
+    r.error = c.error;
+    r.accepted = c.accepted;
+    r.reason = c.reason;
+    return r;
+}
+
+TrialOptions trial_options(bool measure_speed, double max_theta, int threads) {
+    TrialOptions o;
+    o.measure_speed = measure_speed;
+    o.metrics.max_theta_deg = max_theta;
+    o.metrics.threads = threads;
+    o.compress.threads = threads;
+    return o;
+}
+
+}  // namespace
+
+void bind_select(py::module_& m) {
+    py::class_<TrialResult>(m, "Trial", "what one representation achieved against its source (select.h)")
+        .def_readonly("brdf", &TrialResult::brdf, "the representation (None for a rejected candidate)")
+        .def_readonly("spec", &TrialResult::spec, "canonical spec text")
+        .def_readonly("describe", &TrialResult::describe)
+        .def_readonly("bytes", &TrialResult::bytes, "Brdf.nbytes of the result")
+        .def_readonly("metrics", &TrialResult::metrics, "the result against the source")
+        .def_readonly("eval_rate", &TrialResult::eval_rate, "batch eval, pairs per second on one thread (0: not measured)")
+        .def_readonly("build_seconds", &TrialResult::build_seconds)
+        .def_readonly("notes", &TrialResult::notes, "from the builder (fit status, clamping)")
+        .def("__repr__", [](const TrialResult& t) {
+            return "<brdfz.Trial " + t.spec + ": " + std::to_string(t.bytes) + " bytes, cos_rmse_rel " +
+                   std::to_string(t.metrics.cos_rmse_rel.mean) + ">";
+        });
+    py::class_<CandidateResult, TrialResult>(m, "Candidate", "one candidate of a selection and why it was kept or not")
+        .def_readonly("error", &CandidateResult::error, "in the selection's metric; NaN when the candidate failed")
+        .def_readonly("accepted", &CandidateResult::accepted)
+        .def_readonly("reason", &CandidateResult::reason, "why it was rejected, or 'meets the budget'")
+        .def("__repr__", [](const CandidateResult& c) {
+            return "<brdfz.Candidate " + c.spec + ": " + std::to_string(c.bytes) + " bytes, " + c.reason + ">";
+        });
+    py::class_<SelectionResult>(m, "Selection", "every candidate tried, cheapest first, and the one chosen")
+        .def_readonly("candidates", &SelectionResult::candidates)
+        .def_readonly("chosen", &SelectionResult::chosen, "index into candidates; -1 when none met the budget")
+        .def_readonly("brdf", &SelectionResult::brdf, "the chosen representation, or None")
+        .def("__repr__", [](const SelectionResult& s) {
+            return "<brdfz.Selection " + std::to_string(s.candidates.size()) + " tried, chose " +
+                   (s.chosen < 0 ? std::string("none") : s.candidates[static_cast<std::size_t>(s.chosen)].spec) + ">";
+        });
+
+    py::class_<Scene>(m, "Scene", "the direction pairs a scene evaluates and their weights (scene.h)")
+        .def_readonly("name", &Scene::name)
+        .def_readonly("views", &Scene::views, "views (pixels)")
+        .def_property_readonly("samples", [](const Scene& s) { return s.samples.size(); }, "direction pairs");
+    m.def("read_scene", [](const Path& path) {
+              return reading(path, [&] {
+                  py::gil_scoped_release release;
+                  return build_scene(scene_json::read(path.string()));
+              });
+          },
+          py::arg("path"), "a scene file (docs/scene-json.md), its samples drawn");
+
+    m.def("trial", [](const BrdfPtr& brdf, const std::string& spec, bool measure_speed, double max_theta, int threads,
+                      py::object progress) {
+              TrialOptions o = trial_options(measure_speed, max_theta, threads);
+              Progress bar(std::move(progress));
+              o.compress.progress = bar.hook();
+              std::optional<Trial> t;
+              {
+                  py::gil_scoped_release release;
+                  t.emplace(trial(*brdf, spec, o));
+              }
+              bar.rethrow();
+              TrialResult r = summary_of(*t);
+              r.brdf = BrdfPtr(std::move(t->brdf));
+              return r;
+          },
+          py::arg("brdf"), py::arg("spec"), py::kw_only(), py::arg("measure_speed") = true, py::arg("max_theta") = 80.0,
+          py::arg("threads") = 0, py::arg("progress") = py::none(),
+          "compress(brdf, spec) and measure it: bytes, metrics, eval speed, build time");
+
+    m.def("select_representation",
+          [](const BrdfPtr& brdf, double max_error, const std::string& metric, const std::optional<Scene>& scene,
+             const std::vector<std::string>& candidates, bool measure_speed, int threads, py::object on_candidate) {
+              SelectOptions o;
+              o.max_error = max_error;
+              o.metric = parse_scene_metric(metric);
+              o.scene = scene;
+              o.candidates = candidates;
+              o.trial = trial_options(measure_speed, 80.0, threads);
+              // The callable runs on this thread with the GIL released: take it back for the call, and
+              // keep a Python exception to raise once the selection is over.
+              std::exception_ptr failure;
+              std::size_t index = 0;
+              const std::size_t total = candidates.empty() ? default_candidates().size() : candidates.size();
+              if (!on_candidate.is_none())
+                  o.on_candidate = [&](const Candidate& c) {
+                      py::gil_scoped_acquire gil;
+                      if (failure) return;
+                      try {
+                          on_candidate(summary_of(c), index++, total);
+                      } catch (py::error_already_set&) {
+                          failure = std::current_exception();
+                      }
+                  };
+              Selection s;
+              {
+                  py::gil_scoped_release release;
+                  s = select_representation(*brdf, o);
+              }
+              if (failure) std::rethrow_exception(failure);
+              SelectionResult out;
+              out.chosen = s.chosen;
+              for (Candidate& c : s.tried) {
+                  out.candidates.push_back(summary_of(c));
+                  out.candidates.back().brdf = BrdfPtr(std::move(c.trial.brdf));
+              }
+              if (out.chosen >= 0) out.brdf = out.candidates[static_cast<std::size_t>(out.chosen)].brdf;
+              return out;
+          },
+          py::arg("brdf"), py::arg("max_error"), py::kw_only(), py::arg("metric") = "log", py::arg("scene") = py::none(),
+          py::arg("candidates") = std::vector<std::string>{}, py::arg("measure_speed") = true, py::arg("threads") = 0,
+          py::arg("on_candidate") = py::none(),
+          "the smallest candidate within the budget (select.h); on_candidate(candidate, index, total) after each");
+
+    m.def("benchmark_specs", &benchmark_specs, "the settings the compression benchmark sweeps");
+    m.def("default_candidates", &default_candidates, "select_representation's candidates, cheapest first");
+    m.def("format_of", &format_of, py::arg("path"), "the format name of a file's extension ('merl', 'rgl', ...)");
+}
+
+}  // namespace brdfz::python

@@ -1,0 +1,94 @@
+// Choosing a representation: try candidates, measure what each achieves, keep the smallest that is
+// good enough. trial() is the measurement behind `brdfz compress`, the compression benchmark and the
+// budget-driven selection alike, so all three report the same numbers.
+#pragma once
+
+#include <cstdint>
+#include <functional>
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "brdfz/compress.h"
+#include "brdfz/metrics.h"
+#include "brdfz/scene.h"
+
+namespace brdfz {
+
+struct TrialOptions {
+    CompressOptions compress;
+    MetricOptions metrics;
+    bool measure_speed = true;  // eval_rate() of the result (about 0.1 s)
+};
+
+// What one representation achieved against its source (zfp-style: measured, not asked for).
+struct Trial {
+    std::string spec;               // canonical spec text
+    std::string describe;           // the result's describe()
+    std::size_t bytes = 0;          // Brdf::nbytes() of the result
+    Metrics metrics;                // the result against the source
+    double eval_rate = 0;           // batch eval, pairs per second on one thread (0: not measured)
+    double build_seconds = 0;
+    std::vector<std::string> notes; // from the builder (fit status, clamping)
+    std::unique_ptr<Brdf> brdf;
+};
+
+// compress(source, spec) and measure it. Errors of compress() pass through.
+Trial trial(const Brdf& source, const std::string& spec, const TrialOptions& options = {});
+Trial trial(const MeasurementSet& source, const std::string& spec, const TrialOptions& options = {});
+
+// Budget-driven selection: the smallest candidate whose error meets the budget.
+//
+// The error of a candidate, by metric:
+//   without a scene: cos = cos_rmse_rel (mean of channels), log = log_rmse, image = scene_error on
+//                    default_scene();
+//   with a scene:    scene_error(metric) under that scene (scene.h).
+// Candidates are tried in the order given — cheapest (fewest bytes) first — and the search stops at
+// the first that meets the budget, so the order must be by size; default_candidates() is.
+struct SelectOptions {
+    double max_error = 0.05;
+    SceneMetric metric = SceneMetric::Log;
+    std::optional<Scene> scene;
+    std::vector<std::string> candidates;  // empty: default_candidates()
+    TrialOptions trial;
+    // Called after each candidate (the CLI's progress lines).
+    std::function<void(const struct Candidate&)> on_candidate;
+};
+
+struct Candidate {
+    Trial trial;           // spec, bytes, metrics, speed, build time (no brdf unless chosen)
+    double error = 0;      // by SelectOptions::metric, NaN when the candidate failed
+    bool accepted = false;
+    std::string reason;    // why it was rejected (or "meets the budget")
+};
+
+struct Selection {
+    std::vector<Candidate> tried;
+    int chosen = -1;  // index into tried; -1 when no candidate met the budget
+    const Candidate* best() const { return chosen < 0 ? nullptr : &tried[static_cast<std::size_t>(chosen)]; }
+};
+
+// The settings the compression benchmark sweeps (bench/compress_sweep, python -m brdfz.bench): every
+// kind at a few sizes, the float32 MERL-resolution table first as the baseline.
+std::vector<std::string> benchmark_specs();
+
+// The benchmark's CSV (bench/compress_sweep, `brdfz demo`; python -m brdfz.bench writes and reads the
+// same columns): one row per material and setting. A setting that failed has empty numbers and the
+// status "error: MESSAGE"; otherwise the status is "ok" followed by the builder's notes.
+inline constexpr const char* kSweepCsvHeader =
+    "material,format,repr,describe,bytes,input_bytes,ratio,cos_rmse,cos_rmse_rel,log_rmse,cbrt_rmse,"
+    "eval_pairs_per_s,build_s,status";
+// A line of it (no newline): `trial` measured, or `error` when trial is null.
+std::string sweep_csv_row(const std::string& material, const std::string& format, const std::string& spec,
+                          std::uintmax_t input_bytes, const Trial* trial, const std::string& error = {});
+
+// Candidates from cheapest to richest: analytic fits of growing lobe count, factorisations of growing
+// rank, compact tables, the full-resolution table.
+std::vector<std::string> default_candidates();
+
+// ValueError for a budget that is not finite and > 0, or an empty candidate list. A candidate that
+// fails to build is rejected with its error message as the reason, not thrown.
+Selection select_representation(const Brdf& source, const SelectOptions& options);
+
+}  // namespace brdfz

@@ -1,0 +1,129 @@
+#include "brdfz/select.h"
+
+#include <cmath>
+#include <cstdio>
+
+#include "brdfz/errors.h"
+
+namespace brdfz {
+namespace {
+
+template <typename Source>
+Trial measure(const Source& source, const std::string& spec, const TrialOptions& options) {
+    Compressed c = compress(source, spec, options.compress);
+    Trial t;
+    t.spec = std::move(c.spec);
+    t.describe = c.brdf->describe();
+    t.bytes = c.brdf->nbytes();
+    t.metrics = compare(source, *c.brdf, options.metrics);
+    if (options.measure_speed) t.eval_rate = eval_rate(*c.brdf);
+    t.build_seconds = c.build_seconds;
+    t.notes = std::move(c.notes);
+    t.brdf = std::move(c.brdf);
+    return t;
+}
+
+}  // namespace
+
+Trial trial(const Brdf& source, const std::string& spec, const TrialOptions& options) {
+    return measure(source, spec, options);
+}
+
+Trial trial(const MeasurementSet& source, const std::string& spec, const TrialOptions& options) {
+    return measure(source, spec, options);
+}
+
+std::vector<std::string> benchmark_specs() {
+    return {
+        "tabular:res=90x90x180",  // the MERL grid in float32: the baseline
+        "tabular:res=45x45x90",          "tabular:res=45x45x90,dtype=f16",   "tabular:res=45x45x90,dtype=u8log",
+        "tabular:res=32x32x64,dtype=f16", "tabular:res=32x32x64,dtype=u8log", "tabular:res=16x16x32,dtype=u8log",
+        "bivariate:res=90x90",           "bivariate:res=90x90,dtype=u8log",  "bivariate:res=32x32,dtype=f16",
+        "svd:rank=1,space=log",          "svd:rank=2,space=log",             "svd:rank=4,space=log",
+        "svd:rank=8,space=log",          "svd:rank=4,space=cos",             "nmf:rank=1",
+        "nmf:rank=2",                    "nmf:rank=4",                       "analytic:lambert+ggx",
+        "analytic:lambert+ggx+ggx",      "analytic:lambert+beckmann",
+    };
+}
+
+std::vector<std::string> default_candidates() {
+    return {
+        "analytic:lambert+ggx",     "analytic:lambert+ggx+ggx", "tabular:res=16x16x32",
+        "tabular:res=32x32x64",     "tabular:res=45x45x90",     "tabular:res=90x90x180",
+    };
+}
+
+Selection select_representation(const Brdf& source, const SelectOptions& options) {
+    if (!(std::isfinite(options.max_error) && options.max_error > 0.0))
+        throw ValueError("select: the error budget must be a finite number > 0");
+    const std::vector<std::string> candidates = options.candidates.empty() ? default_candidates() : options.candidates;
+    const std::optional<Scene> judge =
+        options.scene ? options.scene
+                      : options.metric == SceneMetric::Image ? std::optional<Scene>(build_scene(default_scene())) : std::nullopt;
+    Selection out;
+    for (const std::string& spec : candidates) {
+        Candidate c;
+        try {
+            c.trial = trial(source, spec, options.trial);
+            if (judge)
+                c.error = scene_error(source, *c.trial.brdf, *judge, options.metric);
+            else
+                c.error = options.metric == SceneMetric::Cos ? c.trial.metrics.cos_rmse_rel.mean : c.trial.metrics.log_rmse.mean;
+            char buf[96];
+            if (!std::isfinite(c.error)) {
+                c.reason = "error is not finite";
+            } else if (c.error > options.max_error) {
+                std::snprintf(buf, sizeof buf, "error %.4g > budget %.4g", c.error, options.max_error);
+                c.reason = buf;
+            } else {
+                c.accepted = true;
+                c.reason = "meets the budget";
+            }
+        } catch (const Error& e) {
+            c.trial.spec = spec;
+            c.error = std::nan("");
+            c.reason = std::string("failed: ") + e.what();
+        }
+        if (!c.accepted) c.trial.brdf.reset();  // only the chosen one is kept in memory
+        out.tried.push_back(std::move(c));
+        if (options.on_candidate) options.on_candidate(out.tried.back());
+        if (out.tried.back().accepted) {
+            out.chosen = static_cast<int>(out.tried.size()) - 1;
+            break;
+        }
+    }
+    return out;
+}
+
+namespace {
+
+// CSV field: quoted when it holds a comma, a quote or a line break.
+std::string field(const std::string& s) {
+    if (s.find_first_of(",\"\n\r") == std::string::npos) return s;
+    std::string q = "\"";
+    for (char c : s) q += c == '"' ? std::string("\"\"") : std::string(1, c);
+    return q + "\"";
+}
+
+std::string num(double v) {
+    char buf[32];
+    std::snprintf(buf, sizeof buf, "%.6g", v);
+    return buf;
+}
+
+}  // namespace
+
+std::string sweep_csv_row(const std::string& material, const std::string& format, const std::string& spec,
+                          std::uintmax_t input_bytes, const Trial* trial, const std::string& error) {
+    std::string row = field(material) + "," + field(format) + "," + field(spec) + ",";
+    if (!trial) return row + ",," + std::to_string(input_bytes) + ",,,,,,,," + field("error: " + error);
+    const Trial& t = *trial;
+    std::string status = "ok";
+    for (const std::string& n : t.notes) status += "; " + n;
+    return row + field(t.describe) + "," + std::to_string(t.bytes) + "," + std::to_string(input_bytes) + "," +
+           num(static_cast<double>(input_bytes) / static_cast<double>(t.bytes)) + "," + num(t.metrics.cos_rmse.mean) +
+           "," + num(t.metrics.cos_rmse_rel.mean) + "," + num(t.metrics.log_rmse.mean) + "," +
+           num(t.metrics.cbrt_rmse.mean) + "," + num(t.eval_rate) + "," + num(t.build_seconds) + "," + field(status);
+}
+
+}  // namespace brdfz

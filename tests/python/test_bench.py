@@ -1,0 +1,133 @@
+"""python -m brdfz.bench and brdfz.stability_charts on tiny inputs: the CSV's exact columns and rows
+(equal to bench/compress_sweep's where both measure the same thing), the charts, renders and summary,
+and the Pareto front."""
+import csv
+import os
+import pathlib
+import re
+
+import pytest
+
+from conftest import import_brdfz
+
+brdfz = import_brdfz()
+bench = pytest.importorskip("brdfz.bench", reason="matplotlib is not installed (scripts/setup-deps)")
+stability_charts = pytest.importorskip("brdfz.stability_charts")
+
+COLUMNS = ["material", "format", "repr", "describe", "bytes", "input_bytes", "ratio", "cos_rmse", "cos_rmse_rel",
+           "log_rmse", "cbrt_rmse", "eval_pairs_per_s", "build_s", "status"]
+SPECS = ["tabular:res=8x8x16", "nosuch:x=1", "tabular:res=16x16x32"]
+# The measured columns; eval speed and build time differ from run to run.
+DETERMINISTIC = [c for c in COLUMNS if c not in ("eval_pairs_per_s", "build_s")]
+
+
+def read(path):
+    with open(path, newline="") as f:
+        return list(csv.reader(f))
+
+
+def is_png(path):
+    return path.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+
+
+def test_pareto_front():
+    xs = [1, 2, 3, 4, 5, 2, 6]
+    ys = [5, 3, 4, 1, 1, 3, 0.5]
+    # (3, 4) is beaten by (2, 3); (5, 1) by (4, 1); the second (2, 3) repeats the first.
+    assert bench.pareto_front(xs, ys) == [0, 1, 3, 6]
+    # Larger x is better: (6, 0.5) beats everything.
+    assert bench.pareto_front(xs, ys, maximize_x=True) == [6]
+    assert bench.pareto_front([1, 2, 3], [3, 2, 1], maximize_x=True) == [2]
+    assert bench.pareto_front([1, 2, 3], [1, 2, 3], maximize_x=True) == [2, 1, 0]
+    assert bench.pareto_front([], []) == []
+
+
+def test_method_groups_tables_by_stored_type():
+    assert bench.method("tabular:res=45x45x90,dtype=u8log") == "tabular u8log"
+    assert bench.method("tabular:res=45x45x90") == "tabular"
+    assert bench.method("analytic:lambert+ggx") == "analytic"
+
+
+@pytest.fixture(scope="module")
+def bench_out(demo_table, tmp_path_factory):
+    out = tmp_path_factory.mktemp("bench")
+    assert bench.main(["--materials", str(demo_table), "--specs", *SPECS, "--out", str(out), "--budgets", "0.5", "1e-9",
+                       "--candidates", "tabular:res=8x8x16", "tabular:res=16x16x32", "--render-size", "24"]) == 0
+    return out
+
+
+def test_bench_csv(bench_out, demo_table):
+    rows = read(bench_out / "sweep.csv")
+    assert rows[0] == COLUMNS
+    assert [(r[0], r[1], r[2]) for r in rows[1:]] == [("coated-diffuse", "merl", s) for s in SPECS]
+    size = os.path.getsize(demo_table)
+    demo = brdfz.load(demo_table)
+    for r in (rows[1], rows[3]):
+        d = dict(zip(COLUMNS, r))
+        t = brdfz.trial(demo, d["repr"])
+        assert d["status"] == "ok" and d["describe"] == t.describe and int(d["bytes"]) == t.bytes
+        assert int(d["input_bytes"]) == size and float(d["ratio"]) == pytest.approx(size / t.bytes, rel=1e-5)
+        assert float(d["cos_rmse_rel"]) == pytest.approx(t.metrics.cos_rmse_rel.mean, rel=1e-5)
+        assert float(d["log_rmse"]) == pytest.approx(t.metrics.log_rmse.mean, rel=1e-5)
+        assert float(d["eval_pairs_per_s"]) > 0 and float(d["build_s"]) > 0
+    failed = dict(zip(COLUMNS, rows[2]))
+    assert failed["status"].startswith("error: unknown representation 'nosuch'")
+    assert failed["input_bytes"] == str(size) and all(failed[c] == "" for c in ("bytes", "ratio", "cos_rmse_rel"))
+
+
+def test_bench_csv_equals_compress_sweep(bench_out, demo_table, cli, tmp_path):
+    """The C++ sweep writes the same columns and, but for timings, the same values."""
+    sweep = pathlib.Path(cli).resolve().parents[2] / "bench" / "compress_sweep"
+    if not sweep.exists():
+        pytest.skip("bench/compress_sweep is not built (BRDFZ_BUILD_BENCH=OFF)")
+    import subprocess
+
+    out = tmp_path / "cpp.csv"
+    subprocess.run([sweep, "--out", out, *[a for s in SPECS for a in ("--spec", s)], demo_table], check=True,
+                   capture_output=True, timeout=300)
+    cpp, py = read(out), read(bench_out / "sweep.csv")
+    assert cpp[0] == py[0] == COLUMNS and len(cpp) == len(py)
+    keep = [COLUMNS.index(c) for c in DETERMINISTIC]
+    assert [[r[i] for i in keep] for r in cpp] == [[r[i] for i in keep] for r in py]
+    # --from-csv draws the same charts from the C++ program's file.
+    charts = tmp_path / "charts"
+    assert bench.main(["--from-csv", str(out), "--out", str(charts), "--budgets"]) == 0
+    assert is_png(charts / "size_vs_cos_rmse_rel.png") and (charts / "summary.md").exists()
+    assert not (charts / "auto.csv").exists()
+
+
+def test_bench_charts_renders_summary(bench_out):
+    pngs = ["size_vs_cos_rmse_rel.png", "size_vs_cos_rmse.png", "size_vs_log_rmse.png", "size_vs_cbrt_rmse.png",
+            "speed_vs_error.png", "auto_size_vs_error.png", "auto_speed_vs_error.png", "renders/coated-diffuse.png"]
+    for p in pngs:
+        assert is_png(bench_out / p), p
+    summary = (bench_out / "summary.md").read_text()
+    links = re.findall(r"\]\(([^)]+)\)", summary)
+    assert set(pngs) | {"sweep.csv"} <= set(links)
+    assert all((bench_out / link).exists() for link in links)
+    # The failed setting is listed, and the auto selection's rows: a choice at 0.5, none at 1e-9.
+    assert "`nosuch:x=1`" in summary and "none within the budget" in summary
+    auto = read(bench_out / "auto.csv")
+    assert auto[0] == bench.AUTO_COLUMNS
+    assert [r[:3] for r in auto[1:]] == [["coated-diffuse", "0.5", "tabular:res=16x16x32"], ["coated-diffuse", "1e-09", ""]]
+    assert auto[2][-1] == "2"  # both candidates tried
+
+
+def test_stability_heatmap(tmp_path):
+    src = tmp_path / "stability.csv"
+    src.write_text(
+        "material,class,repr,status,bytes,cos_rmse_rel,log_rmse,grazing_ratio,sampler_spread_ratio,bad_values,"
+        "eval_pairs_per_s,build_s,flags\n"
+        'diffuse,diffuse,"analytic:lambert+ggx","converged",64,0.001,0.001,1,1,0,5e7,1,""\n'
+        'diffuse,diffuse,"svd:rank=2","error: unknown representation",0,nan,nan,nan,nan,0,0,0,"failed"\n'
+        'metal,metal,"analytic:lambert+ggx","hit_bounds",64,0.3,0.1,12,2,0,5e7,1,"hit_bounds; grazing artefacts"\n'
+        'metal,metal,"svd:rank=2","ok",1000,0.8,0.2,1,1,3,1e7,1,"error blow-up; bad values"\n')
+    assert stability_charts.main([str(src), "--out", str(tmp_path / "out")]) == 0
+    assert is_png(tmp_path / "out" / "stability_heatmap.png")
+    assert stability_charts.flag_letters("hit_bounds; grazing artefacts") == "FG"
+    assert stability_charts.flag_letters("error blow-up; bad values; sampler worse than cosine") == "BVS"
+    assert stability_charts.flag_letters("failed") == ""
+    bad = tmp_path / "bad.csv"
+    bad.write_text("material,repr\nx,y\n")
+    with pytest.raises(ValueError, match="not a stability CSV"):
+        stability_charts.main([str(bad)])
