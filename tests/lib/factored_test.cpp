@@ -341,6 +341,8 @@ TEST_CASE("factored: .brdfz round trip is bit for bit", "[factored][container]")
             CHECK(a.nbytes == f.brdf->nbytes());
             const container::ReadResult r = container::read(path);
             CHECK(r.meta.representation == "factored");
+            CHECK(r.meta.features == std::vector<container::Feature>{{"core", 1}, {"factored", 2}});
+            CHECK(r.meta.min_reader_version == 2);
             const auto* back = dynamic_cast<const FactoredBrdf*>(r.brdf.get());
             REQUIRE(back);
             const Factors &x = f.brdf->factors(), &y = back->factors();
