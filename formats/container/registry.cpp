@@ -4,7 +4,8 @@ namespace brdfz::container {
 namespace detail {
 
 std::span<const StorageModule* const> storage_modules() {
-    static const StorageModule* const kModules[] = {&tabular_storage(), &rgl_storage(), &analytic_storage(), &pca_storage()};
+    static const StorageModule* const kModules[] = {&tabular_storage(), &rgl_storage(), &analytic_storage(),
+                                                    &pca_storage(), &factored_storage()};
     return kModules;
 }
 

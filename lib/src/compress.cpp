@@ -8,6 +8,7 @@
 #include "brdfz/repr/compact_table.h"
 #include "brdfz/formats/pca_basis.h"
 #include "brdfz/repr/pca.h"
+#include "brdfz/repr/factored.h"
 #include "brdfz/repr/tabular.h"
 #include "brdfz/tabulate.h"
 
@@ -127,6 +128,54 @@ Compressed build_pca(const Brdf& source, const ReprSpec& spec, const CompressOpt
     return out;
 }
 
+// svd / nmf (repr/factored.h): a table factored in a transform space. The source is factored on its
+// own grid when it is a table and no res= is given, else tabulated on res (default 90x90x180).
+Compressed build_factored(FactorMethod method, const Brdf& source, const ReprSpec& spec, const CompressOptions& options) {
+    FactorOptions fo;
+    fo.method = method;
+    fo.rank = spec.get_int("rank", fo.rank, 1, GridSpec::kMaxAxis);
+    fo.space = parse_factor_space(spec.get_choice("space", "log", {"linear", "cos", "log", "cbrt"}));
+    fo.layout = parse_factor_layout(spec.get_choice("layout", "h_dp", {"h_dp", "hd_p"}));
+    fo.colour = parse_factor_colour(spec.get_choice("colour", "separate", {"separate", "shared"}));
+    fo.max_iterations = spec.get_int("iterations", method == FactorMethod::Svd ? 50 : 100, 1, 100000);
+    const auto* tabular = dynamic_cast<const TabularBrdf*>(&source);
+    const bool resample = !tabular || spec.has("res");
+    const std::vector<int> res = spec.get_dims("res", {90, 90, 180});
+    spec.finish();
+    fo.threads = options.threads;
+    fo.progress = options.progress;
+    Compressed out;
+    Factored factored;
+    if (resample) {
+        TabulateOptions tab;
+        tab.grid = GridSpec{res[0], res[1], res[2], BinPosition::Centre};
+        tab.grid.validate();
+        tab.threads = options.threads;
+        Tabulated t = tabulate(source, tab);
+        if (t.counts.clamped > 0)
+            out.notes.push_back(std::to_string(t.counts.clamped) + " negative values clamped to 0 when tabulating");
+        factored = factor(t.table, fo);
+    } else {
+        factored = factor(tabular->table(), fo);
+    }
+    const FactorReport& r = factored.report;
+    out.notes.push_back(std::string(factor_method_name(method)) + ": " + std::to_string(r.iterations) + " iterations, " +
+                        (r.converged ? "converged" : "iteration cap reached") + ", weighted residual " +
+                        std::to_string(r.residual) + " over " + std::to_string(r.valid_bins) + " valid bins");
+    if (r.clamped > 0)
+        out.notes.push_back(std::to_string(r.clamped) + " reconstructed values below 0 at the grid's samples (clamped to 0 at eval)");
+    out.brdf = std::move(factored.brdf);
+    return out;
+}
+
+Compressed build_svd(const Brdf& source, const ReprSpec& spec, const CompressOptions& options) {
+    return build_factored(FactorMethod::Svd, source, spec, options);
+}
+
+Compressed build_nmf(const Brdf& source, const ReprSpec& spec, const CompressOptions& options) {
+    return build_factored(FactorMethod::Nmf, source, spec, options);
+}
+
 Compressed build_analytic(const Brdf& source, const ReprSpec& spec, const CompressOptions& options) {
     return from_fit(fit(source, spec.positional(), analytic_options(spec, options)));
 }
@@ -151,6 +200,8 @@ constexpr Kind kKinds[] = {
     {"bivariate", build_bivariate},
     {"analytic", build_analytic},
     {"pca", build_pca},
+    {"svd", build_svd},
+    {"nmf", build_nmf},
 };
 
 }  // namespace

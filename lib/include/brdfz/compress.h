@@ -10,7 +10,8 @@
 //   analytic:MODEL[,loss=log|cos|cbrt,starts=N,seed=S]   a Ceres fit (fit/fit.h)
 //   pca:basis=FILE,k=K[,store=reference|embed,lookup=linear|nearest]   k coefficients of a shared
 //                                                   basis read from FILE (repr/pca.h)
-// and those registered in compress.cpp's table as they land (svd, nmf).
+//   svd:rank=K,space=linear|cos|log|cbrt,layout=h_dp|hd_p,colour=separate|shared[,res=AxBxC,iterations=N]
+//   nmf:(the same keys)                     low-rank / non-negative factorisation (repr/factored.h)
 #pragma once
 
 #include <functional>

@@ -1,0 +1,103 @@
+// Factored storage: a FactoredBrdf's float32 factors as datasets "u" [rows, m] and "v" [columns, m]
+// (and "colour" [3, rank] for shared colour), exactly the arrays FactoredBrdf keeps, with the grid,
+// layout, transform space, method and colour mode as attributes (formats/SPEC.md). Factors round-trip
+// bit for bit, so evaluation does too.
+#include "brdfz/errors.h"
+#include "brdfz/repr/factored.h"
+#include "storage.h"
+
+namespace brdfz::container::detail {
+namespace {
+
+const Feature kFactored{"factored", 2};
+
+std::vector<Feature> needs(const Brdf& brdf) {
+    if (!dynamic_cast<const FactoredBrdf*>(&brdf)) return {};
+    return {kFactored};
+}
+
+void write(h5::WriteNode& rep, const Brdf& brdf) {
+    const Factors& f = dynamic_cast<const FactoredBrdf&>(brdf).factors();
+    const GridSpec& g = f.grid;
+    const std::uint64_t dims[3] = {static_cast<std::uint64_t>(g.n_theta_h), static_cast<std::uint64_t>(g.n_theta_d),
+                                   static_cast<std::uint64_t>(g.n_phi_d)};
+    rep.attr("grid", std::span<const std::uint64_t>(dims));
+    rep.attr("bin_position", std::string(g.position == BinPosition::Centre ? "centre" : "start"));
+    rep.attr("theta_h_axis", std::string("sqrt"));
+    rep.attr("method", std::string(factor_method_name(f.method)));
+    rep.attr("space", std::string(factor_space_name(f.space)));
+    rep.attr("layout", std::string(factor_layout_name(f.layout)));
+    rep.attr("colour", std::string(factor_colour_name(f.colour)));
+    rep.attr("rank", static_cast<std::uint64_t>(f.rank));
+    rep.attr("dtype", std::string("float32"));
+    const std::uint64_t m = static_cast<std::uint64_t>(f.row_width());
+    rep.dataset("u", h5::DType::F32, {static_cast<std::uint64_t>(f.rows()), m}, f.u.data());
+    rep.dataset("v", h5::DType::F32, {static_cast<std::uint64_t>(f.columns()), m}, f.v.data());
+    if (f.colour == FactorColour::Shared)
+        rep.dataset("colour", h5::DType::F32, {3, static_cast<std::uint64_t>(f.rank)}, f.colour_weights.data());
+}
+
+std::unique_ptr<Brdf> read(const h5::ReadNode& rep, const ReadContext&) {
+    const auto bad = [&](const std::string& what) { throw FormatError(rep.file(), rep.path() + ": " + what); };
+    // The attributes are checksummed, so an unknown name is from a newer writer, not damage; either
+    // way it is refused with the value named.
+    const auto choice = [&](const char* name, auto parse_fn) {
+        const std::string text = rep.str(name);
+        try {
+            return parse_fn(text);
+        } catch (const ValueError& e) {
+            bad(e.what());
+            throw;  // unreachable: bad() throws
+        }
+    };
+    Factors f;
+    f.method = choice("method", parse_factor_method);
+    f.space = choice("space", parse_factor_space);
+    f.layout = choice("layout", parse_factor_layout);
+    f.colour = choice("colour", parse_factor_colour);
+    if (rep.str("dtype") != "float32") bad("unsupported factor element type '" + rep.str("dtype") + "'");
+    if (rep.str("theta_h_axis") != "sqrt") bad("unknown theta_h_axis '" + rep.str("theta_h_axis") + "'");
+    const std::string position = rep.str("bin_position");
+    if (position != "centre" && position != "start") bad("unknown bin_position '" + position + "'");
+    const std::vector<std::uint64_t> dims = rep.u64s("grid");
+    if (dims.size() != 3) bad("attribute 'grid' has " + std::to_string(dims.size()) + " entries, expected 3");
+    for (std::uint64_t d : dims)
+        if (d < 1 || d > static_cast<std::uint64_t>(GridSpec::kMaxAxis))
+            bad("grid axis " + std::to_string(d) + " outside 1.." + std::to_string(GridSpec::kMaxAxis));
+    f.grid = GridSpec{static_cast<int>(dims[0]), static_cast<int>(dims[1]), static_cast<int>(dims[2]),
+                      position == "centre" ? BinPosition::Centre : BinPosition::Start};
+    const std::uint64_t rows = static_cast<std::uint64_t>(f.rows()), cols = static_cast<std::uint64_t>(f.columns());
+    const std::uint64_t rank = rep.u64("rank");
+    if (rank < 1 || rank > std::min(rows, cols))
+        bad("rank " + std::to_string(rank) + " outside 1.." + std::to_string(std::min(rows, cols)));
+    f.rank = static_cast<int>(rank);
+    const std::uint64_t m = static_cast<std::uint64_t>(f.row_width());
+
+    // Shapes checked against the attributes (and by the reader, sizes against the file) before allocating.
+    const auto load = [&](const char* name, std::uint64_t n, std::uint64_t width, std::vector<float>& out) {
+        const h5::Dataset d = rep.dataset(name);
+        if (d.type() != h5::DType::F32 || d.shape() != std::vector<std::uint64_t>{n, width})
+            bad(std::string("dataset '") + name + "' is not a float32 array of shape " + std::to_string(n) + "x" +
+                std::to_string(width));
+        out.resize(n * width);
+        d.read(out.data());
+    };
+    load("u", rows, m, f.u);
+    load("v", cols, m, f.v);
+    if (f.colour == FactorColour::Shared) load("colour", 3, rank, f.colour_weights);
+    try {
+        return std::make_unique<FactoredBrdf>(std::move(f));
+    } catch (const ValueError& e) {
+        bad(e.what());
+        throw;  // unreachable
+    }
+}
+
+}  // namespace
+
+const StorageModule& factored_storage() {
+    static const StorageModule m{"factored", {kFactored}, &needs, &write, &read};
+    return m;
+}
+
+}  // namespace brdfz::container::detail

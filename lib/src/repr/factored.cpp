@@ -1,0 +1,642 @@
+#include "brdfz/repr/factored.h"
+
+#include <Eigen/Dense>
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <type_traits>
+
+#include "brdfz/coords.h"
+#include "brdfz/errors.h"
+#include "detail/table_lookup.h"
+#include "detail/grid_sweep.h"
+
+namespace brdfz {
+namespace {
+
+// ---------------------------------------------------------------------------------------------
+// Names
+
+template <typename E>
+struct Named {
+    E value;
+    const char* name;
+};
+
+constexpr Named<FactorMethod> kMethods[] = {{FactorMethod::Svd, "svd"}, {FactorMethod::Nmf, "nmf"}};
+constexpr Named<FactorSpace> kSpaces[] = {
+    {FactorSpace::Linear, "linear"}, {FactorSpace::Cos, "cos"}, {FactorSpace::Log, "log"}, {FactorSpace::Cbrt, "cbrt"}};
+constexpr Named<FactorLayout> kLayouts[] = {{FactorLayout::HxDP, "h_dp"}, {FactorLayout::HDxP, "hd_p"}};
+constexpr Named<FactorColour> kColours[] = {{FactorColour::Separate, "separate"}, {FactorColour::Shared, "shared"}};
+
+template <typename E, std::size_t N>
+const char* name_of(const Named<E> (&table)[N], E value) {
+    for (const Named<E>& n : table)
+        if (n.value == value) return n.name;
+    return "?";
+}
+
+template <typename E, std::size_t N>
+E parse(const Named<E> (&table)[N], const std::string& name, const char* what) {
+    std::string known;
+    for (const Named<E>& n : table) {
+        if (name == n.name) return n.value;
+        known += (known.empty() ? "" : ", ") + std::string(n.name);
+    }
+    throw ValueError(std::string("unknown factorisation ") + what + " '" + name + "' (expected " + known + ")");
+}
+
+// ---------------------------------------------------------------------------------------------
+// Transform spaces
+
+double to_space(FactorSpace s, double f) {
+    switch (s) {
+        case FactorSpace::Log: return std::log1p(f);
+        case FactorSpace::Cbrt: return std::cbrt(f);
+        default: return f;
+    }
+}
+
+// The value for a reconstruction y; y < 0 (possible for svd) gives 0 and is counted.
+inline double from_space(FactorSpace s, double y, std::uint64_t& clamped) {
+    clamped += y < 0.0;
+    const double p = y > 0.0 ? y : 0.0;  // NaN cannot occur: factors are finite
+    switch (s) {
+        case FactorSpace::Log: return std::expm1(p);
+        case FactorSpace::Cbrt: return p * p * p;
+        default: return p;
+    }
+}
+
+// ---------------------------------------------------------------------------------------------
+// Evaluation: interpolation corners in factor rows and columns
+
+// Row-major offsets (index · m) of the factor rows to blend, and their weights.
+template <int NR, int NC>
+struct FactorCorners {
+    std::size_t r[NR], c[NC];
+    double rw[NR], cw[NC];
+};
+using CornersHxDP = FactorCorners<2, 4>;
+using CornersHDxP = FactorCorners<4, 2>;
+
+// θh rows; (θd, φd) columns.
+inline CornersHxDP corners_hxdp(const GridSpec& g, const detail::Corners& k, std::size_t m) {
+    const std::size_t np = g.n_phi_d;
+    const double td = k.d.t, tp = k.p.t;
+    return {{k.h.i0 * m, k.h.i1 * m},
+            {(k.d.i0 * np + k.p.i0) * m, (k.d.i0 * np + k.p.i1) * m, (k.d.i1 * np + k.p.i0) * m,
+             (k.d.i1 * np + k.p.i1) * m},
+            {1.0 - k.h.t, k.h.t},
+            {(1.0 - td) * (1.0 - tp), (1.0 - td) * tp, td * (1.0 - tp), td * tp}};
+}
+
+// (θh, θd) rows; φd columns.
+inline CornersHDxP corners_hdxp(const GridSpec& g, const detail::Corners& k, std::size_t m) {
+    const std::size_t nd = g.n_theta_d;
+    const double th = k.h.t, td = k.d.t;
+    return {{(k.h.i0 * nd + k.d.i0) * m, (k.h.i0 * nd + k.d.i1) * m, (k.h.i1 * nd + k.d.i0) * m,
+             (k.h.i1 * nd + k.d.i1) * m},
+            {k.p.i0 * m, k.p.i1 * m},
+            {(1.0 - th) * (1.0 - td), (1.0 - th) * td, th * (1.0 - td), th * td},
+            {1.0 - k.p.t, k.p.t}};
+}
+
+// The transform-space values y_c = Σ_j s_cj · (Σ_r rw_r U[r][j]) · (Σ_c cw_c V[c][j]). Separate colour
+// sums each channel's own components (no multiplications by a one-hot mix); shared colour weights the
+// rank products by s_cj (`mix`).
+template <bool Shared, int NR, int NC>
+inline void blend(const Factors& f, const float* mix, const FactorCorners<NR, NC>& k, double y[3]) {
+    const int rank = f.rank, m = Shared ? rank : 3 * rank;
+    const float* u = f.u.data();
+    const float* v = f.v.data();
+    const auto product = [&](int j) {
+        double a = 0.0, b = 0.0;
+        for (int r = 0; r < NR; ++r) a += k.rw[r] * u[k.r[r] + j];
+        for (int c = 0; c < NC; ++c) b += k.cw[c] * v[k.c[c] + j];
+        return a * b;
+    };
+    if constexpr (Shared) {
+        y[0] = y[1] = y[2] = 0.0;
+        for (int j = 0; j < rank; ++j) {
+            const double p = product(j);
+            for (int c = 0; c < 3; ++c) y[c] += mix[c * m + j] * p;
+        }
+    } else {
+        for (int c = 0; c < 3; ++c) {
+            double sum = 0.0;
+            for (int j = c * rank; j < (c + 1) * rank; ++j) sum += product(j);
+            y[c] = sum;
+        }
+    }
+}
+
+template <FactorLayout L>
+using CornersOf = std::conditional_t<L == FactorLayout::HxDP, CornersHxDP, CornersHDxP>;
+
+template <FactorLayout L>
+inline CornersOf<L> factor_corners(const Factors& f, const detail::BinCoords& c, const Vec3& wi, const Vec3& wo) {
+    const detail::Corners k = detail::linear_corners(f.grid, c, wi, wo);
+    const std::size_t m = static_cast<std::size_t>(f.row_width());
+    if constexpr (L == FactorLayout::HxDP)
+        return corners_hxdp(f.grid, k, m);
+    else
+        return corners_hdxp(f.grid, k, m);
+}
+
+inline Rgb to_values(FactorSpace space, const double y[3], std::uint64_t& clamped) {
+    return {from_space(space, y[0], clamped), from_space(space, y[1], clamped), from_space(space, y[2], clamped)};
+}
+
+// Blocks of pairs in three passes, as the tabular kernel: (1) the coordinates, branch-free so the
+// compiler vectorises them; (2) the corners, prefetching the factor rows (large factors miss the
+// cache); (3) the blends.
+template <FactorLayout L, bool Shared>
+void eval_pairs(const Factors& f, const float* mix, const Vec3* wi, const Vec3* wo, Rgb* out, std::size_t n,
+                std::uint64_t& clamped) {
+    constexpr std::size_t kBlock = 64;
+    detail::BinCoords coords[kBlock];
+    CornersOf<L> corners[kBlock];
+    bool above[kBlock];
+    const float* u = f.u.data();
+    const float* v = f.v.data();
+    for (std::size_t start = 0; start < n; start += kBlock) {
+        const std::size_t m = std::min(kBlock, n - start);
+        const Vec3* a = wi + start;
+        const Vec3* b = wo + start;
+        for (std::size_t k = 0; k < m; ++k) coords[k] = detail::fast_bin_coords(f.grid, a[k], b[k]);
+        for (std::size_t k = 0; k < m; ++k) above[k] = (a[k].z > 0.0) & (b[k].z > 0.0);
+        for (std::size_t k = 0; k < m; ++k) {
+            if (!above[k]) continue;
+            const CornersOf<L>& c = corners[k] = factor_corners<L>(f, coords[k], a[k], b[k]);
+            for (std::size_t r : c.r) __builtin_prefetch(u + r);
+            for (std::size_t col : c.c) __builtin_prefetch(v + col);
+        }
+        for (std::size_t k = 0; k < m; ++k) {
+            if (!above[k]) {
+                out[start + k] = Rgb{};
+                continue;
+            }
+            double y[3];
+            blend<Shared>(f, mix, corners[k], y);
+            out[start + k] = to_values(f.space, y, clamped);
+        }
+    }
+}
+
+template <FactorLayout L, bool Shared>
+Rgb eval_one(const Factors& f, const float* mix, const Vec3& wi, const Vec3& wo, std::uint64_t& clamped) {
+    double y[3];
+    blend<Shared>(f, mix, factor_corners<L>(f, detail::fast_bin_coords(f.grid, wi, wo), wi, wo), y);
+    return to_values(f.space, y, clamped);
+}
+
+// ---------------------------------------------------------------------------------------------
+// Factorisation: alternating weighted least squares
+
+using Mat = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
+using Vec = Eigen::VectorXd;
+
+// min ½ uᵀAu − bᵀu subject to u ≥ 0, by coordinate descent from the given u (A positive definite).
+void nnls(const Eigen::MatrixXd& a, const Vec& b, Vec& u) {
+    const Eigen::Index k = u.size();
+    for (int sweep = 0; sweep < 20; ++sweep) {  // warm-started: a few sweeps per outer iteration suffice
+        double change = 0.0, scale = 0.0;
+        for (Eigen::Index i = 0; i < k; ++i) {
+            const double next = std::max(0.0, u[i] + (b[i] - a.row(i).dot(u)) / a(i, i));
+            change = std::max(change, std::fabs(next - u[i]));
+            u[i] = next;
+            scale = std::max(scale, next);
+        }
+        if (change <= 1e-9 * scale) break;
+    }
+}
+
+// What one side of an alternating step needs, row i of each matrix being row i of that side's factor
+// (the other side sees the transposes). Row-major, so a row is contiguous.
+struct Side {
+    Mat w;                // weights: 0 for invalid bins
+    std::vector<Mat> wx;  // per channel: w ∘ y
+    Vec xx;               // per row: Σ_c Σ_j w y², for the objective
+};
+
+// Normal equations of the colour weights s, accumulated while updating V (shared colour only).
+struct ColourSums {
+    Eigen::MatrixXd k;   // Σ_j (v_j v_jᵀ) ∘ G_j
+    std::vector<Vec> r;  // per channel: Σ_j v_j ∘ (Uᵀ (w_j ∘ y_cj))
+    double objective = 0.0;
+};
+
+constexpr int kChunks = 32;  // fixed work split, so results do not depend on the thread count
+
+// Updates every row of `out` given the other factor F: row i minimises
+//   Σ_c Σ_j w_ij (y_cij − Σ_a out_ia s_ca F_ja)²
+// (non-negatively for nmf) with a ridge of 1e-10 of the mean diagonal, which only matters for rows
+// whose valid bins do not determine all components. Its normal equations are G_i ∘ (Σ_c s_c s_cᵀ)
+// with G_i = Σ_j w_ij F_j F_jᵀ: for all rows at once, one product W·P with P_j = vec(F_j F_jᵀ), and
+// the right-hand sides (W ∘ Y_c)·F. Returns the objective after the update and the colour weights'
+// normal equations.
+ColourSums update_side(Mat& out, const Mat& other, const Side& side, const Mat& s, bool nonneg, int threads) {
+    const Eigen::Index n = out.rows(), k = out.cols(), m = other.rows();
+    const int channels = static_cast<int>(side.wx.size());
+    Eigen::MatrixXd s2 = Eigen::MatrixXd::Zero(k, k);
+    for (int c = 0; c < channels; ++c) s2 += s.row(c).transpose() * s.row(c);
+    Mat outer(m, k * k);
+    for (Eigen::Index j = 0; j < m; ++j)
+        for (Eigen::Index a = 0; a < k; ++a)
+            for (Eigen::Index b = 0; b < k; ++b) outer(j, a * k + b) = other(j, a) * other(j, b);
+
+    const int chunks = static_cast<int>(std::min<Eigen::Index>(n, kChunks));
+    std::vector<ColourSums> sums(chunks);
+    detail::parallel_for(chunks, threads, [&](int, int chunk) {
+        const Eigen::Index begin = n * chunk / chunks, len = n * (chunk + 1) / chunks - begin;
+        const Mat grams = side.w.middleRows(begin, len) * outer;
+        std::vector<Mat> rhs(channels);
+        for (int c = 0; c < channels; ++c) rhs[c] = side.wx[c].middleRows(begin, len) * other;
+        ColourSums& acc = sums[chunk];
+        acc.k = Eigen::MatrixXd::Zero(k, k);
+        acc.r.assign(channels, Vec::Zero(k));
+        Eigen::MatrixXd g(k, k), a(k, k), ridged(k, k);
+        Vec b(k), u(k);
+        Eigen::LDLT<Eigen::MatrixXd> ldlt(k);
+        for (Eigen::Index r = 0; r < len; ++r) {
+            g = Eigen::Map<const Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>>(
+                grams.row(r).data(), k, k);
+            b.setZero();
+            for (int c = 0; c < channels; ++c) b += s.row(c).transpose().cwiseProduct(rhs[c].row(r).transpose());
+            a = g.cwiseProduct(s2);
+            ridged = a;
+            ridged.diagonal().array() += 1e-10 * a.trace() / static_cast<double>(k) + 1e-300;
+            u = out.row(begin + r).transpose();
+            if (nonneg) {
+                nnls(ridged, b, u);
+            } else {
+                ldlt.compute(ridged);
+                u = ldlt.solve(b);
+            }
+            out.row(begin + r) = u.transpose();
+            acc.objective += std::max(0.0, side.xx[begin + r] - 2.0 * u.dot(b) + u.dot(a * u));
+            acc.k += (u * u.transpose()).cwiseProduct(g);
+            for (int c = 0; c < channels; ++c) acc.r[c] += u.cwiseProduct(rhs[c].row(r).transpose());
+        }
+    });
+    ColourSums total{Eigen::MatrixXd::Zero(k, k), std::vector<Vec>(channels, Vec::Zero(k)), 0.0};
+    for (const ColourSums& a : sums) {
+        total.k += a.k;
+        for (int c = 0; c < channels; ++c) total.r[c] += a.r[c];
+        total.objective += a.objective;
+    }
+    return total;
+}
+
+// A table's valid bins in one layout and transform space: the values y (rows × columns, 0 where
+// invalid) and the two Sides.
+struct Data {
+    std::vector<Mat> y;
+    Side rows, cols;
+    std::size_t valid = 0;
+};
+
+struct Solved {
+    Mat u, v, s;  // rows × k, columns × k, channels × k
+    int iterations = 0;
+    bool converged = false;
+    double objective = 0.0, norm = 0.0;  // Σ w (y − ŷ)², Σ w y²
+};
+
+// Column norms moved between U, V and s so that no factor's scale drifts (the product is unchanged):
+// with colour weights the norms go into s; without, U and V get equal norms.
+void balance(Solved& r, bool shared) {
+    for (Eigen::Index j = 0; j < r.u.cols(); ++j) {
+        const double nu = r.u.col(j).norm(), nv = r.v.col(j).norm();
+        if (!(nu > 0.0 && nv > 0.0)) continue;
+        if (shared) {
+            r.u.col(j) /= nu;
+            r.v.col(j) /= nv;
+            r.s.col(j) *= nu * nv;
+        } else {
+            const double g = std::sqrt(nu * nv);
+            r.u.col(j) *= g / nu;
+            r.v.col(j) *= g / nv;
+        }
+    }
+}
+
+// Rewrites U·Vᵀ as its SVD (U' = Q_u A √Σ, V' = Q_v B √Σ): orthogonal columns, so float32 storage
+// of the factors loses no more than float32 storage of the table would.
+void canonical_svd(Solved& r) {
+    const Eigen::Index k = r.u.cols();
+    const Eigen::HouseholderQR<Eigen::MatrixXd> qu(r.u), qv(r.v);
+    const Eigen::MatrixXd ru = qu.matrixQR().topRows(k).triangularView<Eigen::Upper>();
+    const Eigen::MatrixXd rv = qv.matrixQR().topRows(k).triangularView<Eigen::Upper>();
+    const Eigen::JacobiSVD<Eigen::MatrixXd> core(ru * rv.transpose(), Eigen::ComputeFullU | Eigen::ComputeFullV);
+    const Eigen::VectorXd root = core.singularValues().cwiseSqrt();
+    r.u = qu.householderQ() * Eigen::MatrixXd::Identity(r.u.rows(), k) * core.matrixU() * root.asDiagonal();
+    r.v = qv.householderQ() * Eigen::MatrixXd::Identity(r.v.rows(), k) * core.matrixV() * root.asDiagonal();
+}
+
+// NNDSVD (Boutsidis & Gallopoulos 2008): each SVD component u vᵀ replaced by the larger (by norm
+// product) of its positive part u₊v₊ᵀ and negated negative part u₋v₋ᵀ, a non-negative start close to
+// the truncated SVD. The leading component of a non-negative matrix is one-signed already.
+void nndsvd(Mat& u, Mat& v) {
+    for (Eigen::Index j = 0; j < u.cols(); ++j) {
+        const Vec up = u.col(j).cwiseMax(0.0), un = (-u.col(j)).cwiseMax(0.0);
+        const Vec vp = v.col(j).cwiseMax(0.0), vn = (-v.col(j)).cwiseMax(0.0);
+        const double mp = up.norm() * vp.norm(), mn = un.norm() * vn.norm();
+        // u.col(j) and v.col(j) carry √σ each: keep the product's scale, σ·m/(|u|·|v|).
+        const double scale = std::sqrt(u.col(j).norm() * v.col(j).norm());
+        const bool pos = mp >= mn;
+        const Vec& a = pos ? up : un;
+        const Vec& b = pos ? vp : vn;
+        const double m = pos ? mp : mn;
+        if (!(m > 0.0)) {
+            u.col(j).setZero();
+            v.col(j).setZero();
+            continue;
+        }
+        const double g = scale * std::sqrt(m / (u.col(j).norm() * v.col(j).norm()));
+        u.col(j) = g * a / a.norm();
+        v.col(j) = g * b / b.norm();
+    }
+}
+
+// One factorisation of `channels` matrices sharing U and V (colour weights s updated when there is
+// more than one channel). `step(i)` reports progress after iteration i.
+Solved solve(const Data& d, int k, bool nonneg, const FactorOptions& o, const std::function<void(int)>& step) {
+    const Side &rows = d.rows, &cols = d.cols;
+    const int channels = static_cast<int>(d.y.size());
+    const Eigen::Index nr = rows.w.rows(), nc = cols.w.rows();
+    Solved r;
+    r.norm = rows.xx.sum();
+
+    // Start: the rank-k SVD of the channels' mean, invalid entries filled with their row's weighted
+    // mean (zeros would pull every component towards them); nmf starts from its NNDSVD.
+    Mat mean = Mat::Zero(nr, nc);
+    for (int c = 0; c < channels; ++c) mean += d.y[c] / channels;
+    for (Eigen::Index i = 0; i < nr; ++i) {
+        const double wsum = rows.w.row(i).sum();
+        const double fill = wsum > 0.0 ? mean.row(i).dot(rows.w.row(i)) / wsum : 0.0;
+        for (Eigen::Index j = 0; j < nc; ++j)
+            if (!(rows.w(i, j) > 0.0)) mean(i, j) = fill;
+    }
+    const Eigen::BDCSVD<Eigen::MatrixXd> svd(mean, Eigen::ComputeThinU | Eigen::ComputeThinV);
+    const Vec root = svd.singularValues().head(k).cwiseSqrt();
+    r.u = svd.matrixU().leftCols(k) * root.asDiagonal();
+    r.v = svd.matrixV().leftCols(k) * root.asDiagonal();
+    if (nonneg) nndsvd(r.u, r.v);
+    r.s = Mat::Ones(channels, k);
+    if (channels > 1) {  // each channel's share of the mean
+        const double base = mean.cwiseProduct(rows.w).sum();
+        for (int c = 0; c < channels; ++c) {
+            const double ratio = base > 0.0 ? rows.wx[c].sum() / base : 1.0;
+            r.s.row(c).setConstant(ratio > 0.0 ? ratio : 1.0);
+        }
+    }
+
+    double previous = 0.0;
+    for (int it = 1; it <= o.max_iterations; ++it) {
+        update_side(r.u, r.v, rows, r.s, nonneg, o.threads);
+        const ColourSums sums = update_side(r.v, r.u, cols, r.s, nonneg, o.threads);
+        r.objective = sums.objective;
+        r.iterations = it;
+        if (channels > 1) {
+            Eigen::MatrixXd kk = sums.k;
+            kk.diagonal().array() += 1e-10 * sums.k.trace() / k + 1e-300;
+            for (int c = 0; c < channels; ++c) {
+                Vec s = r.s.row(c).transpose();
+                if (nonneg)
+                    nnls(kk, sums.r[c], s);
+                else
+                    s = kk.ldlt().solve(sums.r[c]);
+                r.s.row(c) = s.transpose();
+            }
+        }
+        balance(r, channels > 1);
+        if (!std::isfinite(r.objective) || !r.u.allFinite() || !r.v.allFinite() || !r.s.allFinite())
+            throw ValueError(std::string(factor_method_name(o.method)) +
+                             ": the factorisation diverged (non-finite values after " + std::to_string(it) +
+                             " iterations)");
+        step(it);
+        if (r.objective <= 1e-24 * r.norm || (it > 1 && previous - r.objective <= o.tolerance * previous)) {
+            r.converged = true;
+            break;
+        }
+        previous = r.objective;
+    }
+    if (!nonneg && channels == 1) canonical_svd(r);
+    return r;
+}
+
+Data prepare(const Table& table, const FactorOptions& o, int rows, int cols, const std::vector<int>& channels) {
+    const GridSpec& g = table.grid();
+    const int nch = static_cast<int>(channels.size());
+    Data d;
+    Mat w = Mat::Zero(rows, cols);
+    d.y.assign(nch, Mat::Zero(rows, cols));
+    for (std::size_t bin = 0; bin < table.bins(); ++bin) {
+        bool ok = true;
+        for (int c = 0; c < 3; ++c) {
+            const float f = table.at(bin, c);
+            ok = ok && std::isfinite(f) && f >= 0.0f;
+        }
+        if (!ok) continue;
+        double weight = 1.0;
+        if (o.space == FactorSpace::Cos) {
+            const int ip = static_cast<int>(bin % g.n_phi_d), id = static_cast<int>(bin / g.n_phi_d % g.n_theta_d),
+                      ih = static_cast<int>(bin / g.n_phi_d / g.n_theta_d);
+            const double cos_i = from_half_diff({g.theta_h_at(ih), 0.0, g.theta_d_at(id), g.phi_d_at(ip)}).first.z;
+            weight = cos_i > 0.0 ? cos_i * cos_i : 0.0;
+        }
+        if (!(weight > 0.0)) continue;
+        ++d.valid;
+        const Eigen::Index i = static_cast<Eigen::Index>(bin / cols), j = static_cast<Eigen::Index>(bin % cols);
+        w(i, j) = weight;
+        for (int c = 0; c < nch; ++c) d.y[c](i, j) = to_space(o.space, table.at(bin, channels[c]));
+    }
+    d.rows.xx = Vec::Zero(rows);
+    d.cols.xx = Vec::Zero(cols);
+    for (int c = 0; c < nch; ++c) {
+        const Mat wx = w.cwiseProduct(d.y[c]);
+        const Mat wxx = wx.cwiseProduct(d.y[c]);
+        d.rows.xx += wxx.rowwise().sum();
+        d.cols.xx += wxx.colwise().sum().transpose();
+        d.rows.wx.push_back(wx);
+        d.cols.wx.push_back(wx.transpose());
+    }
+    d.cols.w = w.transpose();
+    d.rows.w = std::move(w);
+    return d;
+}
+
+}  // namespace
+
+// ---------------------------------------------------------------------------------------------
+
+const char* factor_method_name(FactorMethod m) { return name_of(kMethods, m); }
+const char* factor_space_name(FactorSpace s) { return name_of(kSpaces, s); }
+const char* factor_layout_name(FactorLayout l) { return name_of(kLayouts, l); }
+const char* factor_colour_name(FactorColour c) { return name_of(kColours, c); }
+FactorMethod parse_factor_method(const std::string& name) { return parse(kMethods, name, "method"); }
+FactorSpace parse_factor_space(const std::string& name) { return parse(kSpaces, name, "space"); }
+FactorLayout parse_factor_layout(const std::string& name) { return parse(kLayouts, name, "layout"); }
+FactorColour parse_factor_colour(const std::string& name) { return parse(kColours, name, "colour"); }
+
+int Factors::rows() const {
+    return layout == FactorLayout::HxDP ? grid.n_theta_h : grid.n_theta_h * grid.n_theta_d;
+}
+int Factors::columns() const {
+    return layout == FactorLayout::HxDP ? grid.n_theta_d * grid.n_phi_d : grid.n_phi_d;
+}
+
+FactoredBrdf::FactoredBrdf(Factors factors) : f_(std::move(factors)) {
+    f_.grid.validate();
+    const std::size_t rows = static_cast<std::size_t>(f_.rows()), cols = static_cast<std::size_t>(f_.columns());
+    if (f_.rank < 1 || static_cast<std::size_t>(f_.rank) > std::min(rows, cols))
+        throw ValueError("factored: rank " + std::to_string(f_.rank) + " outside 1.." +
+                         std::to_string(std::min(rows, cols)) + " for grid " + f_.grid.str() + " in layout " +
+                         factor_layout_name(f_.layout));
+    const std::size_t m = static_cast<std::size_t>(f_.row_width());
+    const std::size_t colours = f_.colour == FactorColour::Shared ? 3 * static_cast<std::size_t>(f_.rank) : 0;
+    if (f_.u.size() != rows * m || f_.v.size() != cols * m || f_.colour_weights.size() != colours)
+        throw ValueError("factored: factor sizes " + std::to_string(f_.u.size()) + ", " + std::to_string(f_.v.size()) +
+                         ", " + std::to_string(f_.colour_weights.size()) + " do not match " +
+                         std::to_string(rows * m) + ", " + std::to_string(cols * m) + ", " + std::to_string(colours));
+    for (const std::vector<float>* values : {&f_.u, &f_.v, &f_.colour_weights})
+        for (float x : *values)
+            if (!std::isfinite(x)) throw ValueError("factored: a factor entry is not finite");
+    mix_.assign(3 * m, 0.0f);
+    for (int c = 0; c < 3; ++c)
+        for (int j = 0; j < f_.rank; ++j) {
+            if (f_.colour == FactorColour::Shared)
+                mix_[c * m + j] = f_.colour_weights[c * f_.rank + j];
+            else
+                mix_[c * m + c * f_.rank + j] = 1.0f;
+        }
+}
+
+std::size_t FactoredBrdf::nbytes() const {
+    return (f_.u.size() + f_.v.size() + f_.colour_weights.size()) * sizeof(float);
+}
+
+std::string FactoredBrdf::describe() const {
+    return std::string(factor_method_name(f_.method)) + " rank " + std::to_string(f_.rank) + ", " +
+           factor_space_name(f_.space) + " space, layout " + factor_layout_name(f_.layout) + ", " +
+           factor_colour_name(f_.colour) + " colour, on " + f_.grid.str() + " (bin " +
+           (f_.grid.position == BinPosition::Start ? "start" : "centre") + "), float32 factors";
+}
+
+Table FactoredBrdf::reconstruct(std::size_t* clamped) const {
+    Table t(f_.grid, Table::Uninitialized{});
+    const std::size_t cols = static_cast<std::size_t>(f_.columns()), m = static_cast<std::size_t>(f_.row_width());
+    std::uint64_t count = 0;
+    for (std::size_t bin = 0; bin < t.bins(); ++bin) {
+        const float* u = f_.u.data() + bin / cols * m;
+        const float* v = f_.v.data() + bin % cols * m;
+        double y[3] = {0.0, 0.0, 0.0};
+        for (std::size_t j = 0; j < m; ++j) {
+            const double p = static_cast<double>(u[j]) * v[j];
+            for (int c = 0; c < 3; ++c) y[c] += mix_[c * m + j] * p;
+        }
+        t.set(bin, {from_space(f_.space, y[0], count), from_space(f_.space, y[1], count),
+                    from_space(f_.space, y[2], count)});
+    }
+    if (clamped) *clamped = count;
+    return t;
+}
+
+Rgb FactoredBrdf::eval_above(const Vec3& wi, const Vec3& wo) const {
+    std::uint64_t clamped = 0;
+    const bool shared = f_.colour == FactorColour::Shared;
+    const Rgb f = f_.layout == FactorLayout::HxDP
+                      ? (shared ? eval_one<FactorLayout::HxDP, true>(f_, mix_.data(), wi, wo, clamped)
+                                : eval_one<FactorLayout::HxDP, false>(f_, mix_.data(), wi, wo, clamped))
+                      : (shared ? eval_one<FactorLayout::HDxP, true>(f_, mix_.data(), wi, wo, clamped)
+                                : eval_one<FactorLayout::HDxP, false>(f_, mix_.data(), wi, wo, clamped));
+    if (clamped) clamped_.fetch_add(clamped, std::memory_order_relaxed);
+    return f;
+}
+
+void FactoredBrdf::eval_batch(const Vec3* wi, const Vec3* wo, Rgb* out, std::size_t n) const {
+    std::uint64_t clamped = 0;
+    const bool shared = f_.colour == FactorColour::Shared;
+    if (f_.layout == FactorLayout::HxDP) {
+        if (shared)
+            eval_pairs<FactorLayout::HxDP, true>(f_, mix_.data(), wi, wo, out, n, clamped);
+        else
+            eval_pairs<FactorLayout::HxDP, false>(f_, mix_.data(), wi, wo, out, n, clamped);
+    } else {
+        if (shared)
+            eval_pairs<FactorLayout::HDxP, true>(f_, mix_.data(), wi, wo, out, n, clamped);
+        else
+            eval_pairs<FactorLayout::HDxP, false>(f_, mix_.data(), wi, wo, out, n, clamped);
+    }
+    if (clamped) clamped_.fetch_add(clamped, std::memory_order_relaxed);
+}
+
+const HalfVectorSampler& FactoredBrdf::sampler() const {
+    return sampler_.get([this] { return std::make_unique<HalfVectorSampler>(*this); });
+}
+
+BrdfSample FactoredBrdf::sample_above(const Vec3& wo, double u1, double u2) const {
+    return sampler().sample(wo, u1, u2);
+}
+
+double FactoredBrdf::pdf_above(const Vec3& wo, const Vec3& wi) const { return sampler().pdf(wo, wi); }
+
+Factored factor(const Table& table, const FactorOptions& o) {
+    const char* method = factor_method_name(o.method);
+    Factors f;
+    f.grid = table.grid();
+    f.method = o.method;
+    f.space = o.space;
+    f.layout = o.layout;
+    f.colour = o.colour;
+    f.rank = o.rank;
+    const int rows = f.rows(), cols = f.columns();
+    if (o.rank < 1 || o.rank > std::min(rows, cols))
+        throw ValueError(std::string(method) + ": rank " + std::to_string(o.rank) + " outside 1.." +
+                         std::to_string(std::min(rows, cols)) + " for grid " + f.grid.str() + " in layout " +
+                         factor_layout_name(o.layout));
+    if (o.max_iterations < 1) throw ValueError(std::string(method) + ": the iteration cap must be at least 1");
+    const bool nonneg = o.method == FactorMethod::Nmf;
+    const bool shared = o.colour == FactorColour::Shared;
+    const int k = o.rank, m = f.row_width();
+    const int solves = shared ? 1 : 3;
+    const auto step = [&](int solve_index) {
+        return [&, solve_index](int it) {
+            if (o.progress) o.progress(std::min(1.0, (solve_index + static_cast<double>(it) / o.max_iterations) / solves));
+        };
+    };
+
+    FactorReport report;
+    double objective = 0.0, norm = 0.0;
+    f.u.assign(static_cast<std::size_t>(rows) * m, 0.0f);
+    f.v.assign(static_cast<std::size_t>(cols) * m, 0.0f);
+    report.converged = true;
+    for (int solve_index = 0; solve_index < solves; ++solve_index) {
+        const std::vector<int> channels = shared ? std::vector<int>{0, 1, 2} : std::vector<int>{solve_index};
+        const Data d = prepare(table, o, rows, cols, channels);
+        if (d.valid == 0) throw ValueError(std::string(method) + ": the table has no valid bins to factor");
+        const Solved r = solve(d, k, nonneg, o, step(solve_index));
+        report.valid_bins = d.valid;
+        report.iterations = std::max(report.iterations, r.iterations);
+        report.converged = report.converged && r.converged;
+        objective += r.objective;
+        norm += r.norm;
+        const int offset = shared ? 0 : solve_index * k;  // separate: channel c's components at c·rank
+        for (int i = 0; i < rows; ++i)
+            for (int j = 0; j < k; ++j) f.u[static_cast<std::size_t>(i) * m + offset + j] = static_cast<float>(r.u(i, j));
+        for (int i = 0; i < cols; ++i)
+            for (int j = 0; j < k; ++j) f.v[static_cast<std::size_t>(i) * m + offset + j] = static_cast<float>(r.v(i, j));
+        if (shared)
+            for (int c = 0; c < 3; ++c)
+                for (int j = 0; j < k; ++j) f.colour_weights.push_back(static_cast<float>(r.s(c, j)));
+    }
+    report.residual = norm > 0.0 ? std::sqrt(objective / norm) : 0.0;
+    Factored out{std::make_unique<FactoredBrdf>(std::move(f)), report};
+    out.brdf->reconstruct(&out.report.clamped);
+    return out;
+}
+
+}  // namespace brdfz
