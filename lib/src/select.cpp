@@ -47,9 +47,19 @@ std::vector<std::string> benchmark_specs() {
 }
 
 std::vector<std::string> default_candidates() {
+    // In order of bytes for three channels (the comments), so the first within budget is the smallest.
     return {
-        "analytic:lambert+ggx",     "analytic:lambert+ggx+ggx", "tabular:res=16x16x32",
-        "tabular:res=32x32x64",     "tabular:res=45x45x90",     "tabular:res=90x90x180",
+        "analytic:lambert+ggx",                             // 64
+        "analytic:lambert+ggx+ggx",                         // 104
+        "bivariate:res=32x32,dtype=u8log",                  // 3,144
+        "svd:rank=4,space=cos,res=32x16x16",                // 13,824
+        "svd:rank=6,space=cos,colour=shared,res=90x32x16",  // 14,520
+        "tabular:res=16x16x32,dtype=u8log",                 // 24,648
+        "tabular:res=32x32x64,dtype=u8log",                 // 196,680
+        "tabular:res=45x45x90,dtype=u8log",                 // 546,822
+        "tabular:res=45x45x90,dtype=f16",                   // 1,093,572
+        "tabular:res=90x90x180,dtype=u8log",                // 4,374,072
+        "tabular:res=90x90x180",                            // 17,496,000
     };
 }
 

@@ -138,3 +138,18 @@ TEST_CASE("a scene that looks near the normal needs a smaller model than grazing
     CHECK(near_normal.best()->trial.spec == "tabular:res=16x16x32");
     CHECK(wide.best()->trial.spec == "tabular:res=90x90x180");
 }
+
+TEST_CASE("the default candidates are in order of size, so the first within budget is the smallest", "[select]") {
+    // Sizes do not depend on the data: a cheap source gives them, and a model string its parameter count.
+    const AnalyticBrdf source = lambert(0.5);
+    CompressOptions quick;
+    std::size_t previous = 0;
+    for (const std::string& spec : default_candidates()) {
+        const ReprSpec parsed = ReprSpec::parse(spec);
+        const std::size_t bytes = parsed.kind() == "analytic" ? Model::parse(parsed.positional()).size() * sizeof(double)
+                                                              : compress(source, spec, quick).brdf->nbytes();
+        INFO(spec << ": " << bytes << " bytes");
+        CHECK(bytes > previous);
+        previous = bytes;
+    }
+}
