@@ -11,6 +11,7 @@
 #include <string>
 #include <vector>
 
+#include "brdfz/frame.h"
 #include "brdfz/table.h"
 
 namespace bench {
@@ -52,6 +53,14 @@ inline Args parse_args(int argc, char** argv, int default_reps) {
         std::exit(2);
     }
     return args;
+}
+
+// Uniform in solid angle on the upper hemisphere: cosθ is uniform on [0, 1).
+inline brdfz::Vec3 uniform_hemisphere(double u1, double u2) {
+    const double z = u1;
+    const double r = std::sqrt(std::fmax(0.0, 1.0 - z * z));
+    const double phi = 2.0 * std::numbers::pi * u2;
+    return {r * std::cos(phi), r * std::sin(phi), z};
 }
 
 // "[--out FILE.csv] [--spec SPEC]... [FILE...]", the command line of the sweeps over representations

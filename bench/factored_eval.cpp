@@ -26,12 +26,6 @@ namespace {
 
 constexpr std::size_t kPairs = std::size_t{1} << 20;
 
-brdfz::Vec3 uniform_hemisphere(double u1, double u2) {
-    const double z = u1;
-    const double r = std::sqrt(std::fmax(0.0, 1.0 - z * z));
-    const double phi = 2.0 * std::numbers::pi * u2;
-    return {r * std::cos(phi), r * std::sin(phi), z};
-}
 
 double sum_of(std::span<const brdfz::Rgb> out) {
     double s = 0.0;
@@ -84,8 +78,8 @@ int main(int argc, char** argv) try {
     std::mt19937_64 rng(20261122);
     std::uniform_real_distribution<double> u01(0.0, 1.0);
     for (std::size_t k = 0; k < kPairs; ++k) {
-        wi[k] = uniform_hemisphere(u01(rng), u01(rng));
-        wo[k] = uniform_hemisphere(u01(rng), u01(rng));
+        wi[k] = bench::uniform_hemisphere(u01(rng), u01(rng));
+        wo[k] = bench::uniform_hemisphere(u01(rng), u01(rng));
     }
     std::vector<brdfz::Rgb> out(kPairs);
     const auto run = [&](const Case& c) {
