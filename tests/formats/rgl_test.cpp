@@ -435,7 +435,7 @@ TEST_CASE("rgl sampler: constant warps give the Jacobian alone, in Mitsuba's var
 }
 
 TEST_CASE("rgl sampler on the shared RGL-EPFL files: chi-square, normalisation, round trip, albedo",
-          "[rgl][sample]") {
+          "[rgl][sample][heavy]") {
     const auto files = shared_rgl_files();
     if (files.empty()) {
         WARN("skipped: ../shared/data/rgl missing");

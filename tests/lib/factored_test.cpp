@@ -106,7 +106,7 @@ TEST_CASE("factored: full-rank svd of a masked table reproduces every valid bin"
     CHECK(relative_error(f.brdf->reconstruct(), t) < 1e-5);
 }
 
-TEST_CASE("factored: error falls monotonically with rank", "[factored]") {
+TEST_CASE("factored: error falls monotonically with rank", "[factored][heavy]") {
     const Table t = coated({24, 24, 48});
     for (FactorMethod method : {FactorMethod::Svd, FactorMethod::Nmf})
         for (FactorSpace space : {FactorSpace::Log, FactorSpace::Cos}) {
@@ -366,7 +366,7 @@ const double kThetaODeg[] = {0, 30, 60, 80, 87};
 
 }  // namespace
 
-TEST_CASE("factored sampler: chi-square, normalisation, round trip", "[factored][sample]") {
+TEST_CASE("factored sampler: chi-square, normalisation, round trip", "[factored][sample][heavy]") {
     const Table t = coated({45, 45, 90}, 0.08);
     for (FactorMethod method : {FactorMethod::Svd, FactorMethod::Nmf}) {
         const Factored f = factor(t, options(method, 3, FactorSpace::Log));
@@ -407,7 +407,7 @@ TEST_CASE("factored sampler: 10^7 random (wo, u) give finite, non-negative pdfs 
     CHECK(failed < 10000000 / 50);
 }
 
-TEST_CASE("factored: real MERL tables", "[factored][data]") {
+TEST_CASE("factored: real MERL tables", "[factored][data][heavy]") {
     const auto files = test::merl_tables();
     if (files.empty()) {
         WARN("skipped: no MERL tables (../shared missing, or numpy unavailable to generate them)");

@@ -254,7 +254,7 @@ TEST_CASE("fits that cannot succeed say so, in bounded time", "[fit][failure]") 
     CHECK(std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count() < 60.0);
 }
 
-TEST_CASE("fits on real measured data", "[fit][real]") {
+TEST_CASE("fits on real measured data", "[fit][real][heavy]") {
     const auto merl = test::merl_tables();
     if (merl.empty()) WARN("skipped MERL fits: BRDFZ_MERL_DIR has no tables");
     for (const auto& path : merl) {

@@ -86,7 +86,7 @@ TEST_CASE("every lobe family has a tested sampler", "[sample][analytic]") {
     }
 }
 
-TEST_CASE("analytic samplers: chi-square, normalisation, round trip at 0/30/60/80/87 deg", "[sample][analytic][chi2]") {
+TEST_CASE("analytic samplers: chi-square, normalisation, round trip at 0/30/60/80/87 deg", "[sample][analytic][chi2][heavy]") {
     // Bonferroni over every case and angle: a 1% chance in all that any check fails by chance.
     const double p_min = 0.01 / (cases().size() * std::size(test::kThetaODeg));
     for (const Case& c : cases()) {
