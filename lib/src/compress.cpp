@@ -1,6 +1,8 @@
 #include "brdfz/compress.h"
 
 #include <chrono>
+#include <cstdio>
+#include <numbers>
 #include <optional>
 
 #include "brdfz/errors.h"
@@ -17,6 +19,18 @@ namespace {
 
 using Builder = Compressed (*)(const Brdf& source, const ReprSpec& spec, const CompressOptions& options);
 
+// What tabulating `source` left out or changed, for Compressed::notes.
+void note_tabulation(const Brdf& source, const Tabulated& t, Compressed& out) {
+    if (t.counts.clamped > 0)
+        out.notes.push_back(std::to_string(t.counts.clamped) + " negative values clamped to 0 when tabulating");
+    if (t.extrapolated > 0) {
+        char deg[32];
+        std::snprintf(deg, sizeof deg, "%.2f", source.measured_theta_max() * 180.0 / std::numbers::pi);
+        out.notes.push_back(std::to_string(t.extrapolated) + " samples beyond the measured elevation (" + deg +
+                            " deg) taken at it");
+    }
+}
+
 // Tabulates `source` on `grid` (box-filtered by `supersample`) and keeps the table in `dtype`.
 Compressed build_table(const Brdf& source, const GridSpec& grid, std::array<int, 3> supersample, TableDtype dtype,
                        Lookup lookup, const CompressOptions& options) {
@@ -28,8 +42,7 @@ Compressed build_table(const Brdf& source, const GridSpec& grid, std::array<int,
     tab.progress = options.progress;
     Tabulated t = tabulate(source, tab);
     Compressed out;
-    if (t.counts.clamped > 0)
-        out.notes.push_back(std::to_string(t.counts.clamped) + " negative values clamped to 0");
+    note_tabulation(source, t, out);
     if (dtype == TableDtype::F32)
         out.brdf = std::make_unique<TabularBrdf>(std::move(t.table), lookup);
     else
@@ -116,8 +129,7 @@ Compressed build_pca(const Brdf& source, const ReprSpec& spec, const CompressOpt
         tab.threads = options.threads;
         tab.progress = options.progress;
         tabulated = tabulate(source, tab);
-        if (tabulated->counts.clamped > 0)
-            out.notes.push_back(std::to_string(tabulated->counts.clamped) + " negative values clamped to 0 when tabulating");
+        note_tabulation(source, *tabulated, out);
     }
     const Table& values = tabulated ? tabulated->table : table->table();
     auto pca = std::make_unique<PcaBrdf>(basis, basis->project(values, k), lookup,
@@ -152,8 +164,7 @@ Compressed build_factored(FactorMethod method, const Brdf& source, const ReprSpe
         tab.grid.validate();
         tab.threads = options.threads;
         Tabulated t = tabulate(source, tab);
-        if (t.counts.clamped > 0)
-            out.notes.push_back(std::to_string(t.counts.clamped) + " negative values clamped to 0 when tabulating");
+        note_tabulation(source, t, out);
         factored = factor(t.table, fo);
     } else {
         factored = factor(tabular->table(), fo);

@@ -16,14 +16,32 @@ Tabulated tabulate_points(const Brdf& brdf, const TabulateOptions& options) {
     Tabulated result{Table(g), {}};
     const int workers = detail::resolve_threads(options.threads);
     std::vector<ValidityCounts> counts(workers);
+    std::vector<std::size_t> extrapolated(workers, 0);
     std::vector<std::vector<Rgb>> scratch(workers);
+    std::vector<std::vector<Vec3>> clamped_wi(workers), clamped_wo(workers);
+    const double theta_max = brdf.measured_theta_max();
+    const bool limited = theta_max < std::numbers::pi / 2;
 
     detail::sweep_slices(
         g, workers,
         [&](int worker, int ih, std::span<const Vec3> wi, std::span<const Vec3> wo) {
             std::vector<Rgb>& f = scratch[worker];
             f.resize(wi.size());
-            brdf.eval(wi, wo, f);
+            if (limited) {
+                std::vector<Vec3>& ci = clamped_wi[worker];
+                std::vector<Vec3>& co = clamped_wo[worker];
+                ci.resize(wi.size());
+                co.resize(wi.size());
+                for (std::size_t k = 0; k < wi.size(); ++k) {
+                    const bool beyond_i = elevation(wi[k]) > theta_max, beyond_o = elevation(wo[k]) > theta_max;
+                    ci[k] = beyond_i ? spherical_direction(theta_max, std::atan2(wi[k].y, wi[k].x)) : wi[k];
+                    co[k] = beyond_o ? spherical_direction(theta_max, std::atan2(wo[k].y, wo[k].x)) : wo[k];
+                    extrapolated[worker] += wi[k].z > 0.0 && wo[k].z > 0.0 && (beyond_i || beyond_o);
+                }
+                brdf.eval(ci, co, f);
+            } else {
+                brdf.eval(wi, wo, f);
+            }
             ValidityCounts& n = counts[worker];
             const std::size_t base = g.index(ih, 0, 0);
             for (std::size_t k = 0; k < wi.size(); ++k) {
@@ -62,6 +80,7 @@ Tabulated tabulate_points(const Brdf& brdf, const TabulateOptions& options) {
         })
                          : nullptr);
 
+    for (std::size_t n : extrapolated) result.extrapolated += n;
     for (const ValidityCounts& n : counts) {
         result.counts.valid += n.valid;
         result.counts.negative += n.negative;
@@ -86,7 +105,7 @@ Tabulated tabulate_boxes(const Brdf& brdf, const TabulateOptions& options) {
     const Table& f = fine.table;
     const GridSpec& fg = f.grid();
     const double min_cos = std::cos(options.box_max_theta_deg * std::numbers::pi / 180.0);
-    Tabulated result{Table(g), fine.counts};
+    Tabulated result{Table(g), fine.counts, fine.extrapolated};
     result.counts.valid = 0;
     for (int ih = 0; ih < g.n_theta_h; ++ih)
         for (int id = 0; id < g.n_theta_d; ++id)

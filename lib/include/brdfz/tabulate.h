@@ -1,5 +1,8 @@
 // The virtual gonioreflectometer: evaluate any Brdf at the sample positions of a Rusinkiewicz grid.
 // Bins whose wi or wo falls below the horizon are marked invalid (MERL leaves them unmeasured too).
+// Where wi or wo lies beyond the source's measured_theta_max() (brdf.h), a bin takes the source's value
+// at their elevations clamped to it, azimuths kept: constant extrapolation, continuous at the edge of
+// the data, where the source's own extrapolation can be orders of magnitude off (RGL files).
 // Sources are taken as isotropic: bins are evaluated at φh = 0.
 #pragma once
 
@@ -39,6 +42,10 @@ struct TabulateOptions {
 struct Tabulated {
     Table table;
     ValidityCounts counts;
+    // Bins (points, when supersampled) above the horizon whose wi or wo lies beyond
+    // brdf.measured_theta_max(), hence evaluated at clamped elevations (not in counts, whose classes
+    // the container stores).
+    std::size_t extrapolated = 0;
 };
 
 Tabulated tabulate(const Brdf& brdf, const TabulateOptions& options = {});
