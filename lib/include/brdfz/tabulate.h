@@ -28,6 +28,13 @@ struct TabulateOptions {
     // θd and φd axes) instead of the value at its sample point; {1, 1, 1} point-samples. Needs bin
     // centres. One φd bin with c = 180 averages over φd: a bivariate (θh, θd) table.
     std::array<int, 3> supersample{1, 1, 1};
+    // What a supersampled bin's value is made of its points: their mean (Box), or the values whose
+    // linear lookup (TabularBrdf, Lookup::Linear) fits all the points best in the metrics' weighting,
+    // least squares of f·cosθi (LeastSquares): interpolation then errs less between samples than with
+    // point or box samples, which matters on coarse grids. LeastSquares leaves bins below the horizon
+    // or beyond the measured range invalid as point sampling does, clamps negative results to 0 (counted
+    // in `clamped`), and takes at most 2^21 points (ValueError beyond).
+    enum class Filter { Box, LeastSquares } filter = Filter::Box;
     // Box filter: points with θi or θo above this angle are left out of a bin's mean unless the bin has
     // no other valid point. Grazing values are the least reliable (extrapolated in RGL files) and can be
     // orders of magnitude larger than the rest (10^5 against 0.3 in RGL's paper_white), so they would
