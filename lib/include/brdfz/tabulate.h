@@ -31,9 +31,9 @@ struct TabulateOptions {
     // What a supersampled bin's value is made of its points: their mean (Box), or the values whose
     // linear lookup (TabularBrdf, Lookup::Linear) fits all the points best in the metrics' weighting,
     // least squares of f·cosθi (LeastSquares): interpolation then errs less between samples than with
-    // point or box samples, which matters on coarse grids. LeastSquares leaves bins below the horizon
-    // or beyond the measured range invalid as point sampling does, clamps negative results to 0 (counted
-    // in `clamped`), and takes at most 2^21 points (ValueError beyond).
+    // point or box samples, which matters on coarse grids. LeastSquares keeps point sampling's valid
+    // bins (below the horizon: invalid), clamps negative results to 0 (counted in `clamped`), and takes
+    // at most 2^21 points (ValueError beyond).
     enum class Filter { Box, LeastSquares } filter = Filter::Box;
     // Box filter: points with θi or θo above this angle are left out of a bin's mean unless the bin has
     // no other valid point. Grazing values are the least reliable (extrapolated in RGL files) and can be

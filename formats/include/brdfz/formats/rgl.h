@@ -29,8 +29,8 @@
 // the upper hemisphere to 1 minus their probability: 0.02-2.8% on those files.
 // Measured range: the files tabulate θi up to ~78-85° and pad the range to 90° with a copy of the
 // last measured slice's rgb table, so beyond that slice's θi eval extrapolates (Mitsuba alike), and
-// the factor D(m)/(4σ(wi))/cosθo lets such values reach 10^3-10^4 at grazing angles against < 10
-// inside. measured_theta_max() is that θi (the instrument's limit, taken for θo too, by reciprocity);
+// the factor D(m)/(4σ(wi))/cosθo lets such values reach 10^3-10^4 at grazing angles against at most a
+// few hundred inside. measured_theta_max() is that θi (the instrument's limit, taken for θo too, by reciprocity);
 // eval still returns Mitsuba's values beyond it, but tabulate() and compare() do not use them.
 // Like Mitsuba, nothing is clamped: real files hold slightly negative RGB values, and eval returns
 // slightly negative f_r where they dominate. Where the result would not be finite (a zero sigma,
