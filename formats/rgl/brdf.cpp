@@ -89,6 +89,10 @@ RglBrdf::RglBrdf(Tensors tensors) : tensors_(std::move(tensors)) {
     // Mitsuba would return NaN wherever such a value contributes; 0 keeps eval finite.
     for (float& v : t.rgb.values)
         if (!std::isfinite(v)) v = 0.0f;
+    // Nothing is measured at θi = 90° (no irradiance): a slice there pads the range for interpolation
+    // (in the RGL-EPFL files a copy of the last measured slice's rgb table, at 90° less a float ulp).
+    const bool padded = n_theta > 1 && t.theta_i.back() >= std::numbers::pi / 2 - 1e-6;
+    measured_theta_max_ = t.theta_i[n_theta - (padded ? 2 : 1)];
     vndf_ = std::make_unique<const detail::Marginal2D>("rgl: vndf", t.vndf.values, t.vndf.slices, t.vndf.rows,
                                                        t.vndf.cols);
 }

@@ -1,6 +1,8 @@
 #include "brdfz/compress.h"
 
 #include <chrono>
+#include <cstdio>
+#include <numbers>
 #include <optional>
 
 #include "brdfz/errors.h"
@@ -17,19 +19,31 @@ namespace {
 
 using Builder = Compressed (*)(const Brdf& source, const ReprSpec& spec, const CompressOptions& options);
 
+// What tabulating `source` left out or changed, for Compressed::notes.
+void note_tabulation(const Brdf& source, const Tabulated& t, Compressed& out) {
+    if (t.counts.clamped > 0)
+        out.notes.push_back(std::to_string(t.counts.clamped) + " negative values clamped to 0 when tabulating");
+    if (t.extrapolated > 0) {
+        char deg[32];
+        std::snprintf(deg, sizeof deg, "%.2f", source.measured_theta_max() * 180.0 / std::numbers::pi);
+        out.notes.push_back(std::to_string(t.extrapolated) + " samples beyond the measured elevation (" + deg +
+                            " deg) taken at it");
+    }
+}
+
 // Tabulates `source` on `grid` (box-filtered by `supersample`) and keeps the table in `dtype`.
-Compressed build_table(const Brdf& source, const GridSpec& grid, std::array<int, 3> supersample, TableDtype dtype,
-                       Lookup lookup, const CompressOptions& options) {
+Compressed build_table(const Brdf& source, const GridSpec& grid, std::array<int, 3> supersample,
+                       TabulateOptions::Filter filter, TableDtype dtype, Lookup lookup, const CompressOptions& options) {
     TabulateOptions tab;
     tab.grid = grid;
     tab.grid.validate();
     tab.supersample = supersample;
+    tab.filter = filter;
     tab.threads = options.threads;
     tab.progress = options.progress;
     Tabulated t = tabulate(source, tab);
     Compressed out;
-    if (t.counts.clamped > 0)
-        out.notes.push_back(std::to_string(t.counts.clamped) + " negative values clamped to 0");
+    note_tabulation(source, t, out);
     if (dtype == TableDtype::F32)
         out.brdf = std::make_unique<TabularBrdf>(std::move(t.table), lookup);
     else
@@ -49,16 +63,28 @@ Lookup lookup_option(const ReprSpec& spec) {
 // (bench/README.md, "Compact tables"): with linear lookup the box blurs what interpolation blurs again
 // (3x the error of point samples for 16x16x16 on RGL's paper_white), and for bivariate tables, whose
 // φd mean is a box anyway, ss=2 gained nothing on three of the four RGL materials at 4x the build time.
-int supersample_option(const ReprSpec& spec) { return spec.get_int("ss", 1, 1, 16); }
+//
+// filter=lsq: instead of the mean, the values whose linear lookup fits the ss³ points of each bin best
+// (tabulate.h), default ss=3.
+TabulateOptions::Filter filter_option(const ReprSpec& spec, Lookup lookup) {
+    const bool lsq = spec.get_choice("filter", "box", {"box", "lsq"}) == "lsq";
+    if (lsq && lookup != Lookup::Linear) throw ValueError("filter=lsq fits the linear lookup: it needs lookup=linear");
+    return lsq ? TabulateOptions::Filter::LeastSquares : TabulateOptions::Filter::Box;
+}
+
+int supersample_option(const ReprSpec& spec, TabulateOptions::Filter filter) {
+    return spec.get_int("ss", filter == TabulateOptions::Filter::LeastSquares ? 3 : 1, 1, 16);
+}
 
 Compressed build_tabular(const Brdf& source, const ReprSpec& spec, const CompressOptions& options) {
     const std::vector<int> res = spec.get_dims("res", {90, 90, 180});
     const TableDtype dtype = dtype_option(spec);
     const Lookup lookup = lookup_option(spec);
-    const int ss = supersample_option(spec);
+    const TabulateOptions::Filter filter = filter_option(spec, lookup);
+    const int ss = supersample_option(spec, filter);
     spec.finish();
-    return build_table(source, GridSpec{res[0], res[1], res[2], BinPosition::Centre}, {ss, ss, ss}, dtype, lookup,
-                       options);
+    return build_table(source, GridSpec{res[0], res[1], res[2], BinPosition::Centre}, {ss, ss, ss}, filter, dtype,
+                       lookup, options);
 }
 
 // Romeiro et al. 2008's bivariate table: θh × θd, the source averaged over phi=N values of φd.
@@ -66,10 +92,12 @@ Compressed build_bivariate(const Brdf& source, const ReprSpec& spec, const Compr
     const std::vector<int> res = spec.get_dims("res", {90, 90});
     const TableDtype dtype = dtype_option(spec);
     const Lookup lookup = lookup_option(spec);
-    const int ss = supersample_option(spec);
+    const TabulateOptions::Filter filter = filter_option(spec, lookup);
+    const int ss = supersample_option(spec, filter);
     const int phi = spec.get_int("phi", 180, 1, GridSpec::kMaxAxis);
     spec.finish();
-    return build_table(source, GridSpec{res[0], res[1], 1, BinPosition::Centre}, {ss, ss, phi}, dtype, lookup, options);
+    return build_table(source, GridSpec{res[0], res[1], 1, BinPosition::Centre}, {ss, ss, phi}, filter, dtype, lookup,
+                       options);
 }
 
 FitOptions analytic_options(const ReprSpec& spec, const CompressOptions& options) {
@@ -116,8 +144,7 @@ Compressed build_pca(const Brdf& source, const ReprSpec& spec, const CompressOpt
         tab.threads = options.threads;
         tab.progress = options.progress;
         tabulated = tabulate(source, tab);
-        if (tabulated->counts.clamped > 0)
-            out.notes.push_back(std::to_string(tabulated->counts.clamped) + " negative values clamped to 0 when tabulating");
+        note_tabulation(source, *tabulated, out);
     }
     const Table& values = tabulated ? tabulated->table : table->table();
     auto pca = std::make_unique<PcaBrdf>(basis, basis->project(values, k), lookup,
@@ -152,8 +179,7 @@ Compressed build_factored(FactorMethod method, const Brdf& source, const ReprSpe
         tab.grid.validate();
         tab.threads = options.threads;
         Tabulated t = tabulate(source, tab);
-        if (t.counts.clamped > 0)
-            out.notes.push_back(std::to_string(t.counts.clamped) + " negative values clamped to 0 when tabulating");
+        note_tabulation(source, t, out);
         factored = factor(t.table, fo);
     } else {
         factored = factor(tabular->table(), fo);

@@ -66,7 +66,10 @@ double min_cos_of(const MetricOptions& options) {
 }  // namespace
 
 Metrics compare(const Brdf& reference, const Brdf& approx, const MetricOptions& options) {
-    const double min_cos = min_cos_of(options);
+    // Extrapolated reference values (beyond its measured range) are no measure of error.
+    const double theta_max = reference.measured_theta_max();
+    const double min_cos = theta_max < std::numbers::pi / 2 ? std::max(min_cos_of(options), std::cos(theta_max))
+                                                            : min_cos_of(options);
     const auto* ref_table = dynamic_cast<const TabularBrdf*>(&reference);
     const GridSpec g = ref_table ? ref_table->table().grid() : options.grid;
     g.validate();

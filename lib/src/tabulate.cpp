@@ -4,8 +4,11 @@
 #include <numbers>
 #include <vector>
 
+#include <Eigen/Sparse>
+
 #include "brdfz/errors.h"
 #include "detail/grid_sweep.h"
+#include "detail/table_lookup.h"
 
 namespace brdfz {
 namespace {
@@ -16,14 +19,32 @@ Tabulated tabulate_points(const Brdf& brdf, const TabulateOptions& options) {
     Tabulated result{Table(g), {}};
     const int workers = detail::resolve_threads(options.threads);
     std::vector<ValidityCounts> counts(workers);
+    std::vector<std::size_t> extrapolated(workers, 0);
     std::vector<std::vector<Rgb>> scratch(workers);
+    std::vector<std::vector<Vec3>> clamped_wi(workers), clamped_wo(workers);
+    const double theta_max = brdf.measured_theta_max();
+    const bool limited = theta_max < std::numbers::pi / 2;
 
     detail::sweep_slices(
         g, workers,
         [&](int worker, int ih, std::span<const Vec3> wi, std::span<const Vec3> wo) {
             std::vector<Rgb>& f = scratch[worker];
             f.resize(wi.size());
-            brdf.eval(wi, wo, f);
+            if (limited) {
+                std::vector<Vec3>& ci = clamped_wi[worker];
+                std::vector<Vec3>& co = clamped_wo[worker];
+                ci.resize(wi.size());
+                co.resize(wi.size());
+                for (std::size_t k = 0; k < wi.size(); ++k) {
+                    const bool beyond_i = elevation(wi[k]) > theta_max, beyond_o = elevation(wo[k]) > theta_max;
+                    ci[k] = beyond_i ? spherical_direction(theta_max, std::atan2(wi[k].y, wi[k].x)) : wi[k];
+                    co[k] = beyond_o ? spherical_direction(theta_max, std::atan2(wo[k].y, wo[k].x)) : wo[k];
+                    extrapolated[worker] += wi[k].z > 0.0 && wo[k].z > 0.0 && (beyond_i || beyond_o);
+                }
+                brdf.eval(ci, co, f);
+            } else {
+                brdf.eval(wi, wo, f);
+            }
             ValidityCounts& n = counts[worker];
             const std::size_t base = g.index(ih, 0, 0);
             for (std::size_t k = 0; k < wi.size(); ++k) {
@@ -62,6 +83,7 @@ Tabulated tabulate_points(const Brdf& brdf, const TabulateOptions& options) {
         })
                          : nullptr);
 
+    for (std::size_t n : extrapolated) result.extrapolated += n;
     for (const ValidityCounts& n : counts) {
         result.counts.valid += n.valid;
         result.counts.negative += n.negative;
@@ -86,7 +108,7 @@ Tabulated tabulate_boxes(const Brdf& brdf, const TabulateOptions& options) {
     const Table& f = fine.table;
     const GridSpec& fg = f.grid();
     const double min_cos = std::cos(options.box_max_theta_deg * std::numbers::pi / 180.0);
-    Tabulated result{Table(g), fine.counts};
+    Tabulated result{Table(g), fine.counts, fine.extrapolated};
     result.counts.valid = 0;
     for (int ih = 0; ih < g.n_theta_h; ++ih)
         for (int id = 0; id < g.n_theta_d; ++id)
@@ -113,6 +135,84 @@ Tabulated tabulate_boxes(const Brdf& brdf, const TabulateOptions& options) {
     return result;
 }
 
+// Least squares over the points of the fine grid: minimise Σ cos²θi (f − lookup(x))² over the valid
+// points, lookup(x) being the linear lookup's weighted mean of x at the point's valid corners, by the
+// normal equations. A tiny pull towards the point samples x0 (1e-9 of the mean diagonal) keeps them
+// positive definite and leaves bins that no point reaches at their point sample.
+Tabulated tabulate_least_squares(const Brdf& brdf, const TabulateOptions& options) {
+    const GridSpec& g = options.grid;
+    const auto [sh, sd, sp] = options.supersample;
+    Tabulated result = tabulate_points(brdf, options);  // validity, counts and x0
+    TabulateOptions fine_options = options;
+    fine_options.grid = GridSpec{g.n_theta_h * sh, g.n_theta_d * sd, g.n_phi_d * sp, BinPosition::Centre};
+    fine_options.grid.validate();
+    const GridSpec& fg = fine_options.grid;
+    if (fg.bins() > (std::size_t{1} << 21))
+        throw ValueError("tabulate: least squares over " + std::to_string(fg.bins()) +
+                         " points (more than 2^21); lower the supersampling");
+    const Tabulated fine = tabulate_points(brdf, fine_options);
+
+    const Table& coarse = result.table;
+    std::vector<Eigen::Triplet<double>> entries;
+    std::vector<double> rhs[3];
+    int row = 0;
+    for (int jh = 0; jh < fg.n_theta_h; ++jh)
+        for (int jd = 0; jd < fg.n_theta_d; ++jd)
+            for (int jp = 0; jp < fg.n_phi_d; ++jp) {
+                const std::size_t bin = fg.index(jh, jd, jp);
+                if (!fine.table.valid(bin)) continue;
+                const auto [wi, wo] = from_half_diff({fg.theta_h_at(jh), 0.0, fg.theta_d_at(jd), fg.phi_d_at(jp)});
+                const detail::Corners k = detail::linear_corners(g, detail::fast_bin_coords(g, wi, wo), wi, wo);
+                double w[8];
+                std::size_t at[8];
+                double wsum = 0.0;
+                for (int c = 0; c < 8; ++c) {
+                    at[c] = g.index(c & 4 ? k.h.i1 : k.h.i0, c & 2 ? k.d.i1 : k.d.i0, c & 1 ? k.p.i1 : k.p.i0);
+                    w[c] = (c & 4 ? k.h.t : 1.0 - k.h.t) * (c & 2 ? k.d.t : 1.0 - k.d.t) * (c & 1 ? k.p.t : 1.0 - k.p.t);
+                    if (!coarse.valid(at[c])) w[c] = 0.0;  // the lookup skips invalid corners
+                    wsum += w[c];
+                }
+                if (!(wsum > 0.0)) continue;
+                const double cos_i = wi.z;
+                for (int c = 0; c < 8; ++c)
+                    if (w[c] > 0.0) entries.emplace_back(row, static_cast<int>(at[c]), cos_i * w[c] / wsum);
+                for (int ch = 0; ch < 3; ++ch) rhs[ch].push_back(cos_i * fine.table.at(bin, ch));
+                ++row;
+            }
+
+    const int n = static_cast<int>(g.bins());
+    Eigen::SparseMatrix<double> a(row, n);
+    a.setFromTriplets(entries.begin(), entries.end());  // repeated corners (bivariate's φd) are summed
+    Eigen::SparseMatrix<double> normal = a.transpose() * a;
+    const double lambda = 1e-9 * normal.diagonal().sum() / n;
+    for (int j = 0; j < n; ++j) normal.coeffRef(j, j) += lambda;
+    Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> solver(normal);
+    if (solver.info() != Eigen::Success) throw ValueError("tabulate: the least-squares system is singular");
+
+    Table& out = result.table;
+    std::vector<Rgb> x(static_cast<std::size_t>(n));
+    for (int ch = 0; ch < 3; ++ch) {
+        Eigen::VectorXd x0 = Eigen::VectorXd::Zero(n);
+        for (int j = 0; j < n; ++j)
+            if (out.valid(static_cast<std::size_t>(j))) x0[j] = out.at(static_cast<std::size_t>(j), ch);
+        const Eigen::VectorXd b = Eigen::Map<const Eigen::VectorXd>(rhs[ch].data(), row);
+        const Eigen::VectorXd solved = solver.solve(a.transpose() * b + lambda * x0);
+        for (int j = 0; j < n; ++j) x[static_cast<std::size_t>(j)][ch] = solved[j];
+    }
+    result.counts.clamped = 0;
+    for (std::size_t j = 0; j < x.size(); ++j) {
+        if (!out.valid(j)) continue;
+        bool clamped = false;
+        for (double& v : x[j]) {
+            clamped = clamped || v < 0.0;
+            v = std::fmax(v, 0.0);
+        }
+        result.counts.clamped += clamped;
+        out.set(j, x[j]);
+    }
+    return result;
+}
+
 }  // namespace
 
 Tabulated tabulate(const Brdf& brdf, const TabulateOptions& options) {
@@ -125,7 +225,8 @@ Tabulated tabulate(const Brdf& brdf, const TabulateOptions& options) {
         throw ValueError("tabulate: box_max_theta_deg must be in (0, 90]");
     if (options.grid.position != BinPosition::Centre)
         throw ValueError("tabulate: supersampling averages over whole bins, so it needs bin centres");
-    return tabulate_boxes(brdf, options);
+    return options.filter == TabulateOptions::Filter::LeastSquares ? tabulate_least_squares(brdf, options)
+                                                                    : tabulate_boxes(brdf, options);
 }
 
 }  // namespace brdfz

@@ -4,6 +4,7 @@
 
 #include "brdfz/albedo.h"
 #include "brdfz/coords.h"
+#include "brdfz/errors.h"
 #include "brdfz/metrics.h"
 #include "brdfz/repr/analytic/coated_diffuse.h"
 #include "brdfz/repr/tabular.h"
@@ -127,4 +128,43 @@ TEST_CASE("metrics: zero against itself, known values against a scaled copy", "[
     const Metrics between = compare(m, table);
     CHECK(between.cos_rmse_rel.mean > 1e-4);
     CHECK(between.cos_rmse_rel.mean < 0.05);
+}
+
+TEST_CASE("least-squares tabulation fits the linear lookup better than point or box samples", "[tabulate]") {
+    const CoatedDiffuse m;  // a glossy coat: under-resolved by a coarse grid
+    TabulateOptions o;
+    o.grid = GridSpec{12, 8, 8};
+    const Tabulated point = tabulate(m, o);
+    o.supersample = {3, 3, 3};
+    const Tabulated box = tabulate(m, o);
+    o.filter = TabulateOptions::Filter::LeastSquares;
+    const Tabulated lsq = tabulate(m, o);
+    // The same bins valid; values finite and >= 0.
+    CHECK(lsq.counts.valid == point.counts.valid);
+    for (std::size_t bin = 0; bin < lsq.table.bins(); ++bin) {
+        CHECK(lsq.table.valid(bin) == point.table.valid(bin));
+        for (int c = 0; c < 3; ++c)
+            if (lsq.table.valid(bin)) CHECK(lsq.table.at(bin, c) >= 0.0f);
+    }
+    // It minimises the cosine-weighted error at the points it was fitted to, so it is below point and
+    // box samples there, and (the point of it) between them: on the metric's own grid.
+    MetricOptions fitted;
+    fitted.grid = GridSpec{36, 24, 24, BinPosition::Centre};
+    const double e_lsq = compare(m, TabularBrdf(lsq.table), fitted).cos_rmse_rel.mean;
+    CHECK(e_lsq < compare(m, TabularBrdf(point.table), fitted).cos_rmse_rel.mean);
+    CHECK(e_lsq < compare(m, TabularBrdf(box.table), fitted).cos_rmse_rel.mean);
+    const double g_lsq = compare(m, TabularBrdf(lsq.table)).cos_rmse_rel.mean;
+    CHECK(g_lsq < compare(m, TabularBrdf(point.table)).cos_rmse_rel.mean);
+    CHECK(g_lsq < compare(m, TabularBrdf(box.table)).cos_rmse_rel.mean);
+
+    // A constant is reproduced exactly; negative results would be clamped and counted.
+    const Rgb rho{0.2, 0.5, 0.9};
+    const Tabulated flat = tabulate(lambert(rho), o);
+    CHECK(flat.counts.clamped == 0);
+    for (std::size_t bin = 0; bin < flat.table.bins(); ++bin)
+        if (flat.table.valid(bin))
+            for (int c = 0; c < 3; ++c) CHECK(flat.table.at(bin, c) == Approx(rho[c] / M_PI).epsilon(1e-6));
+
+    o.supersample = {64, 64, 64};
+    CHECK_THROWS_AS(tabulate(m, o), ValueError);
 }

@@ -198,8 +198,13 @@ def test_rgl_to_merl(cli, rgl_files, tmp_path):
     assert info["dims"] == [90, 90, 180] and info["valid"] > BINS // 2
     src_info = json.loads(run(cli, "info", src, "--json").stdout)
     assert src_info["format"] == "rgl"
-    # The tabulated table keeps the source's albedo.
+    # The tabulated table keeps the source's albedo where the source is measured: the file's data end at
+    # theta 79.76 deg, and beyond it the table holds the values at the clamped elevations (tabulate.h), not
+    # the evaluator's extrapolation, so the 80 deg entry is not comparable.
+    assert src.name == "cc_ibiza_sunset_rgb.bsdf"
     for a, b in zip(info["albedo"], src_info["albedo"]):
+        if a["theta_o_deg"] > 79.76:
+            continue
         for c in "rgb":
             assert a[c] == pytest.approx(b[c], rel=0.05, abs=2e-3)
 

@@ -17,6 +17,7 @@
 
 #include <array>
 #include <cstddef>
+#include <numbers>
 #include <span>
 #include <string>
 
@@ -64,6 +65,12 @@ public:
     virtual std::size_t nbytes() const = 0;
     // One line saying what this is, e.g. "tabular 90x90x180 float32 (linear lookup)".
     virtual std::string describe() const = 0;
+    // The largest elevation (radians) of wi and of wo up to which the values are data rather than
+    // extrapolation: tabulate() extrapolates beyond it by clamping the elevations and compare() does
+    // not count pairs beyond it, so the source's own extrapolation neither shapes a compressed
+    // representation nor judges it. π/2 (everywhere) unless the source knows better (RGL files pad
+    // their θi range: formats/rgl.h).
+    virtual double measured_theta_max() const { return std::numbers::pi / 2; }
 
 protected:
     // f_r for a pair already known to be above the horizon (wi.z > 0 and wo.z > 0).

@@ -2,11 +2,14 @@
 // point behind `brdfz compress`, Python's brdfz.compress and the budget-driven selection.
 //
 // Kinds (each documented with its options in its own header under repr/):
-//   tabular:res=AxBxC,dtype=f32|f16|u8log[,lookup=linear|nearest,ss=N]
+//   tabular:res=AxBxC,dtype=f32|f16|u8log[,lookup=linear|nearest,ss=N,filter=box|lsq]
 //                                           resampled Rusinkiewicz table (repr/tabular.h, compact_table.h),
-//                                           each bin the mean of N³ points (default 1: point samples)
-//   bivariate:res=AxB,dtype=...[,lookup=...,ss=N,phi=P]   (θh, θd) table, the source averaged over P
-//                                           φd values (default 180) and N² points per bin (default 1)
+//                                           each bin the mean of N³ points (default 1: point samples), or
+//                                           with filter=lsq the least-squares fit of the linear lookup to
+//                                           them (tabulate.h; default N = 3)
+//   bivariate:res=AxB,dtype=...[,lookup=...,ss=N,phi=P,filter=box|lsq]   (θh, θd) table, the source
+//                                           averaged over P φd values (default 180) and N² points per bin
+//                                           (default 1), or fitted to them (filter=lsq)
 //   analytic:MODEL[,loss=log|cos|cbrt,starts=N,seed=S]   a Ceres fit (fit/fit.h)
 //   pca:basis=FILE,k=K[,store=reference|embed,lookup=linear|nearest]   k coefficients of a shared
 //                                                   basis read from FILE (repr/pca.h)

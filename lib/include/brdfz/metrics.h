@@ -1,7 +1,8 @@
 // Error metrics between two BRDFs over the valid bins of a reference grid.
 //
 // Samples are the bins of the reference's own grid when it is a TabularBrdf (its invalid bins are
-// skipped), otherwise of MetricOptions::grid; bins with θi or θo >= max_theta_deg are left out.
+// skipped), otherwise of MetricOptions::grid; bins with θi or θo >= max_theta_deg, or beyond the
+// reference's measured_theta_max() (extrapolated, brdf.h), are left out.
 // Each bin counts once (the MERL literature's convention, e.g. Ngan et al. 2005, Löw et al. 2012).
 // With x = f_ref·cosθi and y = f_approx·cosθi per channel:
 //   cos_rmse     = sqrt(mean (x − y)²)

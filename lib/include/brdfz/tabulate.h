@@ -1,5 +1,8 @@
 // The virtual gonioreflectometer: evaluate any Brdf at the sample positions of a Rusinkiewicz grid.
 // Bins whose wi or wo falls below the horizon are marked invalid (MERL leaves them unmeasured too).
+// Where wi or wo lies beyond the source's measured_theta_max() (brdf.h), a bin takes the source's value
+// at their elevations clamped to it, azimuths kept: constant extrapolation, continuous at the edge of
+// the data, where the source's own extrapolation can be orders of magnitude off (RGL files).
 // Sources are taken as isotropic: bins are evaluated at φh = 0.
 #pragma once
 
@@ -25,6 +28,13 @@ struct TabulateOptions {
     // θd and φd axes) instead of the value at its sample point; {1, 1, 1} point-samples. Needs bin
     // centres. One φd bin with c = 180 averages over φd: a bivariate (θh, θd) table.
     std::array<int, 3> supersample{1, 1, 1};
+    // What a supersampled bin's value is made of its points: their mean (Box), or the values whose
+    // linear lookup (TabularBrdf, Lookup::Linear) fits all the points best in the metrics' weighting,
+    // least squares of f·cosθi (LeastSquares): interpolation then errs less between samples than with
+    // point or box samples, which matters on coarse grids. LeastSquares keeps point sampling's valid
+    // bins (below the horizon: invalid), clamps negative results to 0 (counted in `clamped`), and takes
+    // at most 2^21 points (ValueError beyond).
+    enum class Filter { Box, LeastSquares } filter = Filter::Box;
     // Box filter: points with θi or θo above this angle are left out of a bin's mean unless the bin has
     // no other valid point. Grazing values are the least reliable (extrapolated in RGL files) and can be
     // orders of magnitude larger than the rest (10^5 against 0.3 in RGL's paper_white), so they would
@@ -39,6 +49,10 @@ struct TabulateOptions {
 struct Tabulated {
     Table table;
     ValidityCounts counts;
+    // Bins (points, when supersampled) above the horizon whose wi or wo lies beyond
+    // brdf.measured_theta_max(), hence evaluated at clamped elevations (not in counts, whose classes
+    // the container stores).
+    std::size_t extrapolated = 0;
 };
 
 Tabulated tabulate(const Brdf& brdf, const TabulateOptions& options = {});

@@ -27,6 +27,11 @@
 // agree to Mitsuba's float32 precision (~1e-5, at worst ~1e-4 on the files tried).
 // Normals that reflect wo below the horizon give failed samples (pdf 0), so pdf integrates over
 // the upper hemisphere to 1 minus their probability: 0.02-2.8% on those files.
+// Measured range: the files tabulate θi up to ~78-85° and pad the range to 90° with a copy of the
+// last measured slice's rgb table, so beyond that slice's θi eval extrapolates (Mitsuba alike), and
+// the factor D(m)/(4σ(wi))/cosθo lets such values reach 10^3-10^4 at grazing angles against at most a
+// few hundred inside. measured_theta_max() is that θi (the instrument's limit, taken for θo too, by reciprocity);
+// eval still returns Mitsuba's values beyond it, but tabulate() and compare() do not use them.
 // Like Mitsuba, nothing is clamped: real files hold slightly negative RGB values, and eval returns
 // slightly negative f_r where they dominate. Where the result would not be finite (a zero sigma,
 // an empty VNDF row, f overflowing at wo.z → 0, a NaN or infinite direction), eval returns 0.
@@ -84,6 +89,9 @@ public:
     // warp tables are not counted.
     std::size_t nbytes() const override;
     std::string describe() const override;
+    // The largest θi of a slice below 90° (a slice at 90°, to float precision, pads the range: nothing
+    // is measured there); theta_i.back() when there is no such pad.
+    double measured_theta_max() const override { return measured_theta_max_; }
 
 protected:
     Rgb eval_above(const Vec3& wi, const Vec3& wo) const override;
@@ -97,6 +105,7 @@ private:
     Tensors tensors_;
     std::unique_ptr<const detail::Marginal2D> vndf_;
     std::unique_ptr<const detail::Marginal2D> luminance_;  // null without a luminance tensor
+    double measured_theta_max_;
 };
 
 struct ReadResult {
