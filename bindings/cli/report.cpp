@@ -188,7 +188,7 @@ void print_metrics(const Metrics& m, bool json, std::ostream& os) {
         os << buf;
     }
     os << "  over " << m.samples << " bins (theta_i, theta_o < cut-off)";
-    if (m.negatives) os << "; " << m.negatives << " negative values taken as 0 by log_rmse";
+    if (m.negatives) os << "; " << m.negatives << " negative values taken as 0";
     os << "\n";
 }
 

@@ -202,7 +202,7 @@ void bind_operations(py::module_& m) {
         .def_readonly("log_rmse", &Metrics::log_rmse)
         .def_readonly("cbrt_rmse", &Metrics::cbrt_rmse)
         .def_readonly("samples", &Metrics::samples, "bins (or measurements) compared")
-        .def_readonly("negatives", &Metrics::negatives, "channel values below 0 taken as 0 by log_rmse")
+        .def_readonly("negatives", &Metrics::negatives, "channel values below 0 (either BRDF), taken as 0 by every metric")
         .def("to_dict", [](const Metrics& x) {
             py::dict d;
             d["cos_rmse"] = per_channel_dict(x.cos_rmse);

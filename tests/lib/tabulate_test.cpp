@@ -120,6 +120,21 @@ TEST_CASE("metrics: zero against itself, known values against a scaled copy", "[
     CHECK(s.cbrt_rmse.mean > 0.0);
     CHECK(s.cos_rmse.mean == Approx((s.cos_rmse.r + s.cos_rmse.g + s.cos_rmse.b) / 3));
 
+    // Negative reference values (measurement noise) are taken as 0 and counted: the non-negative
+    // copy of a table with negatives matches it exactly.
+    Table noisy = t.table, clamped = t.table;
+    for (std::size_t bin = 0; bin < noisy.bins(); bin += 7) {
+        noisy.data()[3 * bin + 2] = -0.5f;
+        clamped.data()[3 * bin + 2] = 0.0f;
+    }
+    const Metrics n = compare(TabularBrdf(noisy, Lookup::Nearest), TabularBrdf(clamped, Lookup::Nearest));
+    CHECK(n.cos_rmse.mean == 0.0);
+    CHECK(n.cos_rmse_rel.mean == 0.0);
+    CHECK(n.log_rmse.mean == 0.0);
+    CHECK(n.cbrt_rmse.mean == 0.0);
+    CHECK(n.negatives > 0);
+    CHECK(n.negatives == compare(TabularBrdf(noisy, Lookup::Nearest), TabularBrdf(noisy, Lookup::Nearest)).negatives / 2);
+
     // Only bins with θi, θo under the cut-off count.
     MetricOptions narrow;
     narrow.max_theta_deg = 40;

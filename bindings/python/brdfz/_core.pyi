@@ -125,7 +125,7 @@ class Metrics:
     @property
     def negatives(self) -> int:
         """
-        channel values below 0 taken as 0 by log_rmse
+        channel values below 0 (either BRDF), taken as 0 by every metric
         """
     @property
     def samples(self) -> int:

@@ -4,10 +4,11 @@
 // skipped), otherwise of MetricOptions::grid; bins with θi or θo >= max_theta_deg, or beyond the
 // reference's measured_theta_max() (extrapolated, brdf.h), are left out.
 // Each bin counts once (the MERL literature's convention, e.g. Ngan et al. 2005, Löw et al. 2012).
-// With x = f_ref·cosθi and y = f_approx·cosθi per channel:
+// With x = max(f_ref, 0)·cosθi and y = max(f_approx, 0)·cosθi per channel (negative values, noise in
+// some measurements, enter as 0 and are counted):
 //   cos_rmse     = sqrt(mean (x − y)²)
 //   cos_rmse_rel = sqrt(Σ (x − y)² / Σ x²)
-//   log_rmse     = sqrt(mean (ln(1 + x) − ln(1 + y))²)      (negative values enter as 0, and are counted)
+//   log_rmse     = sqrt(mean (ln(1 + x) − ln(1 + y))²)
 //   cbrt_rmse    = sqrt(mean (∛x − ∛y)²)
 // `mean` is the average of the three channel values.
 #pragma once
@@ -27,7 +28,7 @@ struct PerChannel {
 struct Metrics {
     PerChannel cos_rmse, cos_rmse_rel, log_rmse, cbrt_rmse;
     std::size_t samples = 0;    // bins compared
-    std::size_t negatives = 0;  // channel values below 0 (either BRDF) taken as 0 by log_rmse
+    std::size_t negatives = 0;  // channel values below 0 (either BRDF), taken as 0
 };
 
 struct MetricOptions {
