@@ -64,6 +64,7 @@ int main(int argc, char** argv) try {
         "svd:rank=8,space=cos,layout=h_dp,colour=shared,res=32x16x32",  // ~16 KB settings
         "svd:rank=3,space=cos,layout=hd_p,colour=shared,res=32x32x16",
         "svd:rank=4,space=cbrt,res=32x16x16",
+        "svd:rank=6,space=cos,colour=shared,res=90x32x16",
     };
     brdfz::CompressOptions co;
     co.threads = 1;

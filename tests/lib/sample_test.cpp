@@ -9,6 +9,7 @@
 #include "brdfz/repr/analytic/coated_diffuse.h"
 #include "brdfz/repr/analytic/model.h"
 #include "brdfz/repr/tabular.h"
+#include "brdfz/sample/piecewise2d.h"
 #include "brdfz/tabulate.h"
 #include "brdfz/formats/io.h"
 #include "sample_stats.h"
@@ -123,4 +124,42 @@ TEST_CASE("batch sampling gives what one-at-a-time sampling gives", "[sample]") 
     }
     std::vector<BrdfSample> short_out(count - 1);
     CHECK_THROWS_AS(t.sample(wo, us, short_out), ValueError);
+}
+
+// The CDF searches start from guide tables: the cell found must be the one inversion defines, on a
+// grid with empty rows, empty cells and a spike, for u on a fine lattice (so on and next to CDF steps).
+TEST_CASE("Piecewise2D: sampling by inversion with guide tables lands in the right cells", "[sample]") {
+    const int rows = 7, cols = 9;
+    std::vector<float> w(rows * cols);
+    std::mt19937_64 rng(9);
+    std::uniform_real_distribution<float> u01(0.0f, 1.0f);
+    for (float& x : w) x = u01(rng) < 0.3f ? 0.0f : u01(rng);
+    for (int c = 0; c < cols; ++c) w[2 * cols + c] = 0.0f;  // an empty row
+    w[5 * cols + 4] = 200.0f;                            // a spike
+    const Piecewise2D d(w, rows, cols);
+    double total = 0.0;
+    for (float x : w) total += x;
+    const int n = 1000;  // u on an n × n lattice: cell counts approach n² · weight share
+    std::vector<double> count(rows * cols, 0.0);
+    double prev_y = -1.0;
+    for (int i = 0; i < n; ++i) {
+        double prev_x = -1.0;
+        for (int j = 0; j < n; ++j) {
+            const Piecewise2D::Point p = d.sample((i + 0.5) / n, (j + 0.5) / n);
+            const int r = static_cast<int>(p.y * rows), c = static_cast<int>(p.x * cols);
+            REQUIRE(w[r * cols + c] > 0.0f);  // never an empty cell
+            REQUIRE(p.pdf == d.pdf(p.x, p.y));
+            REQUIRE(p.x >= prev_x);  // monotone in u2 within a row
+            prev_x = p.x;
+            if (j == 0) {
+                REQUIRE(p.y >= prev_y);  // and the row's coordinate monotone in u1
+                prev_y = p.y;
+            }
+            count[r * cols + c] += 1.0;
+        }
+    }
+    for (int k = 0; k < rows * cols; ++k) {
+        INFO("cell " << k);
+        CHECK(count[k] / (double(n) * n) == Approx(w[k] / total).margin(3.0 / n));
+    }
 }

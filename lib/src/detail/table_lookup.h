@@ -16,6 +16,7 @@
 #include "brdfz/coords.h"
 #include "brdfz/repr/tabular.h"
 #include "brdfz/table.h"
+#include "detail/fast_math.h"
 
 namespace brdfz::detail {
 
@@ -38,31 +39,6 @@ inline BinCoords bin_coords(const GridSpec& g, const Vec3& wi, const Vec3& wo) {
             axis::phi_d_to_u(std::atan2(d.y, d.x), g.n_phi_d)};
 }
 
-// atan(t) for t in [0, 1] as t·P(t²), a least-squares fit of the relative error: |rel err| < 6e-11.
-// Estrin's scheme: a dependency chain of 4 multiply-adds instead of Horner's 11.
-inline double atan01(double t) {
-    constexpr double c[] = {0.99999999994136979,   -0.33333331572392677, 0.19999912082711904,
-                            -0.1428398114194897,   0.1109324385371387,   -0.089802498131937941,
-                            0.072457466235865964,  -0.054279596397618646, 0.034210157407729216,
-                            -0.016112066961960693, 0.0048510884142120014, -0.00068481937721016906};
-    const double x = t * t, x2 = x * x, x4 = x2 * x2, x8 = x4 * x4;
-    const double p01 = c[0] + c[1] * x, p23 = c[2] + c[3] * x, p45 = c[4] + c[5] * x, p67 = c[6] + c[7] * x;
-    const double p89 = c[8] + c[9] * x, pab = c[10] + c[11] * x;
-    const double q0 = p01 + p23 * x2, q1 = p45 + p67 * x2, q2 = p89 + pab * x2;
-    return t * ((q0 + q1 * x4) + q2 * x8);
-}
-
-// The angle of (x, y) folded into [0, π] (φ ~ φ + π, as MERL folds φd by reciprocity), to ~1e-10
-// relative. No libm call and no branch: octant tests on random directions would mispredict half the
-// time, and branch-free code vectorises. NaN in, NaN out.
-inline double fast_half_turn_angle(double y, double x) {
-    const double ax = std::fabs(x), ay = std::fabs(y);
-    const double a = atan01(std::min(ax, ay) / std::max(ax, ay));
-    const double steep = ay > ax ? 1.0 : 0.0, left = (x < 0.0) != (y < 0.0) ? 1.0 : 0.0;
-    const double b = a + steep * (std::numbers::pi / 2 - 2.0 * a);  // π/2 - a when |y| > |x|
-    return b + left * (std::numbers::pi - 2.0 * b);                  // π - b in the 2nd quadrant
-}
-
 // bin_coords without asin, atan2 or a normalisation: every angle is an arctangent of two lengths
 // in one (arbitrary) scale, from s = wi + wo, the unnormalised half vector:
 //   θh = atan(|s_xy| / s_z),  θd = atan(|wi × s| / wi·s),
@@ -71,7 +47,8 @@ inline double fast_half_turn_angle(double y, double x) {
 // where φd is ill-conditioned (θh or θd below 1e-6): there up is kIllConditioned, beyond any grid, for
 // the callers to fall back to bin_coords. Branch-free, so the compiler vectorises it across pairs.
 constexpr double kIllConditioned = 1e300;
-inline BinCoords fast_bin_coords(const GridSpec& g, const Vec3& wi, const Vec3& wo) {
+// Always inlined: a call per pair would keep the callers' coordinate loops from vectorising.
+[[gnu::always_inline]] inline BinCoords fast_bin_coords(const GridSpec& g, const Vec3& wi, const Vec3& wo) {
     const Vec3 s = wi + wo;
     const double rxy2 = s.x * s.x + s.y * s.y;
     const double rxy = std::sqrt(rxy2);

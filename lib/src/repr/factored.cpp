@@ -9,8 +9,9 @@
 
 #include "brdfz/coords.h"
 #include "brdfz/errors.h"
-#include "detail/table_lookup.h"
+#include "detail/fast_math.h"
 #include "detail/grid_sweep.h"
+#include "detail/table_lookup.h"
 
 namespace brdfz {
 namespace {
@@ -58,25 +59,58 @@ double to_space(FactorSpace s, double f) {
     }
 }
 
-// The value for a reconstruction y; y < 0 (possible for svd) gives 0 and is counted.
-inline double from_space(FactorSpace s, double y, std::uint64_t& clamped) {
-    clamped += y < 0.0;
+// The value for a reconstruction y; y < 0 (possible for svd) gives 0. No libm call, so the loop
+// below vectorises.
+template <FactorSpace S>
+inline double from_space(double y) {
     const double p = y > 0.0 ? y : 0.0;  // NaN cannot occur: factors are finite
+    if constexpr (S == FactorSpace::Log)
+        return detail::expm1_nonneg(p);
+    else if constexpr (S == FactorSpace::Cbrt)
+        return p * p * p;
+    else
+        return p;
+}
+
+// out[i] = the value of y[i], counting the negatives clamped (in a double: GCC vectorises that sum
+// with the loop, not an integer one).
+template <FactorSpace S>
+void from_space_n(const double* y, double* out, std::size_t n, std::uint64_t& clamped) {
+    double count = 0.0;
+    for (std::size_t i = 0; i < n; ++i) {
+        count += y[i] < 0.0 ? 1.0 : 0.0;
+        out[i] = from_space<S>(y[i]);
+    }
+    clamped += static_cast<std::uint64_t>(count);
+}
+
+void from_space_n(FactorSpace s, const double* y, double* out, std::size_t n, std::uint64_t& clamped) {
     switch (s) {
-        case FactorSpace::Log: return std::expm1(p);
-        case FactorSpace::Cbrt: return p * p * p;
-        default: return p;
+        case FactorSpace::Log: return from_space_n<FactorSpace::Log>(y, out, n, clamped);
+        case FactorSpace::Cbrt: return from_space_n<FactorSpace::Cbrt>(y, out, n, clamped);
+        default: return from_space_n<FactorSpace::Linear>(y, out, n, clamped);
     }
 }
 
 // ---------------------------------------------------------------------------------------------
 // Evaluation: interpolation corners in factor rows and columns
 
-// Row-major offsets (index · m) of the factor rows to blend, and their weights.
+constexpr std::size_t kLanes = 4;  // floats per SIMD step of the blend (SSE)
+
+// The factors as evaluation reads them (FactoredBrdf's padded copies): rows `width` floats apart.
+struct FactorView {
+    const GridSpec& grid;
+    std::size_t width;  // row_width() rounded up to kLanes, zero-padded
+    const float* u;
+    const float* v;
+    const double* mix;  // 3 × width
+};
+
+// Row-major offsets (index · width) of the factor rows to blend, and their weights.
 template <int NR, int NC>
 struct FactorCorners {
     std::size_t r[NR], c[NC];
-    double rw[NR], cw[NC];
+    float rw[NR], cw[NC];
 };
 using CornersHxDP = FactorCorners<2, 4>;
 using CornersHDxP = FactorCorners<4, 2>;
@@ -88,8 +122,9 @@ inline CornersHxDP corners_hxdp(const GridSpec& g, const detail::Corners& k, std
     return {{k.h.i0 * m, k.h.i1 * m},
             {(k.d.i0 * np + k.p.i0) * m, (k.d.i0 * np + k.p.i1) * m, (k.d.i1 * np + k.p.i0) * m,
              (k.d.i1 * np + k.p.i1) * m},
-            {1.0 - k.h.t, k.h.t},
-            {(1.0 - td) * (1.0 - tp), (1.0 - td) * tp, td * (1.0 - tp), td * tp}};
+            {static_cast<float>(1.0 - k.h.t), static_cast<float>(k.h.t)},
+            {static_cast<float>((1.0 - td) * (1.0 - tp)), static_cast<float>((1.0 - td) * tp),
+             static_cast<float>(td * (1.0 - tp)), static_cast<float>(td * tp)}};
 }
 
 // (θh, θd) rows; φd columns.
@@ -99,68 +134,55 @@ inline CornersHDxP corners_hdxp(const GridSpec& g, const detail::Corners& k, std
     return {{(k.h.i0 * nd + k.d.i0) * m, (k.h.i0 * nd + k.d.i1) * m, (k.h.i1 * nd + k.d.i0) * m,
              (k.h.i1 * nd + k.d.i1) * m},
             {k.p.i0 * m, k.p.i1 * m},
-            {(1.0 - th) * (1.0 - td), (1.0 - th) * td, th * (1.0 - td), th * td},
-            {1.0 - k.p.t, k.p.t}};
+            {static_cast<float>((1.0 - th) * (1.0 - td)), static_cast<float>((1.0 - th) * td),
+             static_cast<float>(th * (1.0 - td)), static_cast<float>(th * td)},
+            {static_cast<float>(1.0 - k.p.t), static_cast<float>(k.p.t)}};
 }
 
-// The transform-space values y_c = Σ_j s_cj · (Σ_r rw_r U[r][j]) · (Σ_c cw_c V[c][j]). Separate colour
-// sums each channel's own components (no multiplications by a one-hot mix); shared colour weights the
-// rank products by s_cj (`mix`).
-template <bool Shared, int NR, int NC>
-inline void blend(const Factors& f, const float* mix, const FactorCorners<NR, NC>& k, double y[3]) {
-    const int rank = f.rank, m = Shared ? rank : 3 * rank;
-    const float* u = f.u.data();
-    const float* v = f.v.data();
-    const auto product = [&](int j) {
-        double a = 0.0, b = 0.0;
-        for (int r = 0; r < NR; ++r) a += k.rw[r] * u[k.r[r] + j];
-        for (int c = 0; c < NC; ++c) b += k.cw[c] * v[k.c[c] + j];
-        return a * b;
-    };
-    if constexpr (Shared) {
-        y[0] = y[1] = y[2] = 0.0;
-        for (int j = 0; j < rank; ++j) {
-            const double p = product(j);
-            for (int c = 0; c < 3; ++c) y[c] += mix[c * m + j] * p;
-        }
-    } else {
-        for (int c = 0; c < 3; ++c) {
-            double sum = 0.0;
-            for (int j = c * rank; j < (c + 1) * rank; ++j) sum += product(j);
-            y[c] = sum;
-        }
+// The transform-space values y_c = Σ_j mix_cj · (Σ_r rw_r U[r][j]) · (Σ_c cw_c V[c][j]): the row and
+// column blends in float, kLanes components at a time (Eigen's fixed-size arrays: SIMD without
+// loops), their products and the colour mix in double. Separate colour's mix is one-hot; multiplying
+// by its zeros costs less than the gathers that would avoid it.
+template <int NR, int NC>
+inline void blend(const FactorView& f, const FactorCorners<NR, NC>& k, double y[3]) {
+    using Step = Eigen::Array<float, kLanes, 1>;
+    using StepD = Eigen::Array<double, kLanes, 1>;
+    using Map = Eigen::Map<const Step>;
+    using MapD = Eigen::Map<const StepD>;
+    StepD acc[3] = {StepD::Zero(), StepD::Zero(), StepD::Zero()};
+    for (std::size_t j = 0; j < f.width; j += kLanes) {
+        Step a = k.rw[0] * Map(f.u + k.r[0] + j), b = k.cw[0] * Map(f.v + k.c[0] + j);
+        for (int r = 1; r < NR; ++r) a += k.rw[r] * Map(f.u + k.r[r] + j);
+        for (int c = 1; c < NC; ++c) b += k.cw[c] * Map(f.v + k.c[c] + j);
+        const StepD p = a.cast<double>() * b.cast<double>();
+        for (std::size_t ch = 0; ch < 3; ++ch) acc[ch] += MapD(f.mix + ch * f.width + j) * p;
     }
+    for (int ch = 0; ch < 3; ++ch) y[ch] = acc[ch].sum();
 }
 
 template <FactorLayout L>
 using CornersOf = std::conditional_t<L == FactorLayout::HxDP, CornersHxDP, CornersHDxP>;
 
 template <FactorLayout L>
-inline CornersOf<L> factor_corners(const Factors& f, const detail::BinCoords& c, const Vec3& wi, const Vec3& wo) {
+inline CornersOf<L> factor_corners(const FactorView& f, const detail::BinCoords& c, const Vec3& wi, const Vec3& wo) {
     const detail::Corners k = detail::linear_corners(f.grid, c, wi, wo);
-    const std::size_t m = static_cast<std::size_t>(f.row_width());
     if constexpr (L == FactorLayout::HxDP)
-        return corners_hxdp(f.grid, k, m);
+        return corners_hxdp(f.grid, k, f.width);
     else
-        return corners_hdxp(f.grid, k, m);
+        return corners_hdxp(f.grid, k, f.width);
 }
 
-inline Rgb to_values(FactorSpace space, const double y[3], std::uint64_t& clamped) {
-    return {from_space(space, y[0], clamped), from_space(space, y[1], clamped), from_space(space, y[2], clamped)};
-}
-
-// Blocks of pairs in three passes, as the tabular kernel: (1) the coordinates, branch-free so the
-// compiler vectorises them; (2) the corners, prefetching the factor rows (large factors miss the
-// cache); (3) the blends.
-template <FactorLayout L, bool Shared>
-void eval_pairs(const Factors& f, const float* mix, const Vec3* wi, const Vec3* wo, Rgb* out, std::size_t n,
+// Blocks of pairs in passes, as the tabular kernel: (1) the coordinates, branch-free so the compiler
+// vectorises them; (2) the corners, prefetching the factor rows (large factors miss the cache); (3)
+// the blends; (4) the inverse transform, vectorised over the block.
+template <FactorLayout L>
+void eval_pairs(const FactorView& f, FactorSpace space, const Vec3* wi, const Vec3* wo, Rgb* out, std::size_t n,
                 std::uint64_t& clamped) {
     constexpr std::size_t kBlock = 64;
     detail::BinCoords coords[kBlock];
     CornersOf<L> corners[kBlock];
     bool above[kBlock];
-    const float* u = f.u.data();
-    const float* v = f.v.data();
+    double y[3 * kBlock], values[3 * kBlock];
     for (std::size_t start = 0; start < n; start += kBlock) {
         const std::size_t m = std::min(kBlock, n - start);
         const Vec3* a = wi + start;
@@ -170,26 +192,27 @@ void eval_pairs(const Factors& f, const float* mix, const Vec3* wi, const Vec3* 
         for (std::size_t k = 0; k < m; ++k) {
             if (!above[k]) continue;
             const CornersOf<L>& c = corners[k] = factor_corners<L>(f, coords[k], a[k], b[k]);
-            for (std::size_t r : c.r) __builtin_prefetch(u + r);
-            for (std::size_t col : c.c) __builtin_prefetch(v + col);
+            for (std::size_t r : c.r) __builtin_prefetch(f.u + r);
+            for (std::size_t col : c.c) __builtin_prefetch(f.v + col);
         }
         for (std::size_t k = 0; k < m; ++k) {
-            if (!above[k]) {
-                out[start + k] = Rgb{};
-                continue;
-            }
-            double y[3];
-            blend<Shared>(f, mix, corners[k], y);
-            out[start + k] = to_values(f.space, y, clamped);
+            if (above[k])
+                blend(f, corners[k], y + 3 * k);
+            else
+                y[3 * k] = y[3 * k + 1] = y[3 * k + 2] = 0.0;  // gives the value 0, not counted
         }
+        from_space_n(space, y, values, 3 * m, clamped);
+        for (std::size_t k = 0; k < m; ++k) out[start + k] = {values[3 * k], values[3 * k + 1], values[3 * k + 2]};
     }
 }
 
-template <FactorLayout L, bool Shared>
-Rgb eval_one(const Factors& f, const float* mix, const Vec3& wi, const Vec3& wo, std::uint64_t& clamped) {
-    double y[3];
-    blend<Shared>(f, mix, factor_corners<L>(f, detail::fast_bin_coords(f.grid, wi, wo), wi, wo), y);
-    return to_values(f.space, y, clamped);
+// One pair with the batch kernel's arithmetic (bit for bit).
+template <FactorLayout L>
+Rgb eval_one(const FactorView& f, FactorSpace space, const Vec3& wi, const Vec3& wo, std::uint64_t& clamped) {
+    double y[3], values[3];
+    blend(f, factor_corners<L>(f, detail::fast_bin_coords(f.grid, wi, wo), wi, wo), y);
+    from_space_n(space, y, values, 3, clamped);
+    return {values[0], values[1], values[2]};
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -505,13 +528,19 @@ FactoredBrdf::FactoredBrdf(Factors factors) : f_(std::move(factors)) {
     for (const std::vector<float>* values : {&f_.u, &f_.v, &f_.colour_weights})
         for (float x : *values)
             if (!std::isfinite(x)) throw ValueError("factored: a factor entry is not finite");
-    mix_.assign(3 * m, 0.0f);
-    for (int c = 0; c < 3; ++c)
-        for (int j = 0; j < f_.rank; ++j) {
+    // The evaluation copies: rows padded to a whole number of SIMD steps.
+    width_ = (m + kLanes - 1) / kLanes * kLanes;
+    u_.assign(rows * width_, 0.0f);
+    v_.assign(cols * width_, 0.0f);
+    for (std::size_t i = 0; i < rows; ++i) std::copy_n(f_.u.data() + i * m, m, u_.data() + i * width_);
+    for (std::size_t i = 0; i < cols; ++i) std::copy_n(f_.v.data() + i * m, m, v_.data() + i * width_);
+    mix_.assign(3 * width_, 0.0);
+    for (std::size_t c = 0; c < 3; ++c)
+        for (std::size_t j = 0; j < static_cast<std::size_t>(f_.rank); ++j) {
             if (f_.colour == FactorColour::Shared)
-                mix_[c * m + j] = f_.colour_weights[c * f_.rank + j];
+                mix_[c * width_ + j] = f_.colour_weights[c * f_.rank + j];
             else
-                mix_[c * m + c * f_.rank + j] = 1.0f;
+                mix_[c * width_ + c * f_.rank + j] = 1.0;
         }
 }
 
@@ -533,13 +562,13 @@ Table FactoredBrdf::reconstruct(std::size_t* clamped) const {
     for (std::size_t bin = 0; bin < t.bins(); ++bin) {
         const float* u = f_.u.data() + bin / cols * m;
         const float* v = f_.v.data() + bin % cols * m;
-        double y[3] = {0.0, 0.0, 0.0};
+        double y[3] = {0.0, 0.0, 0.0}, values[3];
         for (std::size_t j = 0; j < m; ++j) {
             const double p = static_cast<double>(u[j]) * v[j];
-            for (int c = 0; c < 3; ++c) y[c] += mix_[c * m + j] * p;
+            for (std::size_t c = 0; c < 3; ++c) y[c] += mix_[c * width_ + j] * p;
         }
-        t.set(bin, {from_space(f_.space, y[0], count), from_space(f_.space, y[1], count),
-                    from_space(f_.space, y[2], count)});
+        from_space_n(f_.space, y, values, 3, count);
+        t.set(bin, {values[0], values[1], values[2]});
     }
     if (clamped) *clamped = count;
     return t;
@@ -547,30 +576,20 @@ Table FactoredBrdf::reconstruct(std::size_t* clamped) const {
 
 Rgb FactoredBrdf::eval_above(const Vec3& wi, const Vec3& wo) const {
     std::uint64_t clamped = 0;
-    const bool shared = f_.colour == FactorColour::Shared;
-    const Rgb f = f_.layout == FactorLayout::HxDP
-                      ? (shared ? eval_one<FactorLayout::HxDP, true>(f_, mix_.data(), wi, wo, clamped)
-                                : eval_one<FactorLayout::HxDP, false>(f_, mix_.data(), wi, wo, clamped))
-                      : (shared ? eval_one<FactorLayout::HDxP, true>(f_, mix_.data(), wi, wo, clamped)
-                                : eval_one<FactorLayout::HDxP, false>(f_, mix_.data(), wi, wo, clamped));
+    const FactorView view{f_.grid, width_, u_.data(), v_.data(), mix_.data()};
+    const Rgb f = f_.layout == FactorLayout::HxDP ? eval_one<FactorLayout::HxDP>(view, f_.space, wi, wo, clamped)
+                                                  : eval_one<FactorLayout::HDxP>(view, f_.space, wi, wo, clamped);
     if (clamped) clamped_.fetch_add(clamped, std::memory_order_relaxed);
     return f;
 }
 
 void FactoredBrdf::eval_batch(const Vec3* wi, const Vec3* wo, Rgb* out, std::size_t n) const {
     std::uint64_t clamped = 0;
-    const bool shared = f_.colour == FactorColour::Shared;
-    if (f_.layout == FactorLayout::HxDP) {
-        if (shared)
-            eval_pairs<FactorLayout::HxDP, true>(f_, mix_.data(), wi, wo, out, n, clamped);
-        else
-            eval_pairs<FactorLayout::HxDP, false>(f_, mix_.data(), wi, wo, out, n, clamped);
-    } else {
-        if (shared)
-            eval_pairs<FactorLayout::HDxP, true>(f_, mix_.data(), wi, wo, out, n, clamped);
-        else
-            eval_pairs<FactorLayout::HDxP, false>(f_, mix_.data(), wi, wo, out, n, clamped);
-    }
+    const FactorView view{f_.grid, width_, u_.data(), v_.data(), mix_.data()};
+    if (f_.layout == FactorLayout::HxDP)
+        eval_pairs<FactorLayout::HxDP>(view, f_.space, wi, wo, out, n, clamped);
+    else
+        eval_pairs<FactorLayout::HDxP>(view, f_.space, wi, wo, out, n, clamped);
     if (clamped) clamped_.fetch_add(clamped, std::memory_order_relaxed);
 }
 

@@ -5,6 +5,7 @@
 
 #include "brdfz/coords.h"
 #include "brdfz/errors.h"
+#include "detail/fast_math.h"
 #include "detail/grid_sweep.h"
 
 namespace brdfz {
@@ -28,6 +29,18 @@ Vec3 reflect(const Vec3& wo, const Vec3& h) { return (2.0 * dot(wo, h)) * h - wo
 // Half vector at cell coordinates (x, y), with φh = ±π x relative to wo.
 Vec3 half_at(double x, double y, double sign) {
     return spherical_direction(kPi / 2.0 * y * y, sign * kPi * x);
+}
+
+// sin and cos over [0, π] (θh and |φh − φo|) for sample(), without libm's sincos.
+const detail::SinCosTable& half_turn() {
+    static const detail::SinCosTable table(kPi, 256);
+    return table;
+}
+
+// wo's elevation without asin, to ~1e-10: it only places wo between two slices, and sample() and
+// pdf() place it alike.
+double view_elevation(const Vec3& wo) {
+    return detail::fast_half_turn_angle(std::sqrt(wo.x * wo.x + wo.y * wo.y), wo.z);
 }
 
 }  // namespace
@@ -95,7 +108,7 @@ double HalfVectorSampler::data_pdf(const Vec3& wo, const Vec3& wi) const {
     if (!(theta_h < kPi / 2.0)) return 0.0;
     const double y = std::sqrt(theta_h / (kPi / 2.0));
     const double x = std::fabs(std::atan2(h.y, h.x)) / kPi;
-    const SlicePair sp = slices_for(elevation(wo));
+    const SlicePair sp = slices_for(view_elevation(wo));
     const double p_xy = (1.0 - sp.t) * slices_[sp.k0].pdf(std::fmin(x, std::nextafter(1.0, 0.0)), y) +
                         sp.t * slices_[sp.k1].pdf(std::fmin(x, std::nextafter(1.0, 0.0)), y);
     const double jac = 4.0 * dot(wo, hw) * 2.0 * kPi * kPi * y * std::sin(theta_h);
@@ -115,22 +128,24 @@ BrdfSample HalfVectorSampler::sample(const Vec3& wo, double u1, double u2) const
         return wi.z > 0.0 ? BrdfSample{wi, pdf(wo, wi), {}} : BrdfSample{};
     }
     double v1 = (u1 - share) / (1.0 - share);
-    const SlicePair sp = slices_for(elevation(wo));
+    const SlicePair sp = slices_for(view_elevation(wo));
     const bool upper = !(v1 < 1.0 - sp.t);
     v1 = upper ? (v1 - (1.0 - sp.t)) / sp.t : v1 / (1.0 - sp.t);
     // One bit of u2 picks the side of wo's plane; the rest drives the column.
     const double sign = u2 < 0.5 ? 1.0 : -1.0;
     const double v2 = u2 < 0.5 ? 2.0 * u2 : 2.0 * u2 - 1.0;
     const Piecewise2D::Point p = slices_[upper ? sp.k1 : sp.k0].sample(std::fmin(v1, std::nextafter(1.0, 0.0)), v2);
-    const Vec3 h = Azimuth(wo).to_world(half_at(p.x, p.y, sign));
+    // half_at(p.x, p.y, sign), with table-based sines and cosines (sinθh is also the Jacobian's).
+    const double theta_h = kPi / 2.0 * p.y * p.y;
+    const detail::SinCosTable::SinCos th = half_turn()(theta_h), ph = half_turn()(kPi * p.x);
+    const Vec3 h = Azimuth(wo).to_world({th.s * ph.c, sign * th.s * ph.s, th.c});
     const Vec3 wi = reflect(wo, h);
     if (!(wi.z > 0.0)) return {};
     // The pdf from what is known here (the cell, θh, h) rather than by inverting wi again: the same
     // value pdf(wo, wi) computes, without its atan2 and elevation calls.
     const double p_other = slices_[upper ? sp.k0 : sp.k1].pdf(p.x, p.y);
     const double p_xy = upper ? (1.0 - sp.t) * p_other + sp.t * p.pdf : (1.0 - sp.t) * p.pdf + sp.t * p_other;
-    const double theta_h = kPi / 2.0 * p.y * p.y;
-    const double jac = 4.0 * dot(wo, h) * 2.0 * kPi * kPi * p.y * std::sin(theta_h);
+    const double jac = 4.0 * dot(wo, h) * 2.0 * kPi * kPi * p.y * th.s;
     const double data = p_xy / jac;
     if (!(std::isfinite(data) && data > 0.0)) return {};
     return {wi, share * wi.z / kPi + (1.0 - share) * data, {}};

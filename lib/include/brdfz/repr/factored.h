@@ -100,7 +100,12 @@ protected:
 
 private:
     Factors f_;
-    std::vector<float> mix_;  // 3 × m: the colour weights, or a one-hot selection for separate colour
+    // Evaluation copies (factored.cpp): U and V with rows zero-padded from m to width_ entries (whole
+    // SIMD steps), and the colour mix, 3 × width_: the colour weights, or for separate colour a one-hot
+    // selection of each channel's components.
+    std::size_t width_ = 0;
+    std::vector<float> u_, v_;
+    std::vector<double> mix_;
     mutable std::atomic<std::uint64_t> clamped_{0};
     Lazy<HalfVectorSampler> sampler_;
 };

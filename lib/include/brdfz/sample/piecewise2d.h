@@ -3,6 +3,7 @@
 #pragma once
 
 #include <cstddef>
+#include <cstdint>
 #include <span>
 #include <vector>
 
@@ -24,13 +25,19 @@ public:
 
     int rows() const { return rows_; }
     int cols() const { return cols_; }
-    std::size_t nbytes() const { return (marginal_.size() + conditional_.size() + density_.size()) * sizeof(float); }
+    std::size_t nbytes() const {
+        return (marginal_.size() + conditional_.size() + density_.size()) * sizeof(float) +
+               (marginal_guide_.size() + conditional_guide_.size()) * sizeof(std::uint32_t);
+    }
 
 private:
     int rows_ = 0, cols_ = 0;
     std::vector<float> marginal_;     // rows + 1 entries, 0 … 1
     std::vector<float> conditional_;  // rows × (cols + 1), each row 0 … 1
     std::vector<float> density_;      // rows × cols cell densities
+    // Where sample()'s search for u starts: per CDF of n intervals, entry j is the last interval whose
+    // start is <= j/n.
+    std::vector<std::uint32_t> marginal_guide_, conditional_guide_;
 };
 
 }  // namespace brdfz
