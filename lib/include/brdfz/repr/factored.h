@@ -33,6 +33,7 @@
 #include <vector>
 
 #include "brdfz/brdf.h"
+#include "brdfz/sample/factor_sampler.h"
 #include "brdfz/sample/halfvector.h"
 #include "brdfz/sample/lazy.h"
 #include "brdfz/table.h"
@@ -85,8 +86,11 @@ public:
     // Channel values eval has clamped to 0 so far (svd reconstructions below 0), over all threads.
     std::uint64_t clamped_evaluations() const { return clamped_.load(std::memory_order_relaxed); }
 
-    // The importance sampler (half-vector CDFs tabulated from eval, exact pdf), built on first use.
+    // The half-vector sampler (CDFs tabulated from eval, exact pdf), built on first use.
     const HalfVectorSampler& sampler() const;
+    // The sampler drawing from the factors' CDFs (sample/factor_sampler.h), built on first use; null
+    // for log and cbrt spaces, where the half-vector sampler has the lower variance and sample() uses it.
+    const FactorSampler* factor_sampler() const;
 
     int channels() const override { return 3; }
     std::size_t nbytes() const override;
@@ -103,6 +107,7 @@ private:
     std::vector<float> mix_;  // 3 × m: the colour weights, or a one-hot selection for separate colour
     mutable std::atomic<std::uint64_t> clamped_{0};
     Lazy<HalfVectorSampler> sampler_;
+    Lazy<FactorSampler> factor_sampler_;
 };
 
 // Options of factor(). The spec-string kinds (compress.h) `svd:...` and `nmf:...` map onto these:
