@@ -33,9 +33,25 @@ double s_of_theta(double theta) {
 }
 
 // s of the largest θh whose mirror of wo is above the horizon, at azimuth φh relative to wo:
-// wi.z = sinθo·sin2θh·cosφh + cosθo·cos2θh = R·cos(2θh − α) > 0  ⇔  θh < π/4 + α/2.
+// wi.z = sinθo·sin2θh·cosφh + cosθo·cos2θh = R·cos(2θh − α) > 0  ⇔  θh < θlim = π/4 + α/2, with
+// tanα = tanθo·cosφh. Without trigonometric calls: s = (1 − cosθlim)/2, cosθlim = (cos½α − sin½α)/√2,
+// and the half angles of α from cosα.
 double limit_s(double cos_o, double sin_o, double cos_phi) {
-    return s_of_theta(kPi / 4.0 + 0.5 * std::atan2(sin_o * cos_phi, cos_o));
+    const double y = sin_o * cos_phi, cos_a = cos_o / std::sqrt(cos_o * cos_o + y * y);
+    const double c = std::sqrt(0.5 * (1.0 + cos_a)), s = std::copysign(std::sqrt(0.5 * (1.0 - cos_a)), y);
+    return 0.5 * (1.0 - (c - s) * std::numbers::sqrt2 / 2.0);
+}
+
+// The largest i in [0, n) with a[i] <= x (0 when none), for ascending a. Branch-free (the compare
+// selects): x is random, so a branchy search mispredicts about every other step.
+int last_not_above(const double* a, int n, double x) {
+    const double* base = a;
+    for (int len = n; len > 1;) {
+        const int half = len / 2;
+        base = base[half] <= x ? base + half : base;
+        len -= half;
+    }
+    return static_cast<int>(base - a);
 }
 
 // The terms T_j / a_j = u_j·v_j of the factorisation at (wi, wo), interpolated as FactoredBrdf's eval does.
@@ -166,10 +182,7 @@ FactorSampler::SlicePair FactorSampler::slices_for(const Vec3& wo) const {
     return {k0, k0 + 1, pos - k0};
 }
 
-int FactorSampler::row_of(double s) const {
-    const int r = static_cast<int>(std::upper_bound(s_edges_.begin(), s_edges_.end(), s) - s_edges_.begin()) - 1;
-    return std::clamp(r, 0, rows_ - 1);
-}
+int FactorSampler::row_of(double s) const { return last_not_above(s_edges_.data(), rows_, s); }
 
 double FactorSampler::cdf_at(int k, int r, double s) const {
     const std::size_t base = static_cast<std::size_t>(k) * (rows_ + 1);
@@ -185,10 +198,7 @@ double FactorSampler::density_at(int k, int r, double s) const {
     return d0 + (d1 - d0) * (s - s_edges_[r]) / (s_edges_[r + 1] - s_edges_[r]);
 }
 
-double FactorSampler::half_density(const SlicePair& sp, double cos_o, double sin_o, double cos_phi, double s) const {
-    const double s_lim = limit_s(cos_o, sin_o, cos_phi);
-    if (!(s < s_lim)) return 0.0;
-    const int r = row_of(s), r_lim = row_of(s_lim);
+double FactorSampler::half_density(const SlicePair& sp, int r, double s, int r_lim, double s_lim) const {
     double p = 0.0;
     for (const auto& [k, w] : {std::pair{sp.k0, 1.0 - sp.t}, std::pair{sp.k1, sp.t}})
         if (w > 0.0) p += w * density_at(k, r, s) / cdf_at(k, r_lim, s_lim);
@@ -200,9 +210,9 @@ double FactorSampler::pdf(const Vec3& wo, const Vec3& wi) const {
     const Vec3 h = Azimuth(wo).to_local(hw);
     const double rxy = std::sqrt(h.x * h.x + h.y * h.y);
     const double s = rxy * rxy / (2.0 * (1.0 + h.z));  // (1 − cosθh)/2 without cancellation
-    const double data = half_density(slices_for(wo), wo.z, std::sqrt(wo.x * wo.x + wo.y * wo.y),
-                                     rxy > 0.0 ? h.x / rxy : 1.0, s) /
-                        (4.0 * dot(wo, hw));
+    const double s_lim = limit_s(wo.z, std::sqrt(wo.x * wo.x + wo.y * wo.y), rxy > 0.0 ? h.x / rxy : 1.0);
+    const double data =
+        s < s_lim ? half_density(slices_for(wo), row_of(s), s, row_of(s_lim), s_lim) / (4.0 * dot(wo, hw)) : 0.0;
     const double share = options_.cosine_share;
     return share * wi.z / kPi + (1.0 - share) * (std::isfinite(data) && data > 0.0 ? data : 0.0);
 }
@@ -227,8 +237,7 @@ BrdfSample FactorSampler::sample(const Vec3& wo, double u1, double u2) const {
     // Inversion of the CDF truncated at s_lim: the row, then s uniform within it.
     const double x = v * cdf_at(k, r_lim, s_lim);
     const double* c = &cdf_[static_cast<std::size_t>(k) * (rows_ + 1)];
-    const int r = static_cast<int>(std::upper_bound(c, c + r_lim + 1, x) - c) - 1;
-    if (r < 0) return {};
+    const int r = last_not_above(c, r_lim + 1, x);  // every row has mass (the floor): x < c[r + 1]
     // The density is linear across the row, d0 + a·(s − s_r): solve d0·y + a·y²/2 = x − c[r] for y in
     // the form without cancellation.
     const double* d = &density_[static_cast<std::size_t>(k) * (rows_ + 1)];
@@ -240,7 +249,8 @@ BrdfSample FactorSampler::sample(const Vec3& wo, double u1, double u2) const {
     const Vec3 h = Azimuth(wo).to_world({sin_h * cos_phi, sin_h * sin_phi, cos_h});
     const Vec3 wi = reflect(wo, h);
     if (!(wi.z > 0.0)) return {};
-    const double data = half_density(sp, cos_o, sin_o, cos_phi, s) / (4.0 * dot(wo, h));
+    // The density is continuous in s, so row r serves even when s rounded onto its upper edge.
+    const double data = half_density(sp, r, s, r_lim, s_lim) / (4.0 * dot(wo, h));
     if (!(std::isfinite(data) && data > 0.0)) return {};
     return {wi, share * wi.z / kPi + (1.0 - share) * data, {}};
 }

@@ -63,8 +63,9 @@ private:
     // CDF and density (per unit s) of slice k at s in row r.
     double cdf_at(int k, int r, double s) const;
     double density_at(int k, int r, double s) const;
-    // Density of the data part at h (relative to wo: cosφh, s) for the slice pair, per unit solid angle of h.
-    double half_density(const SlicePair& sp, double cos_theta_o, double sin_theta_o, double cos_phi, double s) const;
+    // Density of the data part per unit solid angle of h at s in row r (s < s_lim, the truncation in row
+    // r_lim at h's azimuth), for the slice pair.
+    double half_density(const SlicePair& sp, int r, double s, int r_lim, double s_lim) const;
 
     FactorSamplerOptions options_;
     int rows_ = 0;
