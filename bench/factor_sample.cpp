@@ -7,6 +7,7 @@
 // the factor sampler is built on them directly to justify that choice). Every estimator weights by the
 // same f (the factored BRDF's eval): only the density the directions are drawn from differs.
 // Variance: of one sample's albedo contribution f·cosθi/pdf (mean channel), n = 10^6 per θo, same seed.
+// Factor sampler: both densities (FactorDensity::Marginal, the default, and Mixture, Lawrence's).
 // Build: single thread, median of 5 (factor) and 3 (half-vector, threads = 1).
 // Speed: batch sample() including the weight's eval, and the sampler's draw alone (one at a time, no
 // weight), one core, median of 7 over 2^20 draws.
@@ -132,22 +133,28 @@ int main(int argc, char** argv) try {
             const auto& f = dynamic_cast<const FactoredBrdf&>(*c.brdf);
             HalfVectorSamplerOptions ho;
             ho.threads = 1;
+            FactorSamplerOptions mo;
+            mo.density = FactorDensity::Mixture;
             const double factor_ms = build_ms(5, [&] { return FactorSampler(f.factors()); });
+            const double mixture_ms = build_ms(5, [&] { return FactorSampler(f.factors(), mo); });
             const double half_ms = build_ms(3, [&] { return HalfVectorSampler(f, ho); });
-            const FactorSampler fs(f.factors());
+            const FactorSampler fs(f.factors()), ms(f.factors(), mo);
             const HalfVectorSampler hs(f, ho);
-            const SampledWith<FactorSampler> by_factors(f, &fs), cosine(f, nullptr);
+            const SampledWith<FactorSampler> by_factors(f, &fs), by_mixture(f, &ms), cosine(f, nullptr);
             const SampledWith<HalfVectorSampler> by_half(f, &hs);
             std::printf("%s  %s  (FactoredBrdf samples with the %s sampler)\n", name.c_str(), spec.c_str(),
                         f.factor_sampler() ? "factor" : "half-vector");
-            std::printf("  build (1 thread): factor %.2f ms, half-vector %.1f ms (%.0fx)\n", factor_ms, half_ms,
-                        half_ms / factor_ms);
-            std::printf("  theta_o | albedo variance: cosine    half-vector   factor | factor/half  cosine/factor\n");
+            std::printf("  build (1 thread): factor (marginal) %.2f ms, factor (mixture) %.2f ms, half-vector %.1f ms "
+                        "(%.0fx marginal)\n",
+                        factor_ms, mixture_ms, half_ms, half_ms / factor_ms);
+            std::printf("  theta_o | albedo variance: cosine  half-vector  marginal   mixture | marginal/half "
+                        "mixture/half cosine/marginal\n");
             for (double deg : {0.0, 30.0, 60.0, 80.0}) {
                 const Vec3 wo = spherical_direction(deg * M_PI / 180.0, 0.3);
                 const double vc = albedo_variance(cosine, wo, n), vh = albedo_variance(by_half, wo, n),
-                             vf = albedo_variance(by_factors, wo, n);
-                std::printf("  %5.0f   | %22.4g %12.4g %9.4g | %10.2fx %13.1fx\n", deg, vc, vh, vf, vf / vh, vc / vf);
+                             vf = albedo_variance(by_factors, wo, n), vm = albedo_variance(by_mixture, wo, n);
+                std::printf("  %5.0f   | %22.4g %12.4g %9.4g %9.4g | %12.2fx %11.2fx %14.1fx\n", deg, vc, vh, vf, vm,
+                            vf / vh, vm / vh, vc / vf);
             }
             const double rf = sample_rate(by_factors), rh = sample_rate(by_half);
             const double df = draw_rate(fs), dh = draw_rate(hs);

@@ -42,6 +42,49 @@ double limit_s(double cos_o, double sin_o, double cos_phi) {
     return 0.5 * (1.0 - (c - s) * std::numbers::sqrt2 / 2.0);
 }
 
+// At θh (given by s) and θo, wi.z = A + B·cosφh with A = cosθo·cos2θh, B = sinθo·sin2θh ≥ 0: wi is above
+// the horizon for |φh| < phi_max, and the azimuth density ∝ wi.z there has normaliser
+// norm = ∫ (A + B cosφ) dφ = 2(A·phi_max + B·sin phi_max); norm = 0 when no azimuth is above.
+struct AzimuthRange {
+    double a, b, phi_max, norm;
+};
+AzimuthRange azimuth_range(double cos_o, double sin_o, double s) {
+    const double sin2_h = 4.0 * s * (1.0 - s);  // sin²θh
+    const double a = cos_o * (1.0 - 2.0 * sin2_h), b = sin_o * 2.0 * std::sqrt(sin2_h) * (1.0 - 2.0 * s);
+    if (a >= b) return {a, b, kPi, 2.0 * kPi * a};
+    if (a <= -b) return {a, b, 0.0, 0.0};
+    const double c = -a / b;
+    const double phi_max = std::acos(c);
+    return {a, b, phi_max, std::fmax(0.0, 2.0 * (a * phi_max + b * std::sqrt(1.0 - c * c)))};
+}
+
+// φ in [0, phi_max] with A·φ + B·sinφ = target (increasing there: its derivative is wi.z ≥ 0), by Newton's
+// method kept inside a shrinking bracket.
+double solve_azimuth(const AzimuthRange& r, double target) {
+    double lo = 0.0, hi = r.phi_max, phi = r.phi_max * target / (0.5 * r.norm);
+    for (int it = 0; it < 30; ++it) {
+        const double g = r.a * phi + r.b * std::sin(phi) - target;
+        if (g > 0.0) hi = phi;
+        else lo = phi;
+        const double slope = r.a + r.b * std::cos(phi);
+        double next = slope > 0.0 ? phi - g / slope : 0.5 * (lo + hi);
+        if (!(next > lo && next < hi)) next = 0.5 * (lo + hi);
+        if (std::fabs(next - phi) <= 1e-13 * r.phi_max) return next;
+        phi = next;
+    }
+    return phi;
+}
+
+// A channel's value for its reconstruction y in the factor space, negatives clamped as eval does.
+double to_value(FactorSpace space, double y) {
+    const double p = y > 0.0 ? y : 0.0;
+    switch (space) {
+        case FactorSpace::Log: return std::expm1(p);
+        case FactorSpace::Cbrt: return p * p * p;
+        default: return p;
+    }
+}
+
 // The largest i in [0, n) with a[i] <= x (0 when none), for ascending a. Branch-free (the compare
 // selects): x is random, so a branchy search mispredicts about every other step.
 int last_not_above(const double* a, int n, double x) {
@@ -100,17 +143,22 @@ FactorSampler::FactorSampler(const Factors& f, const FactorSamplerOptions& o) : 
     if (!(o.cosine_share > 0.0 && o.cosine_share < 1.0))
         throw ValueError("factor sampler: cosine_share must be in (0, 1)");
     if (!(o.floor > 0.0 && o.floor < 1.0)) throw ValueError("factor sampler: floor must be in (0, 1)");
+    if (o.density != FactorDensity::Mixture && o.density != FactorDensity::Marginal)
+        throw ValueError("factor sampler: unknown density");
     const GridSpec& g = f.grid;
     const int rows = rows_ = g.n_theta_h, m = f.row_width(), K = o.n_theta_o;
     s_edges_.resize(rows + 1);
     for (int i = 0; i <= rows; ++i) s_edges_[i] = s_of_theta(axis::u_to_theta_h(i, rows));
 
-    // Each term's colour weight a_j, as a mean over channels (separate colour: a third, its channel's).
-    std::vector<double> a(m, 1.0 / 3.0);
-    if (f.colour == FactorColour::Shared)
-        for (int j = 0; j < m; ++j)
-            a[j] = (std::fabs(f.colour_weights[j]) + std::fabs(f.colour_weights[f.rank + j]) +
-                    std::fabs(f.colour_weights[2 * f.rank + j])) / 3.0;
+    // Channel c's weight of term j (separate colour: 1 for its own channel's terms), and a_j, their mean.
+    std::vector<double> mix(3 * static_cast<std::size_t>(m), 0.0), a(m, 0.0);
+    for (int ch = 0; ch < 3; ++ch)
+        for (int j = 0; j < m; ++j) {
+            const double x = f.colour == FactorColour::Shared ? f.colour_weights[ch * f.rank + j]
+                                                              : (j / f.rank == ch ? 1.0 : 0.0);
+            mix[static_cast<std::size_t>(ch) * m + j] = x;
+            a[j] += std::fabs(x) / 3.0;
+        }
 
     // Each term's θh density per unit s at the row edges: |u_j| as eval interpolates it (layout hd_p:
     // averaged over its θd rows); between edges it is taken as linear in s, with mass total_j.
@@ -129,8 +177,9 @@ FactorSampler::FactorSampler(const Factors& f, const FactorSamplerOptions& o) : 
                             (s_edges_[i] - s_edges_[i - 1]);
         }
 
-    // Per slice: the terms' albedo shares W_j = ∫ |a_j T_j| cosθi dωi, by the midpoint rule over (s, φh)
-    // on the rows × n_phi grid (dωi = 4 (wo·h) dωh, dωh = 2 ds dφ; constants dropped), then the mixture.
+    // Per slice, Mixture: the terms' albedo shares W_j = ∫ |a_j T_j| cosθi dωi, by the midpoint rule over
+    // (s, φh) on the rows × n_phi grid (dωi = 4 (wo·h) dωh, dωh = 2 ds dφ; constants dropped), then the
+    // mixture Σ_j W_j·|u_j|/total_j.
     const Terms terms(f);
     theta_o_.resize(K);
     cdf_.assign(static_cast<std::size_t>(K) * (rows + 1), 0.0);
@@ -139,24 +188,47 @@ FactorSampler::FactorSampler(const Factors& f, const FactorSamplerOptions& o) : 
     for (int k = 0; k < K; ++k) {
         theta_o_[k] = kMaxThetaODeg * kPi / 180.0 * k / (K - 1);
         const Vec3 wo = spherical_direction(theta_o_[k], 0.0);
-        std::fill(w.begin(), w.end(), 0.0);
-        for (int r = 0; r < rows; ++r) {
-            const double ds = s_edges_[r + 1] - s_edges_[r], s = s_edges_[r] + 0.5 * ds;
-            const double cos_h = 1.0 - 2.0 * s, sin_h = 2.0 * std::sqrt(s * (1.0 - s));
-            for (int p = 0; p < o.n_phi; ++p) {
-                const double phi = (p + 0.5) / o.n_phi * kPi;
-                const Vec3 h{sin_h * std::cos(phi), sin_h * std::sin(phi), cos_h};
-                const Vec3 wi = reflect(wo, h);
-                if (!(wi.z > 0.0)) continue;
-                terms.at(wi, wo, t.data());
-                const double jac = wi.z * dot(wo, h) * ds;
-                for (int j = 0; j < m; ++j) w[j] += std::fabs(a[j] * t[j]) * jac;
+        double* d = &density_[static_cast<std::size_t>(k) * (rows + 1)];
+        if (o.density == FactorDensity::Mixture) {
+            std::fill(w.begin(), w.end(), 0.0);
+            for (int r = 0; r < rows; ++r) {
+                const double ds = s_edges_[r + 1] - s_edges_[r], s = s_edges_[r] + 0.5 * ds;
+                const double cos_h = 1.0 - 2.0 * s, sin_h = 2.0 * std::sqrt(s * (1.0 - s));
+                for (int p = 0; p < o.n_phi; ++p) {
+                    const double phi = (p + 0.5) / o.n_phi * kPi;
+                    const Vec3 h{sin_h * std::cos(phi), sin_h * std::sin(phi), cos_h};
+                    const Vec3 wi = reflect(wo, h);
+                    if (!(wi.z > 0.0)) continue;
+                    terms.at(wi, wo, t.data());
+                    const double jac = wi.z * dot(wo, h) * ds;
+                    for (int j = 0; j < m; ++j) w[j] += std::fabs(a[j] * t[j]) * jac;
+                }
+            }
+            for (int j = 0; j < m; ++j)
+                if (total[j] > 0.0)
+                    for (int i = 0; i <= rows; ++i)
+                        d[i] += w[j] / total[j] * edge[static_cast<std::size_t>(j) * (rows + 1) + i];
+        } else {
+            // At each row edge, the integrand f·cosθi·(wo·h) of the reconstruction (mean channel, in the
+            // value domain) summed over φh: the θh marginal, per unit s, of what the data wants drawn.
+            for (int i = 0; i < rows; ++i) {
+                const double s = s_edges_[i], cos_h = 1.0 - 2.0 * s, sin_h = 2.0 * std::sqrt(s * (1.0 - s));
+                for (int p = 0; p < o.n_phi; ++p) {
+                    const double phi = (p + 0.5) / o.n_phi * kPi;
+                    const Vec3 h{sin_h * std::cos(phi), sin_h * std::sin(phi), cos_h};
+                    const Vec3 wi = reflect(wo, h);
+                    if (!(wi.z > 0.0)) continue;
+                    terms.at(wi, wo, t.data());
+                    double value = 0.0;
+                    for (int ch = 0; ch < 3; ++ch) {
+                        double y = 0.0;
+                        for (int j = 0; j < m; ++j) y += mix[static_cast<std::size_t>(ch) * m + j] * t[j];
+                        value += to_value(f.space, y);
+                    }
+                    d[i] += value * wi.z * dot(wo, h);
+                }
             }
         }
-        double* d = &density_[static_cast<std::size_t>(k) * (rows + 1)];
-        for (int j = 0; j < m; ++j)
-            if (total[j] > 0.0)
-                for (int i = 0; i <= rows; ++i) d[i] += w[j] / total[j] * edge[static_cast<std::size_t>(j) * (rows + 1) + i];
         double mass = 0.0;
         for (int r = 0; r < rows; ++r) mass += 0.5 * (d[r] + d[r + 1]) * (s_edges_[r + 1] - s_edges_[r]);
         // The floor: uniform in s over [0, ½]; all of the density when the factors give nothing.
@@ -198,21 +270,25 @@ double FactorSampler::density_at(int k, int r, double s) const {
     return d0 + (d1 - d0) * (s - s_edges_[r]) / (s_edges_[r + 1] - s_edges_[r]);
 }
 
-double FactorSampler::half_density(const SlicePair& sp, int r, double s, int r_lim, double s_lim) const {
+double FactorSampler::half_density(const SlicePair& sp, int r, double s, int r_max, double s_max, double wi_z,
+                                   double norm) const {
     double p = 0.0;
     for (const auto& [k, w] : {std::pair{sp.k0, 1.0 - sp.t}, std::pair{sp.k1, sp.t}})
-        if (w > 0.0) p += w * density_at(k, r, s) / cdf_at(k, r_lim, s_lim);
-    return p / (4.0 * kPi);  // uniform φh over 2π, and dωh = 2 ds dφ
+        if (w > 0.0) p += w * density_at(k, r, s) / cdf_at(k, r_max, s_max);
+    return 0.5 * p * wi_z / norm;  // the azimuth's density wi.z/norm, and dωh = 2 ds dφ
 }
 
 double FactorSampler::pdf(const Vec3& wo, const Vec3& wi) const {
     const Vec3 hw = half_vector(wi, wo);
     const Vec3 h = Azimuth(wo).to_local(hw);
-    const double rxy = std::sqrt(h.x * h.x + h.y * h.y);
-    const double s = rxy * rxy / (2.0 * (1.0 + h.z));  // (1 − cosθh)/2 without cancellation
-    const double s_lim = limit_s(wo.z, std::sqrt(wo.x * wo.x + wo.y * wo.y), rxy > 0.0 ? h.x / rxy : 1.0);
-    const double data =
-        s < s_lim ? half_density(slices_for(wo), row_of(s), s, row_of(s_lim), s_lim) / (4.0 * dot(wo, hw)) : 0.0;
+    const double s = (h.x * h.x + h.y * h.y) / (2.0 * (1.0 + h.z));  // (1 − cosθh)/2 without cancellation
+    const double cos_o = wo.z, sin_o = std::sqrt(wo.x * wo.x + wo.y * wo.y);
+    const double s_max = limit_s(cos_o, sin_o, 1.0);
+    const AzimuthRange az = azimuth_range(cos_o, sin_o, s);
+    const double data = s < s_max && az.norm > 0.0
+                            ? half_density(slices_for(wo), row_of(s), s, row_of(s_max), s_max, wi.z, az.norm) /
+                                  (4.0 * dot(wo, hw))
+                            : 0.0;
     const double share = options_.cosine_share;
     return share * wi.z / kPi + (1.0 - share) * (std::isfinite(data) && data > 0.0 ? data : 0.0);
 }
@@ -224,33 +300,36 @@ BrdfSample FactorSampler::sample(const Vec3& wo, double u1, double u2) const {
         const Vec3 wi{r * std::cos(phi), r * std::sin(phi), std::sqrt(std::fmax(0.0, 1.0 - v))};
         return wi.z > 0.0 ? BrdfSample{wi, pdf(wo, wi), {}} : BrdfSample{};
     }
-    // u1 picks the slice, then the row; u2 the azimuth φh ∈ [−π, π) relative to wo.
+    // u1 picks the slice, then θh; u2 the side of wo's plane, then the azimuth.
     double v = (u1 - share) / (1.0 - share);
     const SlicePair sp = slices_for(wo);
     const bool upper = !(v < 1.0 - sp.t);
     v = std::fmin(upper ? (v - (1.0 - sp.t)) / sp.t : v / (1.0 - sp.t), std::nextafter(1.0, 0.0));
     const int k = upper ? sp.k1 : sp.k0;
-    const double phi = kPi * (2.0 * u2 - 1.0), cos_phi = std::cos(phi), sin_phi = std::sin(phi);
     const double cos_o = wo.z, sin_o = std::sqrt(wo.x * wo.x + wo.y * wo.y);
-    const double s_lim = limit_s(cos_o, sin_o, cos_phi);
-    const int r_lim = row_of(s_lim);
-    // Inversion of the CDF truncated at s_lim: the row, then s uniform within it.
-    const double x = v * cdf_at(k, r_lim, s_lim);
+    const double s_max = limit_s(cos_o, sin_o, 1.0);
+    const int r_max = row_of(s_max);
+    // Inversion of the CDF truncated at s_max: the row, then s within it.
+    const double x = v * cdf_at(k, r_max, s_max);
     const double* c = &cdf_[static_cast<std::size_t>(k) * (rows_ + 1)];
-    const int r = last_not_above(c, r_lim + 1, x);  // every row has mass (the floor): x < c[r + 1]
+    const int r = last_not_above(c, r_max + 1, x);  // every row has mass (the floor): x < c[r + 1]
     // The density is linear across the row, d0 + a·(s − s_r): solve d0·y + a·y²/2 = x − c[r] for y in
     // the form without cancellation.
     const double* d = &density_[static_cast<std::size_t>(k) * (rows_ + 1)];
     const double ds = s_edges_[r + 1] - s_edges_[r], a = (d[r + 1] - d[r]) / ds, mass = x - c[r];
     const double root = d[r] + std::sqrt(std::fmax(0.0, d[r] * d[r] + 2.0 * a * mass));
     const double y = root > 0.0 ? 2.0 * mass / root : 0.0;
-    const double s = std::fmin(s_edges_[r] + std::clamp(y, 0.0, ds), s_lim);
+    const double s = std::fmin(s_edges_[r] + std::clamp(y, 0.0, ds), s_max);
+    const AzimuthRange az = azimuth_range(cos_o, sin_o, s);
+    if (!(az.norm > 0.0)) return {};
+    const double side = u2 < 0.5 ? 1.0 : -1.0, w2 = u2 < 0.5 ? 2.0 * u2 : 2.0 * u2 - 1.0;
+    const double phi = side * solve_azimuth(az, w2 * 0.5 * az.norm);
     const double sin_h = 2.0 * std::sqrt(s * (1.0 - s)), cos_h = 1.0 - 2.0 * s;
-    const Vec3 h = Azimuth(wo).to_world({sin_h * cos_phi, sin_h * sin_phi, cos_h});
+    const Vec3 h = Azimuth(wo).to_world({sin_h * std::cos(phi), sin_h * std::sin(phi), cos_h});
     const Vec3 wi = reflect(wo, h);
     if (!(wi.z > 0.0)) return {};
     // The density is continuous in s, so row r serves even when s rounded onto its upper edge.
-    const double data = half_density(sp, r, s, r_lim, s_lim) / (4.0 * dot(wo, h));
+    const double data = half_density(sp, r, s, r_max, s_max, wi.z, az.norm) / (4.0 * dot(wo, h));
     if (!(std::isfinite(data) && data > 0.0)) return {};
     return {wi, share * wi.z / kPi + (1.0 - share) * data, {}};
 }

@@ -31,7 +31,13 @@ namespace brdfz {
 
 struct Factors;  // repr/factored.h, which holds this sampler
 
+// The θh density of a slice: Mixture, Lawrence's per-term densities |u_j| mixed by the terms' albedo
+// shares; Marginal, the φh-marginal of the reconstruction's integrand f·cosθi·(wo·h) at the row edges
+// (n_phi points each), which also follows the columns' factors, the Jacobian and the cosine.
+enum class FactorDensity { Mixture, Marginal };
+
 struct FactorSamplerOptions {
+    FactorDensity density = FactorDensity::Marginal;
     int n_theta_o = 16;         // view-elevation slices of term weights over [0°, kMaxThetaODeg]
     int n_phi = 16;             // quadrature points over φh ∈ [0, π] per θh row, for the term weights
     double cosine_share = 0.05; // probability of a cosine-weighted sample (as HalfVectorSamplerOptions)
@@ -63,9 +69,10 @@ private:
     // CDF and density (per unit s) of slice k at s in row r.
     double cdf_at(int k, int r, double s) const;
     double density_at(int k, int r, double s) const;
-    // Density of the data part per unit solid angle of h at s in row r (s < s_lim, the truncation in row
-    // r_lim at h's azimuth), for the slice pair.
-    double half_density(const SlicePair& sp, int r, double s, int r_lim, double s_lim) const;
+    // Density of the data part per unit solid angle of h at s in row r (s < s_max, the truncation in row
+    // r_max), for the slice pair, with wi.z and the azimuth normaliser at s.
+    double half_density(const SlicePair& sp, int r, double s, int r_max, double s_max, double wi_z,
+                        double norm) const;
 
     FactorSamplerOptions options_;
     int rows_ = 0;
