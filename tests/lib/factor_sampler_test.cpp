@@ -69,21 +69,24 @@ RandomDraws random_draws(const Brdf& b, int n, std::uint64_t seed) {
     return r;
 }
 
-// A FactorSampler as a Brdf (f = 1/π), for the statistical checks.
+// A FactorSampler as a Brdf (f = 1/π, or another Brdf's f), for the statistical checks.
 class Sampled final : public Brdf {
 public:
-    explicit Sampled(const FactorSampler& s) : s_(s) {}
+    explicit Sampled(const FactorSampler& s, const Brdf* f = nullptr) : s_(s), f_(f) {}
     int channels() const override { return 1; }
     std::size_t nbytes() const override { return s_.nbytes(); }
     std::string describe() const override { return "factor sampler"; }
 
 protected:
-    Rgb eval_above(const Vec3&, const Vec3&) const override { return {M_1_PI, M_1_PI, M_1_PI}; }
+    Rgb eval_above(const Vec3& wi, const Vec3& wo) const override {
+        return f_ ? f_->eval(wi, wo) : Rgb{M_1_PI, M_1_PI, M_1_PI};
+    }
     BrdfSample sample_above(const Vec3& wo, double u1, double u2) const override { return s_.sample(wo, u1, u2); }
     double pdf_above(const Vec3& wo, const Vec3& wi) const override { return s_.pdf(wo, wi); }
 
 private:
     const FactorSampler& s_;
+    const Brdf* f_;
 };
 
 }  // namespace
@@ -108,6 +111,11 @@ TEST_CASE("factor sampler: chi-square, normalisation, round trip over layouts, c
         INFO(label(f.brdf->factors()));
         REQUIRE(f.brdf->factor_sampler());
         check_sampler(*f.brdf, 1000000);
+        // Lawrence's term mixture as the θh density.
+        FactorSamplerOptions mixture;
+        mixture.density = FactorDensity::Mixture;
+        const FactorSampler s(f.brdf->factors(), mixture);
+        check_sampler(Sampled(s, f.brdf.get()), 1000000);
     }
 }
 
@@ -146,8 +154,11 @@ TEST_CASE("factor sampler: draws come from the factors' theta_h distribution", "
         CHECK(outside < 0.06 * n);
         CHECK(outside > 0.01 * n);  // the cosine share is really there
     }
-    // And the density stays exact for factors with hard edges.
-    check_sampler(Sampled(s), 200000, 512);
+    // And the density stays exact for factors with hard edges, with either θh density.
+    check_sampler(Sampled(s), 150000, 512);
+    o.density = FactorDensity::Mixture;
+    const FactorSampler mixture(f, o);
+    check_sampler(Sampled(mixture), 100000, 256);
 }
 
 TEST_CASE("factor sampler: random (wo, u) give finite, non-negative pdfs and weights, and no lost draws",
@@ -201,12 +212,15 @@ TEST_CASE("factor sampler: options out of range are rejected", "[sample][factore
     o = {};
     o.floor = std::nan("");
     CHECK_THROWS_AS(FactorSampler(factors, o), ValueError);
+    o = {};
+    o.density = static_cast<FactorDensity>(7);
+    CHECK_THROWS_AS(FactorSampler(factors, o), ValueError);
 }
 
 namespace {
 
 // The real-data checks on one MERL table: a small linear nmf of it, sampled from its factors.
-void check_merl(const std::filesystem::path& path, std::size_t samples) {
+void check_merl(const std::filesystem::path& path, std::size_t samples, int integral_points) {
     INFO(path);
     const Loaded l = load(path.string());
     const auto* source = dynamic_cast<const TabularBrdf*>(l.brdf.get());
@@ -214,7 +228,7 @@ void check_merl(const std::filesystem::path& path, std::size_t samples) {
     const Factored f = factor(source->table(), options(FactorMethod::Nmf, 2, FactorSpace::Linear, FactorLayout::HxDP,
                                                        FactorColour::Shared, 10));
     REQUIRE(f.brdf->factor_sampler());
-    check_sampler(*f.brdf, samples);
+    check_sampler(*f.brdf, samples, integral_points);
     const RandomDraws r = random_draws(*f.brdf, 200000, 9);
     CHECK(r.bad == 0);
     CHECK(r.failed < 10);
@@ -229,7 +243,7 @@ TEST_CASE("factor sampler on a real MERL table (chrome)", "[sample][factored][da
         WARN("skipped: no MERL chrome table (../shared missing, or numpy unavailable to generate them)");
         return;
     }
-    check_merl(*chrome, 200000);
+    check_merl(*chrome, 150000, 512);
 }
 
 TEST_CASE("factor sampler on every real MERL table", "[sample][factored][data][heavy]") {
@@ -238,5 +252,5 @@ TEST_CASE("factor sampler on every real MERL table", "[sample][factored][data][h
         WARN("skipped: no MERL tables (../shared missing, or numpy unavailable to generate them)");
         return;
     }
-    for (const auto& path : files) check_merl(path, 1000000);
+    for (const auto& path : files) check_merl(path, 1000000, 1024);
 }
