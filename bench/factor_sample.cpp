@@ -2,10 +2,9 @@
 // build time, variance of the directional-albedo estimate at equal sample counts, and sampling speed.
 //
 // Usage: factor_sample [--spec SPEC]... [FILE.binary...]
-// Without files the 90x90x180 table is synthetic (bench/common.h). Default specs: linear nmf and svd
-// (where FactoredBrdf uses the factor sampler) and log / cbrt (where it uses the half-vector sampler;
-// the factor sampler is built on them directly to justify that choice). Every estimator weights by the
-// same f (the factored BRDF's eval): only the density the directions are drawn from differs.
+// Without files the 90x90x180 table is synthetic (bench/common.h). Default specs: nmf and svd in linear
+// space, svd in log space, nmf in cbrt space. Every estimator weights by the same f (the factored BRDF's
+// eval): only the density the directions are drawn from differs.
 // Variance: of one sample's albedo contribution f·cosθi/pdf (mean channel), n = 10^6 per θo, same seed.
 // Factor sampler: both densities (FactorDensity::Marginal, the default, and Mixture, Lawrence's).
 // Build: single thread, median of 5 (factor) and 3 (half-vector, threads = 1).
@@ -142,8 +141,7 @@ int main(int argc, char** argv) try {
             const HalfVectorSampler hs(f, ho);
             const SampledWith<FactorSampler> by_factors(f, &fs), by_mixture(f, &ms), cosine(f, nullptr);
             const SampledWith<HalfVectorSampler> by_half(f, &hs);
-            std::printf("%s  %s  (FactoredBrdf samples with the %s sampler)\n", name.c_str(), spec.c_str(),
-                        f.factor_sampler() ? "factor" : "half-vector");
+            std::printf("%s  %s\n", name.c_str(), spec.c_str());
             std::printf("  build (1 thread): factor (marginal) %.2f ms, factor (mixture) %.2f ms, half-vector %.1f ms "
                         "(%.0fx marginal)\n",
                         factor_ms, mixture_ms, half_ms, half_ms / factor_ms);

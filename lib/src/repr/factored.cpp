@@ -578,20 +578,15 @@ const HalfVectorSampler& FactoredBrdf::sampler() const {
     return sampler_.get([this] { return std::make_unique<HalfVectorSampler>(*this); });
 }
 
-const FactorSampler* FactoredBrdf::factor_sampler() const {
-    if (f_.space != FactorSpace::Linear && f_.space != FactorSpace::Cos) return nullptr;
-    return &factor_sampler_.get([this] { return std::make_unique<FactorSampler>(f_); });
+const FactorSampler& FactoredBrdf::factor_sampler() const {
+    return factor_sampler_.get([this] { return std::make_unique<FactorSampler>(f_); });
 }
 
 BrdfSample FactoredBrdf::sample_above(const Vec3& wo, double u1, double u2) const {
-    if (const FactorSampler* s = factor_sampler()) return s->sample(wo, u1, u2);
-    return sampler().sample(wo, u1, u2);
+    return factor_sampler().sample(wo, u1, u2);
 }
 
-double FactoredBrdf::pdf_above(const Vec3& wo, const Vec3& wi) const {
-    if (const FactorSampler* s = factor_sampler()) return s->pdf(wo, wi);
-    return sampler().pdf(wo, wi);
-}
+double FactoredBrdf::pdf_above(const Vec3& wo, const Vec3& wi) const { return factor_sampler().pdf(wo, wi); }
 
 Factored factor(const Table& table, const FactorOptions& o) {
     const char* method = factor_method_name(o.method);

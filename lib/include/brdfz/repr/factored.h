@@ -86,11 +86,14 @@ public:
     // Channel values eval has clamped to 0 so far (svd reconstructions below 0), over all threads.
     std::uint64_t clamped_evaluations() const { return clamped_.load(std::memory_order_relaxed); }
 
-    // The half-vector sampler (CDFs tabulated from eval, exact pdf), built on first use.
+    // The sampler sample() and pdf() use: drawn from the factors (sample/factor_sampler.h), built on
+    // first use in milliseconds. In every space: on the MERL tables its albedo variance is 0.03–0.7x the
+    // half-vector sampler's at normal view, but up to ~12x at oblique views where the φh dependence is
+    // strong (gold-metallic-paint); the space makes no difference (bench/README.md, "Factor sampler").
+    const FactorSampler& factor_sampler() const;
+    // The generic half-vector sampler (CDFs tabulated from eval, exact pdf), built on first use: for
+    // comparison (bench/factor_sample).
     const HalfVectorSampler& sampler() const;
-    // The sampler drawing from the factors' CDFs (sample/factor_sampler.h), built on first use; null
-    // for log and cbrt spaces, where the half-vector sampler has the lower variance and sample() uses it.
-    const FactorSampler* factor_sampler() const;
 
     int channels() const override { return 3; }
     std::size_t nbytes() const override;

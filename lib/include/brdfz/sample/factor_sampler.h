@@ -18,9 +18,10 @@
 // in s) keeps every row reachable, and a share of cosine-weighted sampling keeps the pdf positive
 // wherever f·cosθi may be.
 //
-// Any factors give a valid density (magnitudes are used); FactoredBrdf (repr/factored.h) chooses per
-// space between this sampler and the half-vector sampler by measured variance (bench/README.md,
-// "Factor sampler").
+// Any factors, in any space, give a valid density (negative reconstructions count as 0, as eval clamps
+// them). Measured against the half-vector sampler (bench/README.md, "Factor sampler"): the Marginal
+// density in the log and cbrt spaces does as well as in the linear ones, so FactoredBrdf uses this
+// sampler in every space rather than falling back.
 #pragma once
 
 #include <vector>
@@ -32,7 +33,7 @@ namespace brdfz {
 struct Factors;  // repr/factored.h, which holds this sampler
 
 // The θh density of a slice (see above). Marginal follows the columns' factors, the Jacobian and the
-// cosine; Mixture only the rows' factors (bench/README.md: 2–50x the variance of Marginal).
+// cosine; Mixture only the rows' factors (bench/README.md: up to 1000x the variance of Marginal).
 enum class FactorDensity { Mixture, Marginal };
 
 struct FactorSamplerOptions {
