@@ -32,13 +32,11 @@ double s_of_theta(double theta) {
     return h * h;
 }
 
-// s of the largest θh whose mirror of wo is above the horizon, at azimuth φh relative to wo:
-// wi.z = sinθo·sin2θh·cosφh + cosθo·cos2θh = R·cos(2θh − α) > 0  ⇔  θh < θlim = π/4 + α/2, with
-// tanα = tanθo·cosφh. Without trigonometric calls: s = (1 − cosθlim)/2, cosθlim = (cos½α − sin½α)/√2,
-// and the half angles of α from cosα.
-double limit_s(double cos_o, double sin_o, double cos_phi) {
-    const double y = sin_o * cos_phi, cos_a = cos_o / std::sqrt(cos_o * cos_o + y * y);
-    const double c = std::sqrt(0.5 * (1.0 + cos_a)), s = std::copysign(std::sqrt(0.5 * (1.0 - cos_a)), y);
+// s of the largest θh that reflects wo above the horizon for some azimuth: at φh = 0,
+// wi.z = sinθo·sin2θh + cosθo·cos2θh = cos(2θh − θo) > 0  ⇔  θh < θmax = π/4 + θo/2. Without
+// trigonometric calls: s = (1 − cosθmax)/2 with cosθmax = (cos½θo − sin½θo)/√2, the half angles from cosθo.
+double max_s(double cos_o) {
+    const double c = std::sqrt(0.5 * (1.0 + cos_o)), s = std::sqrt(std::fmax(0.0, 0.5 * (1.0 - cos_o)));
     return 0.5 * (1.0 - (c - s) * std::numbers::sqrt2 / 2.0);
 }
 
@@ -283,7 +281,7 @@ double FactorSampler::pdf(const Vec3& wo, const Vec3& wi) const {
     const Vec3 h = Azimuth(wo).to_local(hw);
     const double s = (h.x * h.x + h.y * h.y) / (2.0 * (1.0 + h.z));  // (1 − cosθh)/2 without cancellation
     const double cos_o = wo.z, sin_o = std::sqrt(wo.x * wo.x + wo.y * wo.y);
-    const double s_max = limit_s(cos_o, sin_o, 1.0);
+    const double s_max = max_s(cos_o);
     const AzimuthRange az = azimuth_range(cos_o, sin_o, s);
     const double data = s < s_max && az.norm > 0.0
                             ? half_density(slices_for(wo), row_of(s), s, row_of(s_max), s_max, wi.z, az.norm) /
@@ -307,7 +305,7 @@ BrdfSample FactorSampler::sample(const Vec3& wo, double u1, double u2) const {
     v = std::fmin(upper ? (v - (1.0 - sp.t)) / sp.t : v / (1.0 - sp.t), std::nextafter(1.0, 0.0));
     const int k = upper ? sp.k1 : sp.k0;
     const double cos_o = wo.z, sin_o = std::sqrt(wo.x * wo.x + wo.y * wo.y);
-    const double s_max = limit_s(cos_o, sin_o, 1.0);
+    const double s_max = max_s(cos_o);
     const int r_max = row_of(s_max);
     // Inversion of the CDF truncated at s_max: the row, then s within it.
     const double x = v * cdf_at(k, r_max, s_max);
