@@ -597,11 +597,15 @@ const HalfVectorSampler& FactoredBrdf::sampler() const {
     return sampler_.get([this] { return std::make_unique<HalfVectorSampler>(*this); });
 }
 
-BrdfSample FactoredBrdf::sample_above(const Vec3& wo, double u1, double u2) const {
-    return sampler().sample(wo, u1, u2);
+const FactorSampler& FactoredBrdf::factor_sampler() const {
+    return factor_sampler_.get([this] { return std::make_unique<FactorSampler>(f_); });
 }
 
-double FactoredBrdf::pdf_above(const Vec3& wo, const Vec3& wi) const { return sampler().pdf(wo, wi); }
+BrdfSample FactoredBrdf::sample_above(const Vec3& wo, double u1, double u2) const {
+    return factor_sampler().sample(wo, u1, u2);
+}
+
+double FactoredBrdf::pdf_above(const Vec3& wo, const Vec3& wi) const { return factor_sampler().pdf(wo, wi); }
 
 Factored factor(const Table& table, const FactorOptions& o) {
     const char* method = factor_method_name(o.method);

@@ -33,6 +33,7 @@
 #include <vector>
 
 #include "brdfz/brdf.h"
+#include "brdfz/sample/factor_sampler.h"
 #include "brdfz/sample/halfvector.h"
 #include "brdfz/sample/lazy.h"
 #include "brdfz/table.h"
@@ -85,7 +86,13 @@ public:
     // Channel values eval has clamped to 0 so far (svd reconstructions below 0), over all threads.
     std::uint64_t clamped_evaluations() const { return clamped_.load(std::memory_order_relaxed); }
 
-    // The importance sampler (half-vector CDFs tabulated from eval, exact pdf), built on first use.
+    // The sampler sample() and pdf() use: drawn from the factors (sample/factor_sampler.h), built on
+    // first use in milliseconds. In every space: on the MERL tables its albedo variance is 0.03–0.7x the
+    // half-vector sampler's at normal view, but up to ~12x at oblique views where the φh dependence is
+    // strong (gold-metallic-paint); the space makes no difference (bench/README.md, "Factor sampler").
+    const FactorSampler& factor_sampler() const;
+    // The generic half-vector sampler (CDFs tabulated from eval, exact pdf), built on first use: for
+    // comparison (bench/factor_sample).
     const HalfVectorSampler& sampler() const;
 
     int channels() const override { return 3; }
@@ -108,6 +115,7 @@ private:
     std::vector<double> mix_;
     mutable std::atomic<std::uint64_t> clamped_{0};
     Lazy<HalfVectorSampler> sampler_;
+    Lazy<FactorSampler> factor_sampler_;
 };
 
 // Options of factor(). The spec-string kinds (compress.h) `svd:...` and `nmf:...` map onto these:
