@@ -89,12 +89,15 @@ private:
     const Brdf* f_;
 };
 
+// The factored BRDF sampled through its factor sampler (sample() itself uses the half-vector sampler).
+Sampled by_factors(const Factored& f) { return Sampled(f.brdf->factor_sampler(), f.brdf.get()); }
+
 }  // namespace
 
 TEST_CASE("factor sampler: chi-square, normalisation, round trip on a synthetic factorisation", "[sample][factored]") {
     const Factored f = factor(coated({45, 45, 90}, 0.08), options(FactorMethod::Nmf, 3, FactorSpace::Linear,
                                                                   FactorLayout::HxDP, FactorColour::Separate));
-    check_sampler(*f.brdf, 200000, 512);
+    check_sampler(by_factors(f), 200000, 512);
 }
 
 TEST_CASE("factor sampler: chi-square, normalisation, round trip over layouts, colours and spaces",
@@ -108,7 +111,7 @@ TEST_CASE("factor sampler: chi-square, normalisation, round trip over layouts, c
     for (const FactorOptions& o : cases) {
         const Factored f = factor(t, o);
         INFO(label(f.brdf->factors()));
-        check_sampler(*f.brdf, 1000000);
+        check_sampler(by_factors(f), 1000000);
         // Lawrence's term mixture as the θh density.
         FactorSamplerOptions mixture;
         mixture.density = FactorDensity::Mixture;
@@ -163,7 +166,7 @@ TEST_CASE("factor sampler: random (wo, u) give finite, non-negative pdfs and wei
           "[sample][factored]") {
     const Factored f = factor(coated({32, 32, 64}, 0.03), options(FactorMethod::Svd, 2, FactorSpace::Linear,
                                                                   FactorLayout::HDxP, FactorColour::Shared));
-    const RandomDraws r = random_draws(*f.brdf, 1000000, 5);
+    const RandomDraws r = random_draws(by_factors(f), 1000000, 5);
     CHECK(r.bad == 0);
     CHECK(r.failed < 10);  // the horizon truncation leaves only rounding at the horizon to fail
 }
@@ -171,24 +174,27 @@ TEST_CASE("factor sampler: random (wo, u) give finite, non-negative pdfs and wei
 TEST_CASE("factor sampler: 10^7 random (wo, u)", "[sample][factored][heavy]") {
     const Factored f = factor(coated({32, 32, 64}, 0.02), options(FactorMethod::Nmf, 3, FactorSpace::Cos,
                                                                   FactorLayout::HxDP, FactorColour::Separate));
-    const RandomDraws r = random_draws(*f.brdf, 10000000, 6);
+    const RandomDraws r = random_draws(by_factors(f), 10000000, 6);
     CHECK(r.bad == 0);
     CHECK(r.failed < 100);
 }
 
-TEST_CASE("factored: every space samples from its factors", "[sample][factored]") {
+TEST_CASE("factored: every space builds a factor sampler; sample() keeps the half-vector sampler", "[sample][factored]") {
     const Table t = coated({16, 16, 32}, 0.1);
     for (FactorSpace space : {FactorSpace::Linear, FactorSpace::Cos, FactorSpace::Log, FactorSpace::Cbrt}) {
         const Factored f = factor(t, options(FactorMethod::Nmf, 2, space, FactorLayout::HxDP, FactorColour::Shared, 10));
         INFO(factor_space_name(space));
         const FactoredBrdf& b = *f.brdf;
         const Vec3 wo = spherical_direction(0.7, 0.2);
-        const BrdfSample s = b.sample(wo, 0.3, 0.6), expected = b.factor_sampler().sample(wo, 0.3, 0.6);
+        const BrdfSample s = b.sample(wo, 0.3, 0.6), by_hv = b.sampler().sample(wo, 0.3, 0.6);
         REQUIRE(s.pdf > 0);
-        CHECK(s.wi.x == expected.wi.x);
-        CHECK(s.pdf == expected.pdf);
-        CHECK(b.pdf(wo, s.wi) == b.factor_sampler().pdf(wo, s.wi));
-        CHECK(s.pdf != b.sampler().pdf(wo, s.wi));  // not the half-vector sampler's density
+        CHECK(s.wi.x == by_hv.wi.x);
+        CHECK(s.pdf == by_hv.pdf);
+        CHECK(b.pdf(wo, s.wi) == b.sampler().pdf(wo, s.wi));
+        const BrdfSample d = b.factor_sampler().sample(wo, 0.3, 0.6);
+        REQUIRE(d.pdf > 0);
+        CHECK(d.pdf == Approx(b.factor_sampler().pdf(wo, d.wi)).epsilon(1e-9));
+        CHECK(d.pdf != b.sampler().pdf(wo, d.wi));  // its own density, not the half-vector sampler's
     }
 }
 
@@ -223,8 +229,8 @@ void check_merl(const std::filesystem::path& path, std::size_t samples, int inte
     REQUIRE(source);
     const Factored f = factor(source->table(), options(FactorMethod::Nmf, 2, FactorSpace::Linear, FactorLayout::HxDP,
                                                        FactorColour::Shared, 10));
-    check_sampler(*f.brdf, samples, integral_points);
-    const RandomDraws r = random_draws(*f.brdf, 200000, 9);
+    check_sampler(by_factors(f), samples, integral_points);
+    const RandomDraws r = random_draws(by_factors(f), 200000, 9);
     CHECK(r.bad == 0);
     CHECK(r.failed < 10);
 }

@@ -602,10 +602,10 @@ const FactorSampler& FactoredBrdf::factor_sampler() const {
 }
 
 BrdfSample FactoredBrdf::sample_above(const Vec3& wo, double u1, double u2) const {
-    return factor_sampler().sample(wo, u1, u2);
+    return sampler().sample(wo, u1, u2);
 }
 
-double FactoredBrdf::pdf_above(const Vec3& wo, const Vec3& wi) const { return factor_sampler().pdf(wo, wi); }
+double FactoredBrdf::pdf_above(const Vec3& wo, const Vec3& wi) const { return sampler().pdf(wo, wi); }
 
 Factored factor(const Table& table, const FactorOptions& o) {
     const char* method = factor_method_name(o.method);

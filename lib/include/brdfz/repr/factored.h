@@ -86,13 +86,13 @@ public:
     // Channel values eval has clamped to 0 so far (svd reconstructions below 0), over all threads.
     std::uint64_t clamped_evaluations() const { return clamped_.load(std::memory_order_relaxed); }
 
-    // The sampler sample() and pdf() use: drawn from the factors (sample/factor_sampler.h), built on
-    // first use in milliseconds. In every space: on the MERL tables its albedo variance is 0.03–0.7x the
-    // half-vector sampler's at normal view, but up to ~12x at oblique views where the φh dependence is
-    // strong (gold-metallic-paint); the space makes no difference (bench/README.md, "Factor sampler").
+    // A sampler drawn from the factors alone (sample/factor_sampler.h; Lawrence et al. 2004), built in
+    // milliseconds. On the MERL tables its albedo variance is 0.03–0.7x the half-vector sampler's at
+    // normal view but up to ~12x at oblique views where f depends strongly on φh (gold-metallic-paint),
+    // and its draws are ~3x slower (bench/README.md, "Factor sampler"), so sample() does not use it.
     const FactorSampler& factor_sampler() const;
-    // The generic half-vector sampler (CDFs tabulated from eval, exact pdf), built on first use: for
-    // comparison (bench/factor_sample).
+    // The sampler sample() and pdf() use: the half-vector sampler (CDFs tabulated from eval, exact
+    // pdf), built on first use in 70–400 ms.
     const HalfVectorSampler& sampler() const;
 
     int channels() const override { return 3; }
