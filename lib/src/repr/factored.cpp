@@ -58,10 +58,11 @@ double to_space(FactorSpace s, double f) {
     }
 }
 
-// The value for a reconstruction y; y < 0 (possible for svd) gives 0 and is counted.
-inline double from_space(FactorSpace s, double y, std::uint64_t& clamped) {
+// The value for a reconstruction y, at most the ceiling (in the transform space); y < 0 (possible
+// for svd) gives 0 and is counted.
+inline double from_space(FactorSpace s, double y, double ceiling, std::uint64_t& clamped) {
     clamped += y < 0.0;
-    const double p = y > 0.0 ? y : 0.0;  // NaN cannot occur: factors are finite
+    const double p = y > 0.0 ? std::min(y, ceiling) : 0.0;  // NaN cannot occur: factors are finite
     switch (s) {
         case FactorSpace::Log: return std::expm1(p);
         case FactorSpace::Cbrt: return p * p * p;
@@ -145,16 +146,17 @@ inline CornersOf<L> factor_corners(const Factors& f, const detail::BinCoords& c,
         return corners_hdxp(f.grid, k, m);
 }
 
-inline Rgb to_values(FactorSpace space, const double y[3], std::uint64_t& clamped) {
-    return {from_space(space, y[0], clamped), from_space(space, y[1], clamped), from_space(space, y[2], clamped)};
+inline Rgb to_values(FactorSpace space, const double y[3], const double ceiling[3], std::uint64_t& clamped) {
+    return {from_space(space, y[0], ceiling[0], clamped), from_space(space, y[1], ceiling[1], clamped),
+            from_space(space, y[2], ceiling[2], clamped)};
 }
 
 // Blocks of pairs in three passes, as the tabular kernel: (1) the coordinates, branch-free so the
 // compiler vectorises them; (2) the corners, prefetching the factor rows (large factors miss the
 // cache); (3) the blends.
 template <FactorLayout L, bool Shared>
-void eval_pairs(const Factors& f, const float* mix, const Vec3* wi, const Vec3* wo, Rgb* out, std::size_t n,
-                std::uint64_t& clamped) {
+void eval_pairs(const Factors& f, const float* mix, const double* ceiling, const Vec3* wi, const Vec3* wo, Rgb* out,
+                std::size_t n, std::uint64_t& clamped) {
     constexpr std::size_t kBlock = 64;
     detail::BinCoords coords[kBlock];
     CornersOf<L> corners[kBlock];
@@ -180,16 +182,17 @@ void eval_pairs(const Factors& f, const float* mix, const Vec3* wi, const Vec3* 
             }
             double y[3];
             blend<Shared>(f, mix, corners[k], y);
-            out[start + k] = to_values(f.space, y, clamped);
+            out[start + k] = to_values(f.space, y, ceiling, clamped);
         }
     }
 }
 
 template <FactorLayout L, bool Shared>
-Rgb eval_one(const Factors& f, const float* mix, const Vec3& wi, const Vec3& wo, std::uint64_t& clamped) {
+Rgb eval_one(const Factors& f, const float* mix, const double* ceiling, const Vec3& wi, const Vec3& wo,
+             std::uint64_t& clamped) {
     double y[3];
     blend<Shared>(f, mix, factor_corners<L>(f, detail::fast_bin_coords(f.grid, wi, wo), wi, wo), y);
-    return to_values(f.space, y, clamped);
+    return to_values(f.space, y, ceiling, clamped);
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -229,15 +232,27 @@ struct ColourSums {
 };
 
 constexpr int kChunks = 32;  // fixed work split, so results do not depend on the thread count
+// Small enough that a masked table factored at full rank is still reproduced (5e-7 relative; 1e-3
+// gave 4e-5), large enough to bound the extrapolation (a 16×16×32 coat, rank 4, log space: 625 -> 7).
+constexpr double kRidge = 1e-5;
 
 // Updates every row of `out` given the other factor F: row i minimises
-//   Σ_c Σ_j w_ij (y_cij − Σ_a out_ia s_ca F_ja)²
-// (non-negatively for nmf) with a ridge of 1e-10 of the mean diagonal, which only matters for rows
-// whose valid bins do not determine all components. Its normal equations are G_i ∘ (Σ_c s_c s_cᵀ)
+//   Σ_c Σ_j w_ij (y_cij − Σ_a out_ia s_ca F_ja)² + Σ_a λ_a out_ia²
+// (non-negatively for nmf). In log and cbrt space the ridge λ_ia is `ridge` times what row i's
+// diagonal of the normal equations lacks of the mean over rows (0 for a row as well measured as the
+// average, so a fully valid table is factored exactly): a row with few valid bins, or nearly
+// collinear ones, has its undetermined directions pulled towards 0 instead of fitting its few values
+// with large opposite components, which extrapolate into the invalid bins and there, through expm1
+// or the cube, far beyond the data (RGL cc_ibiza_sunset at grazing θd, nmf rank 2, log space: values
+// past e^700). In linear and cos space the extrapolation stays linear, eval's ceiling bounds it, and
+// the ridge would cost accuracy (svd rank 4 on a GGX plastic: cos_rmse_rel 0.0003 -> 0.01), so
+// `ridge` is 0 there. Rows without any valid bin come out 0. A ridge of 1e-10 of the row's own
+// diagonal keeps the equations definite. Its normal equations are G_i ∘ (Σ_c s_c s_cᵀ)
 // with G_i = Σ_j w_ij F_j F_jᵀ: for all rows at once, one product W·P with P_j = vec(F_j F_jᵀ), and
 // the right-hand sides (W ∘ Y_c)·F. Returns the objective after the update and the colour weights'
 // normal equations.
-ColourSums update_side(Mat& out, const Mat& other, const Side& side, const Mat& s, bool nonneg, int threads) {
+ColourSums update_side(Mat& out, const Mat& other, const Side& side, const Mat& s, bool nonneg, double ridge,
+                       int threads) {
     const Eigen::Index n = out.rows(), k = out.cols(), m = other.rows();
     const int channels = static_cast<int>(side.wx.size());
     Eigen::MatrixXd s2 = Eigen::MatrixXd::Zero(k, k);
@@ -246,6 +261,9 @@ ColourSums update_side(Mat& out, const Mat& other, const Side& side, const Mat& 
     for (Eigen::Index j = 0; j < m; ++j)
         for (Eigen::Index a = 0; a < k; ++a)
             for (Eigen::Index b = 0; b < k; ++b) outer(j, a * k + b) = other(j, a) * other(j, b);
+    // Mean over rows of diag(G_i ∘ s2): Σ_j (Σ_i w_ij) F_ja² · s2_aa / n.
+    const Vec mean_diagonal = (other.cwiseAbs2().transpose() * side.w.colwise().sum().transpose())
+                                  .cwiseProduct(s2.diagonal()) / static_cast<double>(n);
 
     const int chunks = static_cast<int>(std::min<Eigen::Index>(n, kChunks));
     std::vector<ColourSums> sums(chunks);
@@ -267,6 +285,7 @@ ColourSums update_side(Mat& out, const Mat& other, const Side& side, const Mat& 
             for (int c = 0; c < channels; ++c) b += s.row(c).transpose().cwiseProduct(rhs[c].row(r).transpose());
             a = g.cwiseProduct(s2);
             ridged = a;
+            ridged.diagonal() += ridge * (mean_diagonal - a.diagonal()).cwiseMax(0.0);
             ridged.diagonal().array() += 1e-10 * a.trace() / static_cast<double>(k) + 1e-300;
             u = out.row(begin + r).transpose();
             if (nonneg) {
@@ -394,10 +413,11 @@ Solved solve(const Data& d, int k, bool nonneg, const FactorOptions& o, const st
         }
     }
 
+    const double ridge = o.space == FactorSpace::Log || o.space == FactorSpace::Cbrt ? kRidge : 0.0;
     double previous = 0.0;
     for (int it = 1; it <= o.max_iterations; ++it) {
-        update_side(r.u, r.v, rows, r.s, nonneg, o.threads);
-        const ColourSums sums = update_side(r.v, r.u, cols, r.s, nonneg, o.threads);
+        update_side(r.u, r.v, rows, r.s, nonneg, ridge, o.threads);
+        const ColourSums sums = update_side(r.v, r.u, cols, r.s, nonneg, ridge, o.threads);
         r.objective = sums.objective;
         r.iterations = it;
         if (channels > 1) {
@@ -426,6 +446,18 @@ Solved solve(const Data& d, int k, bool nonneg, const FactorOptions& o, const st
     }
     if (!nonneg && channels == 1) canonical_svd(r);
     return r;
+}
+
+// The largest value of each channel over the bins prepare() takes (all channels finite and ≥ 0).
+std::array<float, 3> data_max(const Table& table) {
+    std::array<float, 3> top{0.0f, 0.0f, 0.0f};
+    for (std::size_t bin = 0; bin < table.bins(); ++bin) {
+        const float f[3] = {table.at(bin, 0), table.at(bin, 1), table.at(bin, 2)};
+        if (!(std::isfinite(f[0]) && std::isfinite(f[1]) && std::isfinite(f[2]) && f[0] >= 0 && f[1] >= 0 && f[2] >= 0))
+            continue;
+        for (int c = 0; c < 3; ++c) top[c] = std::max(top[c], f[c]);
+    }
+    return top;
 }
 
 Data prepare(const Table& table, const FactorOptions& o, int rows, int cols, const std::vector<int>& channels) {
@@ -505,6 +537,11 @@ FactoredBrdf::FactoredBrdf(Factors factors) : f_(std::move(factors)) {
     for (const std::vector<float>* values : {&f_.u, &f_.v, &f_.colour_weights})
         for (float x : *values)
             if (!std::isfinite(x)) throw ValueError("factored: a factor entry is not finite");
+    for (int c = 0; c < 3; ++c) {
+        const float top = f_.max_value[c];
+        if (!(top >= 0.0f)) throw ValueError("factored: max_value " + std::to_string(top) + " is not a value >= 0");
+        ceiling_[c] = to_space(f_.space, std::min(top, std::numeric_limits<float>::max()));
+    }
     mix_.assign(3 * m, 0.0f);
     for (int c = 0; c < 3; ++c)
         for (int j = 0; j < f_.rank; ++j) {
@@ -538,8 +575,7 @@ Table FactoredBrdf::reconstruct(std::size_t* clamped) const {
             const double p = static_cast<double>(u[j]) * v[j];
             for (int c = 0; c < 3; ++c) y[c] += mix_[c * m + j] * p;
         }
-        t.set(bin, {from_space(f_.space, y[0], count), from_space(f_.space, y[1], count),
-                    from_space(f_.space, y[2], count)});
+        t.set(bin, to_values(f_.space, y, ceiling_, count));
     }
     if (clamped) *clamped = count;
     return t;
@@ -549,10 +585,10 @@ Rgb FactoredBrdf::eval_above(const Vec3& wi, const Vec3& wo) const {
     std::uint64_t clamped = 0;
     const bool shared = f_.colour == FactorColour::Shared;
     const Rgb f = f_.layout == FactorLayout::HxDP
-                      ? (shared ? eval_one<FactorLayout::HxDP, true>(f_, mix_.data(), wi, wo, clamped)
-                                : eval_one<FactorLayout::HxDP, false>(f_, mix_.data(), wi, wo, clamped))
-                      : (shared ? eval_one<FactorLayout::HDxP, true>(f_, mix_.data(), wi, wo, clamped)
-                                : eval_one<FactorLayout::HDxP, false>(f_, mix_.data(), wi, wo, clamped));
+                      ? (shared ? eval_one<FactorLayout::HxDP, true>(f_, mix_.data(), ceiling_, wi, wo, clamped)
+                                : eval_one<FactorLayout::HxDP, false>(f_, mix_.data(), ceiling_, wi, wo, clamped))
+                      : (shared ? eval_one<FactorLayout::HDxP, true>(f_, mix_.data(), ceiling_, wi, wo, clamped)
+                                : eval_one<FactorLayout::HDxP, false>(f_, mix_.data(), ceiling_, wi, wo, clamped));
     if (clamped) clamped_.fetch_add(clamped, std::memory_order_relaxed);
     return f;
 }
@@ -562,14 +598,14 @@ void FactoredBrdf::eval_batch(const Vec3* wi, const Vec3* wo, Rgb* out, std::siz
     const bool shared = f_.colour == FactorColour::Shared;
     if (f_.layout == FactorLayout::HxDP) {
         if (shared)
-            eval_pairs<FactorLayout::HxDP, true>(f_, mix_.data(), wi, wo, out, n, clamped);
+            eval_pairs<FactorLayout::HxDP, true>(f_, mix_.data(), ceiling_, wi, wo, out, n, clamped);
         else
-            eval_pairs<FactorLayout::HxDP, false>(f_, mix_.data(), wi, wo, out, n, clamped);
+            eval_pairs<FactorLayout::HxDP, false>(f_, mix_.data(), ceiling_, wi, wo, out, n, clamped);
     } else {
         if (shared)
-            eval_pairs<FactorLayout::HDxP, true>(f_, mix_.data(), wi, wo, out, n, clamped);
+            eval_pairs<FactorLayout::HDxP, true>(f_, mix_.data(), ceiling_, wi, wo, out, n, clamped);
         else
-            eval_pairs<FactorLayout::HDxP, false>(f_, mix_.data(), wi, wo, out, n, clamped);
+            eval_pairs<FactorLayout::HDxP, false>(f_, mix_.data(), ceiling_, wi, wo, out, n, clamped);
     }
     if (clamped) clamped_.fetch_add(clamped, std::memory_order_relaxed);
 }
@@ -634,6 +670,7 @@ Factored factor(const Table& table, const FactorOptions& o) {
                 for (int j = 0; j < k; ++j) f.colour_weights.push_back(static_cast<float>(r.s(c, j)));
     }
     report.residual = norm > 0.0 ? std::sqrt(objective / norm) : 0.0;
+    f.max_value = data_max(table);
     Factored out{std::make_unique<FactoredBrdf>(std::move(f)), report};
     out.brdf->reconstruct(&out.report.clamped);
     return out;
