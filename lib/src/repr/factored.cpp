@@ -237,7 +237,7 @@ constexpr int kChunks = 32;  // fixed work split, so results do not depend on th
 constexpr double kRidge = 1e-5;
 
 // Updates every row of `out` given the other factor F: row i minimises
-//   Σ_c Σ_j w_ij (y_cij − Σ_a out_ia s_ca F_ja)² + Σ_a λ_a out_ia²
+//   Σ_c Σ_j w_ij (y_cij − Σ_a out_ia s_ca F_ja)² + Σ_a λ_ia out_ia²
 // (non-negatively for nmf). In log and cbrt space the ridge λ_ia is `ridge` times what row i's
 // diagonal of the normal equations lacks of the mean over rows (0 for a row as well measured as the
 // average, so a fully valid table is factored exactly): a row with few valid bins, or nearly
