@@ -2,8 +2,9 @@
 // Fits an analytic model (a sum of lobes) to any BRDF file or scattered measurements (Cornell, ALTA),
 // prints the fit report and writes the model: OUT.json (docs/model-json.md, with the fit's provenance)
 // or OUT.brdfz store it as parameters; table formats (.binary, .exr) tabulate it. Exit status: 0 when the fit converged (possibly with
-// parameters on their bounds), 2 when it did not (no_convergence: the best parameters are still
-// written; insufficient_data: nothing is written).
+// parameters on their bounds, or poor: the status line says "but poor fit" and a warning why), 2 when
+// it did not (no_convergence: the best parameters are still written; insufficient_data: nothing is
+// written).
 #include <cstdio>
 #include <iostream>
 
@@ -36,6 +37,7 @@ void print_report(const std::string& in, const FitResult& r, RobustLoss robust, 
         j.key("robust").value(std::string(robust_loss_name(robust)));
         j.key("status").value(std::string(fit_status_name(p.status)));
         j.key("message").value(p.message);
+        j.key("poor_fit").value(p.poor_fit);
         j.key("warnings").begin_array();
         for (const std::string& w : p.warnings) j.value(w);
         j.end_array();
@@ -74,7 +76,8 @@ void print_report(const std::string& in, const FitResult& r, RobustLoss robust, 
     }
     os << "fit " << in << " with " << p.model << " (" << fit_loss_name(p.loss) << " loss"
        << (robust == RobustLoss::None ? "" : std::string(", ") + robust_loss_name(robust) + " robust loss") << ")\n"
-       << "  status       " << fit_status_name(p.status) << ": " << p.message << "\n"
+       << "  status       " << fit_status_name(p.status) << (p.poor_fit ? " but poor fit (see the warnings)" : "")
+       << ": " << p.message << "\n"
        << "  samples      " << p.samples << " used, " << p.excluded_cutoff << " outside the cut-off, "
        << p.excluded_invalid << " without a finite value";
     if (p.grid_bins) os << " (drawn from " << p.grid_bins << " grid bins inside the cut-off)";

@@ -252,9 +252,12 @@ void bind_operations(py::module_& m) {
         .def_readonly("best_start", &FitReport::best_start)
         .def_readonly("start_costs", &FitReport::start_costs)
         .def_readonly("unexplained", &FitReport::unexplained)
+        .def_readonly("poor_fit", &FitReport::poor_fit,
+                      "whatever the status, the model misses the data (unexplained > 0.25 or cos_rmse_rel > 0.5)")
         .def_readonly("metrics", &FitReport::metrics, "the model against the input, or None")
         .def("__repr__", [](const FitReport& r) {
-            return "<brdfz.FitReport " + r.model + ": " + fit_status_name(r.status) + ", " + r.message + ">";
+            return "<brdfz.FitReport " + r.model + ": " + fit_status_name(r.status) + (r.poor_fit ? " but poor fit" : "") +
+                   ", " + r.message + ">";
         });
     py::class_<Fitted>(m, "FitResult", "a fitted model and its report")
         .def_readonly("brdf", &Fitted::brdf)

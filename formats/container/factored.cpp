@@ -30,6 +30,8 @@ void write(h5::WriteNode& rep, const Brdf& brdf) {
     rep.attr("colour", std::string(factor_colour_name(f.colour)));
     rep.attr("rank", static_cast<std::uint64_t>(f.rank));
     rep.attr("dtype", std::string("float32"));
+    const double top[3] = {f.max_value[0], f.max_value[1], f.max_value[2]};
+    rep.attr("max_value", std::span<const double>(top));
     const std::uint64_t m = static_cast<std::uint64_t>(f.row_width());
     rep.dataset("u", h5::DType::F32, {static_cast<std::uint64_t>(f.rows()), m}, f.u.data());
     rep.dataset("v", h5::DType::F32, {static_cast<std::uint64_t>(f.columns()), m}, f.v.data());
@@ -71,6 +73,12 @@ std::unique_ptr<Brdf> read(const h5::ReadNode& rep, const ReadContext&) {
     if (rank < 1 || rank > std::min(rows, cols))
         bad("rank " + std::to_string(rank) + " outside 1.." + std::to_string(std::min(rows, cols)));
     f.rank = static_cast<int>(rank);
+    // Optional: files written before it have no ceiling but the float range.
+    if (rep.has_attr("max_value")) {
+        const std::vector<double> top = rep.f64s("max_value");
+        if (top.size() != 3) bad("attribute 'max_value' has " + std::to_string(top.size()) + " entries, expected 3");
+        for (int c = 0; c < 3; ++c) f.max_value[c] = static_cast<float>(top[c]);
+    }
     const std::uint64_t m = static_cast<std::uint64_t>(f.row_width());
 
     // Shapes checked against the attributes (and by the reader, sizes against the file) before allocating.

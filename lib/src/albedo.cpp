@@ -1,6 +1,7 @@
 #include "brdfz/albedo.h"
 
 #include <cmath>
+#include <limits>
 #include <numbers>
 #include <random>
 #include <vector>
@@ -96,6 +97,47 @@ SampledAlbedo sampled_albedo(const Brdf& brdf, double theta_o, std::size_t n, st
         r.stderr_[c] = std::sqrt(var / n);
     }
     return r;
+}
+
+namespace {
+
+// The luminance of sample weights, relative variance (their variance over their squared mean).
+struct Moments {
+    double sum = 0, sum_sq = 0;
+    void add(const Rgb& w) {
+        const double y = 0.2126 * w[0] + 0.7152 * w[1] + 0.0722 * w[2];
+        sum += y;
+        sum_sq += y * y;
+    }
+    double relative_variance(std::size_t n) const {
+        const double mean = sum / n;
+        return mean > 0.0 ? std::fmax(0.0, sum_sq / n - mean * mean) / (mean * mean) : 0.0;
+    }
+};
+
+}  // namespace
+
+double sampler_variance_ratio(const Brdf& brdf, double theta_o, std::size_t n, double floor, std::uint64_t seed) {
+    if (!(theta_o >= 0.0 && theta_o < std::numbers::pi / 2.0))
+        throw ValueError("albedo: theta_o must be in [0, pi/2)");
+    if (n < 2) throw ValueError("albedo: at least 2 samples are needed");
+    if (!(floor >= 0.0)) throw ValueError("albedo: the floor must be >= 0");
+    const Vec3 wo = spherical_direction(theta_o, 0.0);
+    std::mt19937_64 rng(seed);
+    std::uniform_real_distribution<double> u(0.0, 1.0);
+    Moments own, cosine;
+    for (std::size_t k = 0; k < n; ++k) {
+        own.add(brdf.sample(wo, u(rng), u(rng)).weight);
+        // Cosine-weighted wi: the weight f·cosθi / (cosθi/π) = π·f.
+        const double r = std::sqrt(u(rng)), phi = 2.0 * std::numbers::pi * u(rng);
+        const Rgb f = brdf.eval(Vec3{r * std::cos(phi), r * std::sin(phi), std::sqrt(std::fmax(0.0, 1.0 - r * r))}, wo);
+        cosine.add({std::numbers::pi * f[0], std::numbers::pi * f[1], std::numbers::pi * f[2]});
+    }
+    if (!std::isfinite(own.sum_sq) || !std::isfinite(cosine.sum_sq)) return std::numeric_limits<double>::infinity();
+    const double floor2 = floor * floor;
+    const double mine = own.relative_variance(n) + floor2, theirs = cosine.relative_variance(n) + floor2;
+    if (theirs > 0.0) return mine / theirs;
+    return mine > 0.0 ? std::numeric_limits<double>::infinity() : 1.0;
 }
 
 }  // namespace brdfz

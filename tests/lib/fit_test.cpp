@@ -93,7 +93,29 @@ TEST_CASE("fitting recovers every parameter within 5% from noisy, incomplete tab
         REQUIRE(r.report.metrics);
         CHECK(r.report.metrics->cos_rmse_rel.mean < 0.05);
         CHECK(r.report.samples > 10000);
+        CHECK_FALSE(r.report.poor_fit);
     }
+}
+
+TEST_CASE("a fit that converges to a model missing the data is flagged poor, its status kept", "[fit]") {
+    // The stability study's plastic (docs/stability.md): a Lambertian base under a GGX clear coat with
+    // Fresnel. A Blinn-Phong lobe converges on it at 95 % cos_rmse_rel, which the status alone
+    // (converged) does not say.
+    const AnalyticBrdf plastic("lambert+ggx_dielectric", {0.3, 0.05, 0.05, 1, 1, 1, 0.12, 1.5});
+    const FitResult r = fit(plastic, "lambert+blinn_phong");
+    INFO(report(r) << "\nunexplained " << r.report.unexplained);
+    check_sane(r);
+    CHECK((r.report.status == FitStatus::Converged || r.report.status == FitStatus::HitBounds));
+    REQUIRE(r.report.metrics);
+    CHECK(r.report.metrics->cos_rmse_rel.mean > FitReport::kPoorFitCosRmseRel);
+    CHECK(r.report.poor_fit);
+    bool warned = false;
+    for (const std::string& w : r.report.warnings) warned = warned || w.rfind("poor fit", 0) == 0;
+    CHECK(warned);
+    // The model that made the data is not flagged.
+    const FitResult good = fit(plastic, "lambert+ggx_dielectric");
+    INFO(report(good));
+    CHECK_FALSE(good.report.poor_fit);
 }
 
 TEST_CASE("every loss and the robust losses fit, and fits are deterministic", "[fit]") {

@@ -116,15 +116,16 @@ def test_bench_charts_renders_summary(bench_out):
 def test_stability_heatmap(tmp_path):
     src = tmp_path / "stability.csv"
     src.write_text(
-        "material,class,repr,status,bytes,cos_rmse_rel,log_rmse,grazing_ratio,sampler_spread_ratio,bad_values,"
+        "material,class,repr,status,bytes,cos_rmse_rel,log_rmse,grazing_ratio,sampler_variance_ratio,bad_values,"
         "eval_pairs_per_s,build_s,flags\n"
         'diffuse,diffuse,"analytic:lambert+ggx","converged",64,0.001,0.001,1,1,0,5e7,1,""\n'
         'diffuse,diffuse,"svd:rank=2","error: unknown representation",0,nan,nan,nan,nan,0,0,0,"failed"\n'
-        'metal,metal,"analytic:lambert+ggx","hit_bounds",64,0.3,0.1,12,2,0,5e7,1,"hit_bounds; grazing artefacts"\n'
+        'metal,metal,"analytic:lambert+ggx","hit_bounds",64,0.3,0.1,12,2,0,5e7,1,"hit_bounds; poor fit; grazing artefacts"\n'
         'metal,metal,"svd:rank=2","ok",1000,0.8,0.2,1,1,3,1e7,1,"error blow-up; bad values"\n')
     assert stability_charts.main([str(src), "--out", str(tmp_path / "out")]) == 0
     assert is_png(tmp_path / "out" / "stability_heatmap.png")
     assert stability_charts.flag_letters("hit_bounds; grazing artefacts") == "FG"
+    assert stability_charts.flag_letters("hit_bounds; poor fit; grazing artefacts") == "FPG"
     assert stability_charts.flag_letters("error blow-up; bad values; sampler worse than cosine") == "BVS"
     assert stability_charts.flag_letters("failed") == ""
     bad = tmp_path / "bad.csv"

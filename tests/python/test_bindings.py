@@ -245,6 +245,7 @@ def test_fit_report_matches_cli(cli, demo_table, demo, tmp_path):
     assert r.brdf.parameters == pytest.approx(ref["parameters"], rel=1e-9)
     assert r.report.metrics.cos_rmse_rel.mean == pytest.approx(ref["metrics"]["cos_rmse_rel"]["mean"], rel=1e-9)
     assert r.report.samples == ref["samples"] and r.report.seconds > 0
+    assert r.report.poor_fit == ref["poor_fit"]
 
 
 def test_progress(demo, capsys):

@@ -17,6 +17,7 @@ def test_fit_writes_a_model_that_info_eval_and_diff_read(cli, demo_table, tmp_pa
     # The demo material is a GGX-coated diffuse with alpha 0.12: the coat's roughness comes back.
     assert abs(report["parameters"]["ggx_dielectric.alpha"] - 0.12) < 0.02
     assert report["metrics"]["cos_rmse_rel"]["mean"] < 0.2
+    assert report["poor_fit"] is False
     model = json.loads(out.read_text())
     assert model["format"] == "brdfz-analytic" and model["model"] == "lambert+ggx_dielectric"
     assert model["provenance"]["status"] == report["status"]
@@ -30,6 +31,19 @@ def test_fit_writes_a_model_that_info_eval_and_diff_read(cli, demo_table, tmp_pa
 
     text = run(cli, "fit", demo_table, "--model", "lambert+ggx", "--loss", "cbrt", "--starts", "2", "-o", out).stdout
     assert "status" in text and "ggx.alpha" in text and "wrote" in text
+
+
+def test_fit_that_converges_to_a_poor_model_says_so(cli, demo_table, tmp_path):
+    # A Blinn-Phong lobe cannot follow the demo's Fresnel-weighted GGX coat: the fit converges (its
+    # status unchanged, exit 0, the model written) but is flagged as poor, with a warning saying why.
+    out = tmp_path / "phong.json"
+    report = json.loads(run(cli, "fit", demo_table, "--model", "lambert+blinn_phong", "-o", out, "--json").stdout)
+    assert report["status"] in ("converged", "hit_bounds")
+    assert report["poor_fit"] is True
+    assert any(w.startswith("poor fit") for w in report["warnings"])
+    assert out.exists()
+    text = run(cli, "fit", demo_table, "--model", "lambert+blinn_phong", "-o", out).stdout
+    assert "but poor fit" in text and "warning: poor fit" in text
 
 
 def test_fit_without_usable_data_exits_2_and_writes_nothing(cli, tmp_path):

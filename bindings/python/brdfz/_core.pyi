@@ -206,6 +206,11 @@ class FitReport:
     def unexplained(self) -> float:
         ...
     @property
+    def poor_fit(self) -> bool:
+        """
+        whatever the status, the model misses the data (unexplained > 0.25 or cos_rmse_rel > 0.5)
+        """
+    @property
     def warnings(self) -> list[str]:
         ...
 class FitResult:

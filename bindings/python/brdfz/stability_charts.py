@@ -5,8 +5,8 @@ cos_rmse_rel, each cell marked with its failure signs.
 
 Writes DIR/stability_heatmap.png (default DIR: the CSV's folder). Cells: colour = cos_rmse_rel (log
 scale, the value printed); a grey cell with "✗" = the build failed; letters = the study's flags:
-B error blow-up, V bad values, G grazing artefacts, S sampler worse than cosine, F the fit's status
-(no_convergence, hit_bounds).
+B error blow-up, V bad values, G grazing artefacts, S sampler worse than cosine, P the fit's poor-fit
+warning (converged, but the model misses the data), F the fit's status (no_convergence, hit_bounds).
 """
 from __future__ import annotations
 
@@ -20,8 +20,9 @@ from typing import Optional, Sequence
 import numpy as np
 
 COLUMNS = ["material", "class", "repr", "status", "bytes", "cos_rmse_rel", "log_rmse", "grazing_ratio",
-           "sampler_spread_ratio", "bad_values", "eval_pairs_per_s", "build_s", "flags"]
-FLAG_LETTERS = {"error blow-up": "B", "bad values": "V", "grazing artefacts": "G", "sampler worse than cosine": "S"}
+           "sampler_variance_ratio", "bad_values", "eval_pairs_per_s", "build_s", "flags"]
+FLAG_LETTERS = {"error blow-up": "B", "bad values": "V", "grazing artefacts": "G", "sampler worse than cosine": "S",
+                "poor fit": "P"}
 
 
 def flag_letters(flags: str) -> str:
@@ -79,7 +80,7 @@ def heatmap(csv_path: pathlib.Path, png: pathlib.Path) -> pathlib.Path:
     ax.set_xticks(range(len(materials)), materials, rotation=40, ha="right", fontsize=8)
     ax.set_yticks(range(len(methods)), methods, fontsize=8)
     ax.set_title("stability: cos_rmse_rel per method and material\n✗ failed  B blow-up  V bad values\n"
-                 "G grazing artefacts  S sampler worse than cosine  F fit status", fontsize=9)
+                 "G grazing artefacts  S sampler worse than cosine  P poor fit  F fit status", fontsize=9)
     fig.colorbar(im, ax=ax, label="cos_rmse_rel (log)")
     fig.tight_layout()
     fig.savefig(png, dpi=100)

@@ -250,9 +250,6 @@ Samples subset(const Prepared& all, std::size_t n, std::uint64_t seed, std::vect
     return s;
 }
 
-// Share of the data's variation a fit may leave unexplained before it is flagged as poor.
-constexpr double kPoorFit = 0.25;
-
 bool usable(const ceres::Solver::Summary& s) { return s.IsSolutionUsable() && std::isfinite(s.final_cost); }
 
 FitResult fit_samples(const MeasurementSet& data, const std::string& model_text, const FitOptions& options,
@@ -388,7 +385,8 @@ FitResult fit_samples(const MeasurementSet& data, const std::string& model_text,
             total_sq += (t - mean[c]) * (t - mean[c]);
         }
     rep.unexplained = total_sq > 0.0 ? residual_sq / total_sq : 0.0;
-    if (rep.unexplained > kPoorFit) {
+    if (rep.unexplained > FitReport::kPoorFitUnexplained) {
+        rep.poor_fit = true;
         char buf[200];
         std::snprintf(buf, sizeof buf, "poor fit: the model leaves %.0f%% of the data's variation (in the %s loss) unexplained",
                       100.0 * rep.unexplained, fit_loss_name(options.loss));
@@ -428,6 +426,16 @@ FitResult fit_samples(const MeasurementSet& data, const std::string& model_text,
     return finish(std::move(params));
 }
 
+// The second poor-fit test, once the metrics are known.
+void check_energy(FitReport& rep) {
+    if (!rep.metrics || !(rep.metrics->cos_rmse_rel.mean > FitReport::kPoorFitCosRmseRel)) return;
+    rep.poor_fit = true;
+    char buf[200];
+    std::snprintf(buf, sizeof buf, "poor fit: cos_rmse_rel %.2f against the input (the model misses the data's reflected energy)",
+                  rep.metrics->cos_rmse_rel.mean);
+    rep.warnings.push_back(buf);
+}
+
 }  // namespace
 
 FitResult fit(const MeasurementSet& data, const std::string& model, const FitOptions& options) {
@@ -437,6 +445,7 @@ FitResult fit(const MeasurementSet& data, const std::string& model, const FitOpt
         MetricOptions mo = options.metrics;
         mo.max_theta_deg = options.max_theta_deg;
         r.report.metrics = compare(data, r.model, mo);
+        check_energy(r.report);
     }
     r.report.seconds = seconds_since(t0);
     return r;
@@ -456,6 +465,7 @@ FitResult fit(const Brdf& source, const std::string& model, const FitOptions& op
         mo.max_theta_deg = options.max_theta_deg;
         mo.threads = options.threads;
         r.report.metrics = compare(source, r.model, mo);
+        check_energy(r.report);
     }
     r.report.seconds = seconds_since(t0);
     return r;

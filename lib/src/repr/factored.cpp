@@ -59,8 +59,8 @@ double to_space(FactorSpace s, double f) {
     }
 }
 
-// The value for a reconstruction y; y < 0 (possible for svd) gives 0. No libm call, so the loop
-// below vectorises.
+// The value for a reconstruction y (already at most the ceiling); y < 0 (possible for svd) gives 0.
+// No libm call, so the loop below vectorises.
 template <FactorSpace S>
 inline double from_space(double y) {
     const double p = y > 0.0 ? y : 0.0;  // NaN cannot occur: factors are finite
@@ -103,7 +103,8 @@ struct FactorView {
     std::size_t width;  // row_width() rounded up to kLanes, zero-padded
     const float* u;
     const float* v;
-    const double* mix;  // 3 × width
+    const double* mix;      // 3 × width
+    const double* ceiling;  // 3: max_value in the transform space
 };
 
 // Row-major offsets (index · width) of the factor rows to blend, and their weights.
@@ -157,7 +158,8 @@ inline void blend(const FactorView& f, const FactorCorners<NR, NC>& k, double y[
         const StepD p = a.cast<double>() * b.cast<double>();
         for (std::size_t ch = 0; ch < 3; ++ch) acc[ch] += MapD(f.mix + ch * f.width + j) * p;
     }
-    for (int ch = 0; ch < 3; ++ch) y[ch] = acc[ch].sum();
+    // At most the data's largest value: bins without data can reconstruct far beyond it (factor.h).
+    for (int ch = 0; ch < 3; ++ch) y[ch] = std::min(acc[ch].sum(), f.ceiling[ch]);
 }
 
 template <FactorLayout L>
@@ -252,15 +254,27 @@ struct ColourSums {
 };
 
 constexpr int kChunks = 32;  // fixed work split, so results do not depend on the thread count
+// Small enough that a masked table factored at full rank is still reproduced (5e-7 relative; 1e-3
+// gave 4e-5), large enough to bound the extrapolation (a 16×16×32 coat, rank 4, log space: 625 -> 7).
+constexpr double kRidge = 1e-5;
 
 // Updates every row of `out` given the other factor F: row i minimises
-//   Σ_c Σ_j w_ij (y_cij − Σ_a out_ia s_ca F_ja)²
-// (non-negatively for nmf) with a ridge of 1e-10 of the mean diagonal, which only matters for rows
-// whose valid bins do not determine all components. Its normal equations are G_i ∘ (Σ_c s_c s_cᵀ)
+//   Σ_c Σ_j w_ij (y_cij − Σ_a out_ia s_ca F_ja)² + Σ_a λ_ia out_ia²
+// (non-negatively for nmf). In log and cbrt space the ridge λ_ia is `ridge` times what row i's
+// diagonal of the normal equations lacks of the mean over rows (0 for a row as well measured as the
+// average, so a fully valid table is factored exactly): a row with few valid bins, or nearly
+// collinear ones, has its undetermined directions pulled towards 0 instead of fitting its few values
+// with large opposite components, which extrapolate into the invalid bins and there, through expm1
+// or the cube, far beyond the data (RGL cc_ibiza_sunset at grazing θd, nmf rank 2, log space: values
+// past e^700). In linear and cos space the extrapolation stays linear, eval's ceiling bounds it, and
+// the ridge would cost accuracy (svd rank 4 on a GGX plastic: cos_rmse_rel 0.0003 -> 0.01), so
+// `ridge` is 0 there. Rows without any valid bin come out 0. A ridge of 1e-10 of the row's own
+// diagonal keeps the equations definite. Its normal equations are G_i ∘ (Σ_c s_c s_cᵀ)
 // with G_i = Σ_j w_ij F_j F_jᵀ: for all rows at once, one product W·P with P_j = vec(F_j F_jᵀ), and
 // the right-hand sides (W ∘ Y_c)·F. Returns the objective after the update and the colour weights'
 // normal equations.
-ColourSums update_side(Mat& out, const Mat& other, const Side& side, const Mat& s, bool nonneg, int threads) {
+ColourSums update_side(Mat& out, const Mat& other, const Side& side, const Mat& s, bool nonneg, double ridge,
+                       int threads) {
     const Eigen::Index n = out.rows(), k = out.cols(), m = other.rows();
     const int channels = static_cast<int>(side.wx.size());
     Eigen::MatrixXd s2 = Eigen::MatrixXd::Zero(k, k);
@@ -269,6 +283,9 @@ ColourSums update_side(Mat& out, const Mat& other, const Side& side, const Mat& 
     for (Eigen::Index j = 0; j < m; ++j)
         for (Eigen::Index a = 0; a < k; ++a)
             for (Eigen::Index b = 0; b < k; ++b) outer(j, a * k + b) = other(j, a) * other(j, b);
+    // Mean over rows of diag(G_i ∘ s2): Σ_j (Σ_i w_ij) F_ja² · s2_aa / n.
+    const Vec mean_diagonal = (other.cwiseAbs2().transpose() * side.w.colwise().sum().transpose())
+                                  .cwiseProduct(s2.diagonal()) / static_cast<double>(n);
 
     const int chunks = static_cast<int>(std::min<Eigen::Index>(n, kChunks));
     std::vector<ColourSums> sums(chunks);
@@ -290,6 +307,7 @@ ColourSums update_side(Mat& out, const Mat& other, const Side& side, const Mat& 
             for (int c = 0; c < channels; ++c) b += s.row(c).transpose().cwiseProduct(rhs[c].row(r).transpose());
             a = g.cwiseProduct(s2);
             ridged = a;
+            ridged.diagonal() += ridge * (mean_diagonal - a.diagonal()).cwiseMax(0.0);
             ridged.diagonal().array() += 1e-10 * a.trace() / static_cast<double>(k) + 1e-300;
             u = out.row(begin + r).transpose();
             if (nonneg) {
@@ -417,10 +435,11 @@ Solved solve(const Data& d, int k, bool nonneg, const FactorOptions& o, const st
         }
     }
 
+    const double ridge = o.space == FactorSpace::Log || o.space == FactorSpace::Cbrt ? kRidge : 0.0;
     double previous = 0.0;
     for (int it = 1; it <= o.max_iterations; ++it) {
-        update_side(r.u, r.v, rows, r.s, nonneg, o.threads);
-        const ColourSums sums = update_side(r.v, r.u, cols, r.s, nonneg, o.threads);
+        update_side(r.u, r.v, rows, r.s, nonneg, ridge, o.threads);
+        const ColourSums sums = update_side(r.v, r.u, cols, r.s, nonneg, ridge, o.threads);
         r.objective = sums.objective;
         r.iterations = it;
         if (channels > 1) {
@@ -449,6 +468,18 @@ Solved solve(const Data& d, int k, bool nonneg, const FactorOptions& o, const st
     }
     if (!nonneg && channels == 1) canonical_svd(r);
     return r;
+}
+
+// The largest value of each channel over the bins prepare() takes (all channels finite and ≥ 0).
+std::array<float, 3> data_max(const Table& table) {
+    std::array<float, 3> top{0.0f, 0.0f, 0.0f};
+    for (std::size_t bin = 0; bin < table.bins(); ++bin) {
+        const float f[3] = {table.at(bin, 0), table.at(bin, 1), table.at(bin, 2)};
+        if (!(std::isfinite(f[0]) && std::isfinite(f[1]) && std::isfinite(f[2]) && f[0] >= 0 && f[1] >= 0 && f[2] >= 0))
+            continue;
+        for (int c = 0; c < 3; ++c) top[c] = std::max(top[c], f[c]);
+    }
+    return top;
 }
 
 Data prepare(const Table& table, const FactorOptions& o, int rows, int cols, const std::vector<int>& channels) {
@@ -528,6 +559,11 @@ FactoredBrdf::FactoredBrdf(Factors factors) : f_(std::move(factors)) {
     for (const std::vector<float>* values : {&f_.u, &f_.v, &f_.colour_weights})
         for (float x : *values)
             if (!std::isfinite(x)) throw ValueError("factored: a factor entry is not finite");
+    for (int c = 0; c < 3; ++c) {
+        const float top = f_.max_value[c];
+        if (!(top >= 0.0f)) throw ValueError("factored: max_value " + std::to_string(top) + " is not a value >= 0");
+        ceiling_[c] = to_space(f_.space, std::min(top, std::numeric_limits<float>::max()));
+    }
     // The evaluation copies: rows padded to a whole number of SIMD steps.
     width_ = (m + kLanes - 1) / kLanes * kLanes;
     u_.assign(rows * width_, 0.0f);
@@ -567,6 +603,7 @@ Table FactoredBrdf::reconstruct(std::size_t* clamped) const {
             const double p = static_cast<double>(u[j]) * v[j];
             for (std::size_t c = 0; c < 3; ++c) y[c] += mix_[c * width_ + j] * p;
         }
+        for (int c = 0; c < 3; ++c) y[c] = std::min(y[c], ceiling_[c]);
         from_space_n(f_.space, y, values, 3, count);
         t.set(bin, {values[0], values[1], values[2]});
     }
@@ -576,7 +613,7 @@ Table FactoredBrdf::reconstruct(std::size_t* clamped) const {
 
 Rgb FactoredBrdf::eval_above(const Vec3& wi, const Vec3& wo) const {
     std::uint64_t clamped = 0;
-    const FactorView view{f_.grid, width_, u_.data(), v_.data(), mix_.data()};
+    const FactorView view{f_.grid, width_, u_.data(), v_.data(), mix_.data(), ceiling_};
     const Rgb f = f_.layout == FactorLayout::HxDP ? eval_one<FactorLayout::HxDP>(view, f_.space, wi, wo, clamped)
                                                   : eval_one<FactorLayout::HDxP>(view, f_.space, wi, wo, clamped);
     if (clamped) clamped_.fetch_add(clamped, std::memory_order_relaxed);
@@ -585,7 +622,7 @@ Rgb FactoredBrdf::eval_above(const Vec3& wi, const Vec3& wo) const {
 
 void FactoredBrdf::eval_batch(const Vec3* wi, const Vec3* wo, Rgb* out, std::size_t n) const {
     std::uint64_t clamped = 0;
-    const FactorView view{f_.grid, width_, u_.data(), v_.data(), mix_.data()};
+    const FactorView view{f_.grid, width_, u_.data(), v_.data(), mix_.data(), ceiling_};
     if (f_.layout == FactorLayout::HxDP)
         eval_pairs<FactorLayout::HxDP>(view, f_.space, wi, wo, out, n, clamped);
     else
@@ -657,6 +694,7 @@ Factored factor(const Table& table, const FactorOptions& o) {
                 for (int j = 0; j < k; ++j) f.colour_weights.push_back(static_cast<float>(r.s(c, j)));
     }
     report.residual = norm > 0.0 ? std::sqrt(objective / norm) : 0.0;
+    f.max_value = data_max(table);
     Factored out{std::make_unique<FactoredBrdf>(std::move(f)), report};
     out.brdf->reconstruct(&out.report.clamped);
     return out;

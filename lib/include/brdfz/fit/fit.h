@@ -18,7 +18,9 @@
 // says whether to trust it: converged, hit_bounds (a non-trivial bound is active: the data asks for
 // more than the model allows, e.g. a mirror below the smallest roughness), no_convergence (iteration
 // or time limit, or solver failure: the best parameters found are returned), insufficient_data (too
-// few usable samples, or all zero: the defaults are returned). See docs/fitting.md.
+// few usable samples, or all zero: the defaults are returned). Beside the status, `poor_fit` says
+// whether the model describes the data at all: a fit can converge, inside its bounds, to a model that
+// misses most of the data (a Blinn-Phong lobe on a Fresnel-weighted highlight). See docs/fitting.md.
 #pragma once
 
 #include <array>
@@ -94,6 +96,13 @@ struct FitReport {
     // Σ r² / Σ (t − t̄)² over samples and channels (t the transformed data). 0 is a perfect fit.
     double unexplained = 0;
     std::optional<Metrics> metrics;     // the fitted model against the input (metrics.h)
+    // Whatever the status, the model misses the data: unexplained > kPoorFitUnexplained, or the
+    // metrics' cos_rmse_rel (mean of channels) > kPoorFitCosRmseRel. A warning says which.
+    bool poor_fit = false;
+    static constexpr double kPoorFitUnexplained = 0.25;
+    // The log loss may follow the shape of a highlight and still miss its energy (a small
+    // `unexplained`, a large cosine-weighted error), hence the second test.
+    static constexpr double kPoorFitCosRmseRel = 0.5;
 };
 
 struct FitResult {

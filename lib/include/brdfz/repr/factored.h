@@ -12,6 +12,9 @@
 // and factored as y ≈ U·diag(s_c)·Vᵀ of rank k:
 //   svd  unconstrained; reconstructions below 0 in the value domain are clamped to 0 and counted
 //   nmf  U, V, s ≥ 0 (Lawrence et al. 2004), so reconstructions are ≥ 0 without clamping.
+// Reconstructions above the factorised data's largest value (per channel, `max_value`) are clamped
+// to it: where the data leave a bin unconstrained (invalid, or at the edge of the valid region) the
+// product may extrapolate far beyond the data, and in log or cbrt space past the range of a double.
 // Colour: `separate` factors each channel on its own (s_c = 1, three U and three V); `shared` uses
 // one U and V for all channels and per-channel weights s_c per component (colour factored from
 // intensity: a third of the storage).
@@ -25,9 +28,11 @@
 // stored as float32: nbytes() = 4 · (number of U, V and s entries).
 #pragma once
 
+#include <array>
 #include <atomic>
 #include <cstdint>
 #include <functional>
+#include <limits>
 #include <memory>
 #include <string>
 #include <vector>
@@ -58,6 +63,8 @@ FactorColour parse_factor_colour(const std::string& name);
 // The stored parameters (what the container writes), row-major float32:
 //   u       rows × m,  v  columns × m,   m = rank (shared) or 3·rank (separate: entry c·rank + j)
 //   colour  3 × rank, the weights s_cj (shared); empty for separate.
+// max_value is the ceiling of eval per channel (factor() sets the data's maximum); +inf, as in
+// containers written before it, leaves only the float range as a ceiling, so eval stays finite.
 struct Factors {
     GridSpec grid{};
     FactorMethod method = FactorMethod::Svd;
@@ -65,7 +72,9 @@ struct Factors {
     FactorLayout layout = FactorLayout::HxDP;
     FactorColour colour = FactorColour::Separate;
     int rank = 1;
+    static constexpr float kUnbounded = std::numeric_limits<float>::infinity();
     std::vector<float> u, v, colour_weights;
+    std::array<float, 3> max_value{kUnbounded, kUnbounded, kUnbounded};
 
     int rows() const;
     int columns() const;
@@ -74,7 +83,8 @@ struct Factors {
 
 class FactoredBrdf final : public Brdf {
 public:
-    // ValueError when the shapes disagree with the grid, layout and rank, or a value is not finite.
+    // ValueError when the shapes disagree with the grid, layout and rank, a factor is not finite, or
+    // a max_value is NaN or negative.
     explicit FactoredBrdf(Factors factors);
     FactoredBrdf(const FactoredBrdf&) = delete;
     FactoredBrdf& operator=(const FactoredBrdf&) = delete;
@@ -113,6 +123,7 @@ private:
     std::size_t width_ = 0;
     std::vector<float> u_, v_;
     std::vector<double> mix_;
+    double ceiling_[3];  // max_value in the transform space (within the float range)
     mutable std::atomic<std::uint64_t> clamped_{0};
     Lazy<HalfVectorSampler> sampler_;
     Lazy<FactorSampler> factor_sampler_;
