@@ -180,6 +180,11 @@ class FitReport:
     def model(self) -> str:
         ...
     @property
+    def poor_fit(self) -> bool:
+        """
+        whatever the status, the model misses the data (unexplained > 0.25 or cos_rmse_rel > 0.5)
+        """
+    @property
     def samples(self) -> int:
         ...
     @property
@@ -205,11 +210,6 @@ class FitReport:
     @property
     def unexplained(self) -> float:
         ...
-    @property
-    def poor_fit(self) -> bool:
-        """
-        whatever the status, the model misses the data (unexplained > 0.25 or cos_rmse_rel > 0.5)
-        """
     @property
     def warnings(self) -> list[str]:
         ...
