@@ -5,6 +5,7 @@
 
 #include "brdfz/coords.h"
 #include "brdfz/errors.h"
+#include "detail/azimuth.h"
 #include "detail/fast_math.h"
 #include "detail/grid_sweep.h"
 
@@ -13,18 +14,8 @@ namespace {
 
 constexpr double kPi = std::numbers::pi;
 
-// wo's azimuth as a rotation (cos, sin); the identity at the pole.
-struct Azimuth {
-    double c = 1.0, s = 0.0;
-    explicit Azimuth(const Vec3& w) {
-        const double r = std::sqrt(w.x * w.x + w.y * w.y);
-        if (r > 0.0) c = w.x / r, s = w.y / r;
-    }
-    Vec3 to_local(const Vec3& v) const { return {c * v.x + s * v.y, -s * v.x + c * v.y, v.z}; }
-    Vec3 to_world(const Vec3& v) const { return {c * v.x - s * v.y, s * v.x + c * v.y, v.z}; }
-};
-
-Vec3 reflect(const Vec3& wo, const Vec3& h) { return (2.0 * dot(wo, h)) * h - wo; }
+using detail::Azimuth;
+using detail::reflect;
 
 // Half vector at cell coordinates (x, y), with φh = ±π x relative to wo.
 Vec3 half_at(double x, double y, double sign) {
