@@ -17,6 +17,19 @@ constexpr double kPi = std::numbers::pi;
 using detail::Azimuth;
 using detail::reflect;
 
+// fn(wi, h) for the half vectors at s = sin²(θh/2) and n_phi azimuths at cell centres over [0, π]
+// (the slices are symmetric in φh) whose reflection of wo lies above the horizon.
+template <typename Fn>
+void for_each_reflection(const Vec3& wo, double s, int n_phi, Fn&& fn) {
+    const double cos_h = 1.0 - 2.0 * s, sin_h = 2.0 * std::sqrt(s * (1.0 - s));
+    for (int p = 0; p < n_phi; ++p) {
+        const double phi = (p + 0.5) / n_phi * kPi;
+        const Vec3 h{sin_h * std::cos(phi), sin_h * std::sin(phi), cos_h};
+        const Vec3 wi = reflect(wo, h);
+        if (wi.z > 0.0) fn(wi, h);
+    }
+}
+
 // s = sin²(θ/2) = (1 − cosθ)/2, the coordinate in which solid angle is uniform (dω = 2 ds dφ).
 double s_of_theta(double theta) {
     const double h = std::sin(theta / 2.0);
@@ -181,17 +194,12 @@ FactorSampler::FactorSampler(const Factors& f, const FactorSamplerOptions& o) : 
         if (o.density == FactorDensity::Mixture) {
             std::fill(w.begin(), w.end(), 0.0);
             for (int r = 0; r < rows; ++r) {
-                const double ds = s_edges_[r + 1] - s_edges_[r], s = s_edges_[r] + 0.5 * ds;
-                const double cos_h = 1.0 - 2.0 * s, sin_h = 2.0 * std::sqrt(s * (1.0 - s));
-                for (int p = 0; p < o.n_phi; ++p) {
-                    const double phi = (p + 0.5) / o.n_phi * kPi;
-                    const Vec3 h{sin_h * std::cos(phi), sin_h * std::sin(phi), cos_h};
-                    const Vec3 wi = reflect(wo, h);
-                    if (!(wi.z > 0.0)) continue;
+                const double ds = s_edges_[r + 1] - s_edges_[r];
+                for_each_reflection(wo, s_edges_[r] + 0.5 * ds, o.n_phi, [&](const Vec3& wi, const Vec3& h) {
                     terms.at(wi, wo, t.data());
                     const double jac = wi.z * dot(wo, h) * ds;
                     for (int j = 0; j < m; ++j) w[j] += std::fabs(a[j] * t[j]) * jac;
-                }
+                });
             }
             for (int j = 0; j < m; ++j)
                 if (total[j] > 0.0)
@@ -200,13 +208,8 @@ FactorSampler::FactorSampler(const Factors& f, const FactorSamplerOptions& o) : 
         } else {
             // At each row edge, the integrand f·cosθi·(wo·h) of the reconstruction (mean channel, in the
             // value domain) summed over φh: the θh marginal, per unit s, of what the data wants drawn.
-            for (int i = 0; i < rows; ++i) {
-                const double s = s_edges_[i], cos_h = 1.0 - 2.0 * s, sin_h = 2.0 * std::sqrt(s * (1.0 - s));
-                for (int p = 0; p < o.n_phi; ++p) {
-                    const double phi = (p + 0.5) / o.n_phi * kPi;
-                    const Vec3 h{sin_h * std::cos(phi), sin_h * std::sin(phi), cos_h};
-                    const Vec3 wi = reflect(wo, h);
-                    if (!(wi.z > 0.0)) continue;
+            for (int i = 0; i < rows; ++i)
+                for_each_reflection(wo, s_edges_[i], o.n_phi, [&](const Vec3& wi, const Vec3& h) {
                     terms.at(wi, wo, t.data());
                     double value = 0.0;
                     for (int ch = 0; ch < 3; ++ch) {
@@ -215,8 +218,7 @@ FactorSampler::FactorSampler(const Factors& f, const FactorSamplerOptions& o) : 
                         value += to_value(f.space, y);
                     }
                     d[i] += value * wi.z * dot(wo, h);
-                }
-            }
+                });
         }
         double mass = 0.0;
         for (int r = 0; r < rows; ++r) mass += 0.5 * (d[r] + d[r + 1]) * (s_edges_[r + 1] - s_edges_[r]);
