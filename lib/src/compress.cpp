@@ -80,7 +80,7 @@ int supersample_option(const ReprSpec& spec, TabulateOptions::Filter filter) {
 double theta_d_warp_option(const ReprSpec& spec) {
     const double w = spec.get_double("dwarp", 0.0);
     if (!(w >= 0.0 && w <= GridSpec::kMaxWarp))
-        throw ValueError(spec.kind() + ": dwarp=" + std::to_string(w) + " is outside [0, 0.95]");
+        throw ValueError(spec.kind() + ": dwarp=" + spec.get_string("dwarp", "") + " is outside [0, 0.95]");
     return w;
 }
 

@@ -11,6 +11,7 @@
 #include <string>
 #include <vector>
 
+#include "brdfz/coords.h"
 #include "brdfz/errors.h"
 #include "brdfz/formats/container.h"
 #include "brdfz/formats/io.h"
@@ -273,6 +274,26 @@ TEST_CASE("Tables on a warped θd axis round-trip through .brdfz with their axis
     const fs::path p = dir.path / "linear.brdfz";
     container::write(p.string(), TabularBrdf(random_table({7, 9, 5}, 5)));
     for (const container::Feature& f : container::read(p.string()).meta.features) CHECK(f.name != "tabular.warped-theta-d");
+
+    // MERL and EXR files have only the linear θd axis: a warped table is tabulated onto its own grid on
+    // that axis, not written as if its bins were linear.
+    Table smooth(GridSpec{8, 16, 8, BinPosition::Centre, 0.8});
+    for (std::size_t bin = 0; bin < smooth.bins(); ++bin) smooth.set(bin, {1.0, 2.0, 0.5 + bin % 16 * 0.1});
+    const TabularBrdf warped(smooth);
+    for (const char* ext : {".binary", ".exr"}) {
+        INFO(ext);
+        const fs::path q = dir.path / (std::string("warped") + ext);
+        save(warped, q.string());
+        const Loaded back = load(q.string());
+        const auto& t = dynamic_cast<const TabularBrdf&>(*back.brdf).table();
+        CHECK(t.grid() == GridSpec{8, 16, 8});
+        // θd bin centres of the linear grid read the warped table's interpolation there.
+        for (int id = 0; id < 16; ++id) {
+            const auto [a, b] = from_half_diff({t.grid().theta_h_at(2), 0.0, t.grid().theta_d_at(id), t.grid().phi_d_at(3)});
+            if (!(a.z > 0 && b.z > 0)) continue;
+            CHECK(back.brdf->eval(a, b)[2] == Approx(warped.eval(a, b)[2]).epsilon(1e-6));
+        }
+    }
 }
 
 TEST_CASE("Metadata lists datasets and records the source", "[container]") {

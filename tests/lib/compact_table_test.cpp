@@ -433,8 +433,8 @@ TEST_CASE("tables on a warped θd axis: exact for data linear in its coordinate,
         CHECK(t.table().grid().theta_d_warp > 0.0);
         CHECK_THAT(t.describe(), Catch::Contains("theta_d warp"));
     }
-    CHECK_THROWS_WITH(compress(source, "tabular:res=8x8x8,dwarp=0.96"), Catch::Contains("outside [0, 0.95]"));
-    CHECK_THROWS_WITH(compress(source, "tabular:res=8x8x8,dwarp=-0.1"), Catch::Contains("outside [0, 0.95]"));
+    CHECK_THROWS_WITH(compress(source, "tabular:res=8x8x8,dwarp=0.96"), Catch::Contains("dwarp=0.96 is outside [0, 0.95]"));
+    CHECK_THROWS_WITH(compress(source, "tabular:res=8x8x8,dwarp=-0.1"), Catch::Contains("dwarp=-0.1 is outside [0, 0.95]"));
     CHECK_THROWS_WITH(compress(source, "tabular:res=8x8x8,dwarp=x"), Catch::Contains("not a finite number"));
 }
 
