@@ -87,11 +87,11 @@ Loaded load_json(const std::string& path) {
 }
 
 // Table formats: a table on the requested grid (or its own) is written as it is, anything else is
-// tabulated first.
+// tabulated first. MERL and EXR files know only the linear θd axis, so a warped table is tabulated too.
 template <typename Write>
 ValidityCounts save_table(const Brdf& brdf, const SaveOptions& options, const Write& write) {
     const auto* table = dynamic_cast<const TabularBrdf*>(&brdf);
-    if (table && (!options.grid || *options.grid == table->table().grid())) {
+    if (table && table->table().grid().theta_d_warp == 0.0 && (!options.grid || *options.grid == table->table().grid())) {
         write(table->table());
         ValidityCounts written;
         written.valid = table->table().valid_bins();
@@ -99,6 +99,10 @@ ValidityCounts save_table(const Brdf& brdf, const SaveOptions& options, const Wr
     }
     TabulateOptions t;
     t.grid = options.grid.value_or(GridSpec{});
+    if (table && !options.grid) {  // a warped table: its own grid on the linear θd axis
+        t.grid = table->table().grid();
+        t.grid.theta_d_warp = 0.0;
+    }
     t.threads = options.threads;
     t.progress = options.progress;
     Tabulated tab = tabulate(brdf, t);

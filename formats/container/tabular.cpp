@@ -14,14 +14,18 @@ const Feature kTabular{"tabular", 1};
 const Feature kFloat32{"tabular.float32", 1};
 const Feature kFloat16{"tabular.float16", 2};
 const Feature kUint8Log{"tabular.uint8-log", 2};
+const Feature kWarpedThetaD{"tabular.warped-theta-d", 2};
 
 const char* position_name(BinPosition p) { return p == BinPosition::Centre ? "centre" : "start"; }
 
 std::vector<Feature> needs(const Brdf& brdf) {
-    if (dynamic_cast<const TabularBrdf*>(&brdf)) return {kTabular, kFloat32};
-    if (const auto* c = dynamic_cast<const CompactTableBrdf*>(&brdf))
-        return {kTabular, c->table().dtype() == TableDtype::F16 ? kFloat16 : kUint8Log};
-    return {};
+    const auto* t = dynamic_cast<const TabularBrdf*>(&brdf);
+    const auto* c = dynamic_cast<const CompactTableBrdf*>(&brdf);
+    if (!t && !c) return {};
+    std::vector<Feature> out{kTabular, t ? kFloat32 : c->table().dtype() == TableDtype::F16 ? kFloat16 : kUint8Log};
+    // Only a warped grid needs the feature, so linear tables stay readable by readers without it.
+    if ((t ? t->table().grid() : c->table().grid()).theta_d_warp != 0.0) out.push_back(kWarpedThetaD);
+    return out;
 }
 
 void write_grid(h5::WriteNode& rep, const GridSpec& g) {
@@ -30,6 +34,10 @@ void write_grid(h5::WriteNode& rep, const GridSpec& g) {
     rep.attr("grid", std::span<const std::uint64_t>(dims));
     rep.attr("bin_position", std::string(position_name(g.position)));
     rep.attr("theta_h_axis", std::string("sqrt"));
+    if (g.theta_d_warp != 0.0) {
+        rep.attr("theta_d_axis", std::string("warped"));
+        rep.attr("theta_d_warp", g.theta_d_warp);
+    }
 }
 
 std::vector<std::uint64_t> values_shape(const GridSpec& g) {
@@ -92,8 +100,16 @@ std::unique_ptr<Brdf> read(const h5::ReadNode& rep, const ReadContext& ctx) {
     const std::string axis = rep.str("theta_h_axis");
     if (axis != "sqrt") bad("unknown theta_h_axis '" + axis + "'");
 
+    double warp = 0.0;  // absent: the linear θd axis
+    if (rep.has_attr("theta_d_axis")) {
+        const std::string d_axis = rep.str("theta_d_axis");
+        if (d_axis != "warped") bad("unknown theta_d_axis '" + d_axis + "'");
+        warp = rep.f64("theta_d_warp");
+        if (!(warp > 0.0 && warp <= GridSpec::kMaxWarp)) bad("theta_d_warp " + std::to_string(warp) + " outside (0, 0.95]");
+    }
+
     const GridSpec grid{static_cast<int>(dims[0]), static_cast<int>(dims[1]), static_cast<int>(dims[2]),
-                        position == "centre" ? BinPosition::Centre : BinPosition::Start};
+                        position == "centre" ? BinPosition::Centre : BinPosition::Start, warp};
     const h5::Dataset values = rep.dataset("values");
     const h5::DType type = dtype == "float32" ? h5::DType::F32 : dtype == "float16" ? h5::DType::F16 : h5::DType::U8;
     if (values.type() != type || values.shape() != values_shape(grid))
@@ -129,7 +145,7 @@ std::unique_ptr<Brdf> read(const h5::ReadNode& rep, const ReadContext& ctx) {
 }  // namespace
 
 const StorageModule& tabular_storage() {
-    static const StorageModule m{"tabular", {kTabular, kFloat32, kFloat16, kUint8Log}, &needs, &write, &read};
+    static const StorageModule m{"tabular", {kTabular, kFloat32, kFloat16, kUint8Log, kWarpedThetaD}, &needs, &write, &read};
     return m;
 }
 

@@ -76,15 +76,24 @@ int supersample_option(const ReprSpec& spec, TabulateOptions::Filter filter) {
     return spec.get_int("ss", filter == TabulateOptions::Filter::LeastSquares ? 3 : 1, 1, 16);
 }
 
+// dwarp=W: the warped θd axis (table.h, GridSpec::theta_d_warp), default 0 (linear).
+double theta_d_warp_option(const ReprSpec& spec) {
+    const double w = spec.get_double("dwarp", 0.0);
+    if (!(w >= 0.0 && w <= GridSpec::kMaxWarp))
+        throw ValueError(spec.kind() + ": dwarp=" + spec.get_string("dwarp", "") + " is outside [0, 0.95]");
+    return w;
+}
+
 Compressed build_tabular(const Brdf& source, const ReprSpec& spec, const CompressOptions& options) {
     const std::vector<int> res = spec.get_dims("res", {90, 90, 180});
     const TableDtype dtype = dtype_option(spec);
     const Lookup lookup = lookup_option(spec);
     const TabulateOptions::Filter filter = filter_option(spec, lookup);
     const int ss = supersample_option(spec, filter);
+    const double warp = theta_d_warp_option(spec);
     spec.finish();
-    return build_table(source, GridSpec{res[0], res[1], res[2], BinPosition::Centre}, {ss, ss, ss}, filter, dtype,
-                       lookup, options);
+    return build_table(source, GridSpec{res[0], res[1], res[2], BinPosition::Centre, warp}, {ss, ss, ss}, filter,
+                       dtype, lookup, options);
 }
 
 // Romeiro et al. 2008's bivariate table: θh × θd, the source averaged over phi=N values of φd.
@@ -95,9 +104,10 @@ Compressed build_bivariate(const Brdf& source, const ReprSpec& spec, const Compr
     const TabulateOptions::Filter filter = filter_option(spec, lookup);
     const int ss = supersample_option(spec, filter);
     const int phi = spec.get_int("phi", 180, 1, GridSpec::kMaxAxis);
+    const double warp = theta_d_warp_option(spec);
     spec.finish();
-    return build_table(source, GridSpec{res[0], res[1], 1, BinPosition::Centre}, {ss, ss, phi}, filter, dtype, lookup,
-                       options);
+    return build_table(source, GridSpec{res[0], res[1], 1, BinPosition::Centre, warp}, {ss, ss, phi}, filter, dtype,
+                       lookup, options);
 }
 
 FitOptions analytic_options(const ReprSpec& spec, const CompressOptions& options) {

@@ -11,6 +11,21 @@ void GridSpec::validate() const {
     for (int n : {n_theta_h, n_theta_d, n_phi_d})
         if (n < 1 || n > kMaxAxis)
             throw ValueError("grid " + str() + ": every axis must be in [1, " + std::to_string(kMaxAxis) + "]");
+    if (!(theta_d_warp >= 0.0 && theta_d_warp <= kMaxWarp))
+        throw ValueError("grid " + str() + ": theta_d warp " + std::to_string(theta_d_warp) + " outside [0, 0.95]");
+}
+
+double axis::u_to_theta_d(double u, int n, double w) {
+    if (w == 0.0) return u_to_theta_d(u, n);
+    const double x = u / n;
+    double lo = 0.0, hi = std::numbers::pi / 2.0;
+    if (!(x > 0.0)) return 0.0;
+    if (!(x < 1.0)) return hi;
+    for (int i = 0; i < 60; ++i) {  // 2^-60 of π/2: below double rounding
+        const double mid = 0.5 * (lo + hi);
+        (theta_d_to_u(mid, 1, w) < x ? lo : hi) = mid;
+    }
+    return 0.5 * (lo + hi);
 }
 
 std::string GridSpec::str() const {

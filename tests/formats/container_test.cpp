@@ -11,6 +11,7 @@
 #include <string>
 #include <vector>
 
+#include "brdfz/coords.h"
 #include "brdfz/errors.h"
 #include "brdfz/formats/container.h"
 #include "brdfz/formats/io.h"
@@ -240,6 +241,59 @@ TEST_CASE("Compact tables (float16, u8log, bivariate) round-trip through .brdfz 
                 CHECK_THAT(read_error(bad), Catch::Contains("dataset /representation/values is corrupt"));
             }
         }
+}
+
+TEST_CASE("Tables on a warped θd axis round-trip through .brdfz with their axis", "[container][warp]") {
+    test::TempDir dir;
+    const std::vector<Vec3> wi{normalize(Vec3{0.3, -0.2, 0.9}), normalize(Vec3{-0.7, 0.1, 0.2}), {0, 0, 1}},
+        wo{normalize(Vec3{-0.1, 0.4, 0.8}), normalize(Vec3{0.6, 0.5, 0.3}), normalize(Vec3{0.9, 0, 0.1})};
+    const GridSpec g{7, 9, 5, BinPosition::Centre, 0.65};
+    const Table table = random_table(g, 5);
+    const TabularBrdf f32(table);
+    const CompactTableBrdf u8(CompactTable::encode(table, TableDtype::U8Log));
+    for (const Brdf* b : {static_cast<const Brdf*>(&f32), static_cast<const Brdf*>(&u8)}) {
+        INFO(b->describe());
+        const fs::path p = dir.path / "warped.brdfz";
+        const container::Achieved a = container::write(p.string(), *b);
+        CHECK(a.lossless);
+        CHECK(a.nbytes == b->nbytes());
+        const container::ReadResult r = container::read(p.string());
+        CHECK(r.brdf->describe() == b->describe());
+        for (std::size_t k = 0; k < wi.size(); ++k) CHECK(r.brdf->eval(wi[k], wo[k]) == b->eval(wi[k], wo[k]));
+        if (const auto* back = dynamic_cast<const TabularBrdf*>(r.brdf.get())) {
+            CHECK(back->table() == table);  // grid (warp included) and every bit
+        } else {
+            const auto* c = dynamic_cast<const CompactTableBrdf*>(r.brdf.get());
+            REQUIRE(c);
+            CHECK(c->table() == u8.table());
+        }
+        CHECK(r.meta.features.back() == container::Feature{"tabular.warped-theta-d", 2});
+        CHECK(r.meta.min_reader_version == 2);
+    }
+    // A linear table does not list the feature (older readers open it).
+    const fs::path p = dir.path / "linear.brdfz";
+    container::write(p.string(), TabularBrdf(random_table({7, 9, 5}, 5)));
+    for (const container::Feature& f : container::read(p.string()).meta.features) CHECK(f.name != "tabular.warped-theta-d");
+
+    // MERL and EXR files have only the linear θd axis: a warped table is tabulated onto its own grid on
+    // that axis, not written as if its bins were linear.
+    Table smooth(GridSpec{8, 16, 8, BinPosition::Centre, 0.8});
+    for (std::size_t bin = 0; bin < smooth.bins(); ++bin) smooth.set(bin, {1.0, 2.0, 0.5 + bin % 16 * 0.1});
+    const TabularBrdf warped(smooth);
+    for (const char* ext : {".binary", ".exr"}) {
+        INFO(ext);
+        const fs::path q = dir.path / (std::string("warped") + ext);
+        save(warped, q.string());
+        const Loaded back = load(q.string());
+        const auto& t = dynamic_cast<const TabularBrdf&>(*back.brdf).table();
+        CHECK(t.grid() == GridSpec{8, 16, 8});
+        // θd bin centres of the linear grid read the warped table's interpolation there.
+        for (int id = 0; id < 16; ++id) {
+            const auto [a, b] = from_half_diff({t.grid().theta_h_at(2), 0.0, t.grid().theta_d_at(id), t.grid().phi_d_at(3)});
+            if (!(a.z > 0 && b.z > 0)) continue;
+            CHECK(back.brdf->eval(a, b)[2] == Approx(warped.eval(a, b)[2]).epsilon(1e-6));
+        }
+    }
 }
 
 TEST_CASE("Metadata lists datasets and records the source", "[container]") {

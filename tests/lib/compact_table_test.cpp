@@ -96,6 +96,29 @@ double box_mean(const Table& t, int h0, int nh, int d0, int nd, int p0, int np, 
     return n[1] > 0 ? sum[1] / n[1] : std::nan("");
 }
 
+// f = (0.1 + u_d/n)·(1, 0.5, 0.25), u_d the coordinate of a θd axis warped by w (table.h): linear in that
+// coordinate, so the linear lookup on a table with that axis reproduces it exactly between the first and
+// last θd samples.
+class LinearInWarpedThetaD final : public Brdf {
+public:
+    explicit LinearInWarpedThetaD(double w) : w_(w) {}
+    int channels() const override { return 3; }
+    std::size_t nbytes() const override { return 0; }
+    std::string describe() const override { return "linear in the warped theta_d coordinate"; }
+    double coordinate(const Vec3& wi, const Vec3& wo) const {
+        return axis::theta_d_to_u(to_half_diff(wi, wo).theta_d, 1, w_);
+    }
+
+protected:
+    Rgb eval_above(const Vec3& wi, const Vec3& wo) const override {
+        const double v = 0.1 + coordinate(wi, wo);
+        return {v, 0.5 * v, 0.25 * v};
+    }
+
+private:
+    double w_;
+};
+
 CompactTableBrdf compact(const Table& t, TableDtype dtype, Lookup lookup = Lookup::Linear) {
     return CompactTableBrdf(CompactTable::encode(t, dtype), lookup);
 }
@@ -226,7 +249,8 @@ TEST_CASE("compact tables give finite, non-negative values on 10^6 random pairs"
     // A source with negative values: tabulation clamps them and counts every one.
     const NegativeSpots source;
     for (const char* spec : {"tabular:res=16x16x32,dtype=f16", "tabular:res=32x32x64,dtype=u8log,lookup=nearest",
-                             "bivariate:res=32x32,dtype=u8log", "bivariate:res=45x45,dtype=f16,ss=1"}) {
+                             "bivariate:res=32x32,dtype=u8log", "bivariate:res=45x45,dtype=f16,ss=1",
+                             "tabular:res=16x40x8,dtype=u8log,dwarp=0.9", "tabular:res=16x16x16,dtype=u8log,lookup=nearest,dwarp=0.95"}) {
         INFO(spec);
         const Compressed c = compress(source, spec);
         REQUIRE(c.notes.size() == 1);
@@ -360,6 +384,60 @@ TEST_CASE("compress: table kinds and their option errors", "[compact][compress]"
     CHECK_THROWS_AS(compress(source, "bivariate:res=8x8,dtype=f16,colour=1"), ValueError);
 }
 
+TEST_CASE("tables on a warped θd axis: exact for data linear in its coordinate, options checked", "[compact][warp]") {
+    const LinearInWarpedThetaD source(0.6);
+    const Compressed warped = compress(source, "tabular:res=4x16x4,dwarp=0.6");
+    const Compressed plain = compress(source, "tabular:res=4x16x4");
+    CHECK(warped.spec == "tabular:res=4x16x4,dwarp=0.6");
+    const auto& table = dynamic_cast<const TabularBrdf&>(*warped.brdf).table();
+    CHECK(table.grid().theta_d_warp == 0.6);
+    CHECK(warped.brdf->nbytes() == plain.brdf->nbytes());  // the warp is one attribute, not stored per bin
+    // Pairs with θh below the first θh sample (so the lookup reads θh bin 0 only, whose bins are all above
+    // the horizon) and θd between the first and last θd samples (beyond them the lookup is constant).
+    Pairs p;
+    std::mt19937_64 rng(5);
+    std::uniform_real_distribution<double> u01(0, 1);
+    const double h_max = GridSpec{4, 16, 4}.theta_h_at(0);
+    const double d_lo = axis::u_to_theta_d(0.5, 16, 0.6), d_hi = axis::u_to_theta_d(15.5, 16, 0.6);
+    while (p.wi.size() < 10000) {
+        const auto [wi, wo] = from_half_diff({h_max * u01(rng), 2 * M_PI * u01(rng), d_lo + (d_hi - d_lo) * u01(rng),
+                                              2 * M_PI * u01(rng)});
+        if (!(wi.z > 0 && wo.z > 0)) continue;
+        p.wi.push_back(wi);
+        p.wo.push_back(wo);
+    }
+    std::vector<Rgb> fw(p.wi.size()), fp(p.wi.size());
+    warped.brdf->eval(p.wi, p.wo, fw);
+    plain.brdf->eval(p.wi, p.wo, fp);
+    double worst_warped = 0.0, worst_plain = 0.0;
+    std::size_t inside = 0;
+    for (std::size_t k = 0; k < p.wi.size(); ++k) {
+        const double u = 16 * source.coordinate(p.wi[k], p.wo[k]);
+        if (!(u > 0.5 && u < 15.5)) continue;  // rounding at the ends of the range
+        ++inside;
+        const Rgb f = source.eval(p.wi[k], p.wo[k]);
+        for (int c = 0; c < 3; ++c) {
+            worst_warped = std::max(worst_warped, std::fabs(fw[k][c] / f[c] - 1.0));
+            worst_plain = std::max(worst_plain, std::fabs(fp[k][c] / f[c] - 1.0));
+        }
+    }
+    CHECK(inside > 9990);
+    CHECK(worst_warped < 1e-6);  // float32 values
+    CHECK(worst_plain > 1e-3);   // the same grid on the linear axis interpolates the wrong curve
+
+    // Compact types and the bivariate kind take the warp too.
+    for (const char* spec : {"tabular:res=8x16x8,dtype=u8log,filter=lsq,dwarp=0.5", "bivariate:res=8x16,dtype=f16,dwarp=0.3"}) {
+        INFO(spec);
+        const Compressed c = compress(source, spec);
+        const auto& t = dynamic_cast<const CompactTableBrdf&>(*c.brdf);
+        CHECK(t.table().grid().theta_d_warp > 0.0);
+        CHECK_THAT(t.describe(), Catch::Contains("theta_d warp"));
+    }
+    CHECK_THROWS_WITH(compress(source, "tabular:res=8x8x8,dwarp=0.96"), Catch::Contains("dwarp=0.96 is outside [0, 0.95]"));
+    CHECK_THROWS_WITH(compress(source, "tabular:res=8x8x8,dwarp=-0.1"), Catch::Contains("dwarp=-0.1 is outside [0, 0.95]"));
+    CHECK_THROWS_WITH(compress(source, "tabular:res=8x8x8,dwarp=x"), Catch::Contains("not a finite number"));
+}
+
 TEST_CASE("stored codes are validated when a compact table is built from them", "[compact]") {
     const GridSpec g{2, 2, 2};
     const std::array<ChannelCodec, 3> unit{}, log_codec{ChannelCodec{1.0, 0.0, 0.01}, {2.0, 0.5, 0.02}, {1e3, 0.0, 0.05}};
@@ -398,7 +476,8 @@ TEST_CASE("the half-vector sampler works on compact tables", "[compact][sample]"
     CoatedDiffuseParams params;
     params.alpha = 0.15;
     const CoatedDiffuse source(params);
-    for (const char* spec : {"tabular:res=45x45x90,dtype=u8log", "bivariate:res=64x64,dtype=f16"}) {
+    for (const char* spec : {"tabular:res=45x45x90,dtype=u8log", "bivariate:res=64x64,dtype=f16",
+                             "tabular:res=24x48x16,dtype=u8log,dwarp=0.8"}) {
         INFO(spec);
         const Compressed c = compress(source, spec);
         for (double deg : {20.0, 70.0}) {
@@ -455,4 +534,55 @@ TEST_CASE("compact tables of real RGL data: quantisation costs little against re
     CHECK(compare(*src.brdf, *u8.brdf).cos_rmse_rel.mean < 0.02);
     // The φd mean with grazing points left out (tabulate.h): 2.3 % here, 16 % when they dominated.
     CHECK(compare(*src.brdf, *compress(*src.brdf, "bivariate:res=90x90").brdf).cos_rmse_rel.mean < 0.03);
+}
+
+namespace {
+
+std::filesystem::path rgl_file(const char* name) {
+    return std::filesystem::path(BRDFZ_SHARED_DIR) / "data" / "rgl" / (std::string(name) + "_rgb.bsdf");
+}
+
+}  // namespace
+
+TEST_CASE("warped θd tables of real RGL data: below the linear axis's error at the same size", "[compact][data][rgl][warp]") {
+    const std::filesystem::path file = rgl_file("satin_rosaline");
+    if (!std::filesystem::exists(file)) {
+        WARN("skipped: " << file.string() << " missing");
+        return;
+    }
+    const Loaded src = load(file.string());
+    MetricOptions coarse;  // half the metric grid's resolution on each axis: an eighth of the points
+    coarse.grid = GridSpec{45, 45, 90, BinPosition::Start};
+    const Compressed linear = compress(*src.brdf, "tabular:res=12x20x6,dtype=u8log,filter=lsq");
+    const Compressed warped = compress(*src.brdf, "tabular:res=12x20x6,dtype=u8log,filter=lsq,dwarp=0.8");
+    CHECK(warped.brdf->nbytes() == linear.brdf->nbytes());
+    const double e_linear = compare(*src.brdf, *linear.brdf, coarse).cos_rmse_rel.mean;
+    const double e_warped = compare(*src.brdf, *warped.brdf, coarse).cos_rmse_rel.mean;
+    CAPTURE(e_linear, e_warped);
+    CHECK(e_warped < 0.9 * e_linear);  // measured: 5.5 % -> 4.5 %
+}
+
+TEST_CASE("≤ 16 KB within 2 %: tabular:res=24x28x8,dtype=u8log,filter=lsq,dwarp=0.8 on the RGL files", "[compact][data][rgl][warp][heavy]") {
+    // bench/README.md, "RGL: the measured range, and the ≤ 16 KB / 2 % target": 1.81 / 0.69 / 2.78 / 1.99 %
+    // (cc_ibiza_sunset, paper_white, satin_rosaline, vch_golden_yellow); satin_rosaline misses.
+    const char* spec = "tabular:res=24x28x8,dtype=u8log,filter=lsq,dwarp=0.8";
+    for (const char* name : {"cc_ibiza_sunset", "paper_white", "satin_rosaline", "vch_golden_yellow"}) {
+        INFO(name);
+        const std::filesystem::path file = rgl_file(name);
+        if (!std::filesystem::exists(file)) {
+            WARN("skipped: " << file.string() << " missing");
+            continue;
+        }
+        const Loaded src = load(file.string());
+        const Compressed c = compress(*src.brdf, spec);
+        CHECK(c.brdf->nbytes() <= 16384);
+        const double e = compare(*src.brdf, *c.brdf).cos_rmse_rel.mean;
+        const double e_linear =
+            compare(*src.brdf, *compress(*src.brdf, "tabular:res=24x28x8,dtype=u8log,filter=lsq").brdf).cos_rmse_rel.mean;
+        CAPTURE(e, e_linear);
+        const std::string n = name;
+        CHECK(e < (n == "satin_rosaline" ? 0.03 : 0.02));
+        // The warp is for glossy grazing peaks; on paper_white the linear axis does better (0.58 %).
+        if (n != "paper_white") CHECK(e < e_linear);
+    }
 }

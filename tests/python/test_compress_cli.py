@@ -51,6 +51,7 @@ def test_analytic_kind_fits(cli, demo_table, tmp_path):
     ("tabular:rez=16x16x32", "unknown option(s) rez"),
     ("tabular:dtype=f64", "dtype"),
     ("analytic", "name the model"),
+    ("tabular:res=8x8x8,dwarp=1", "dwarp=1 is outside [0, 0.95]"),
 ])
 def test_bad_specs_fail_cleanly_without_output(cli, demo_table, tmp_path, spec, message):
     out = tmp_path / "never.brdfz"
@@ -59,6 +60,20 @@ def test_bad_specs_fail_cleanly_without_output(cli, demo_table, tmp_path, spec, 
     assert message in p.stderr and p.stderr.count("\n") == 1
     assert not out.exists()
     assert list(tmp_path.iterdir()) == []
+
+
+def test_warped_theta_d_table_is_stored_with_its_axis(cli, demo_table, tmp_path):
+    out = tmp_path / "warped.brdfz"
+    spec = "tabular:res=16x24x8,dtype=u8log,filter=lsq,dwarp=0.8"
+    r = compress_json(cli, demo_table, out, spec)
+    assert r["repr"] == spec
+    assert r["bytes"] == 16 * 24 * 8 * 3 + 72
+    assert "theta_d warp 0.8" in r["describe"]
+    info = json.loads(run(cli, "info", out, "--json").stdout)["container"]
+    assert "tabular.warped-theta-d@2" in info["features"]
+    # The file evaluates as reported: the warp was read back, not taken as the linear axis.
+    d = json.loads(run(cli, "diff", demo_table, out, "--json").stdout)
+    assert d["cos_rmse_rel"]["mean"] == pytest.approx(r["metrics"]["cos_rmse_rel"]["mean"], rel=1e-9)
 
 
 def test_measurements_only_fit(cli, tmp_path):

@@ -2,12 +2,13 @@
 // point behind `brdfz compress`, Python's brdfz.compress and the budget-driven selection.
 //
 // Kinds (each documented with its options in its own header under repr/):
-//   tabular:res=AxBxC,dtype=f32|f16|u8log[,lookup=linear|nearest,ss=N,filter=box|lsq]
+//   tabular:res=AxBxC,dtype=f32|f16|u8log[,lookup=linear|nearest,ss=N,filter=box|lsq,dwarp=W]
 //                                           resampled Rusinkiewicz table (repr/tabular.h, compact_table.h),
 //                                           each bin the mean of N³ points (default 1: point samples), or
 //                                           with filter=lsq the least-squares fit of the linear lookup to
-//                                           them (tabulate.h; default N = 3)
-//   bivariate:res=AxB,dtype=...[,lookup=...,ss=N,phi=P,filter=box|lsq]   (θh, θd) table, the source
+//                                           them (tabulate.h; default N = 3); dwarp=W in [0, 0.95]: θd
+//                                           axis warped towards grazing (table.h; default 0, linear)
+//   bivariate:res=AxB,dtype=...[,lookup=...,ss=N,phi=P,filter=box|lsq,dwarp=W]   (θh, θd) table, the source
 //                                           averaged over P φd values (default 180) and N² points per bin
 //                                           (default 1), or fitted to them (filter=lsq)
 //   analytic:MODEL[,loss=log|cos|cbrt,starts=N,seed=S]   a Ceres fit (fit/fit.h)

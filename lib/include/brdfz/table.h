@@ -2,7 +2,8 @@
 //
 // Axes (MERL's, at any resolution):
 //   θh ∈ [0, π/2) on a square-root axis: bin i covers [(i/n)²·π/2, ((i+1)/n)²·π/2);
-//   θd ∈ [0, π/2) linear;  φd ∈ [0, π) linear, folded by reciprocity (φd ~ φd + π).
+//   θd ∈ [0, π/2) linear, or optionally warped towards grazing (GridSpec::theta_d_warp);
+//   φd ∈ [0, π) linear, folded by reciprocity (φd ~ φd + π).
 // Bin index = φd + nφd·(θd + nθd·θh), MERL's order.
 // Nearest lookup is floor() of the continuous bin coordinate with MERL's exact arithmetic, so it picks
 // bit-identically the bin MERL's published lookup picks. Where each bin's value sits for
@@ -36,6 +37,13 @@ inline double theta_h_to_u(double theta_h, int n) {
     return theta_h <= 0.0 ? 0.0 : std::sqrt(theta_h / (std::numbers::pi / 2.0) * n * n);
 }
 inline double theta_d_to_u(double theta_d, int n) { return theta_d / (std::numbers::pi * 0.5) * n; }
+// The warped θd axis, w in [0, 0.95]: u/n = (1 − w)·θd/(π/2) + w·(1 − cos θd), bins at 90° narrower
+// than at 0° by 1 + w·π/2/(1 − w) (as the square-root axis makes θh's narrower near 0): glossy measured
+// data change fastest with θd near grazing mirror pairs. w = 0 is the linear axis above, bit for bit.
+inline double theta_d_to_u(double theta_d, int n, double w) {
+    if (w == 0.0) return theta_d_to_u(theta_d, n);
+    return ((1.0 - w) * theta_d * (2.0 / std::numbers::pi) + w * (1.0 - std::cos(theta_d))) * n;
+}
 // φd in (-π, π] folded to [0, π] by reciprocity.
 inline double phi_d_to_u(double phi_d, int n) {
     if (phi_d < 0.0) phi_d += std::numbers::pi;
@@ -43,6 +51,8 @@ inline double phi_d_to_u(double phi_d, int n) {
 }
 inline double u_to_theta_h(double u, int n) { return (u / n) * (u / n) * (std::numbers::pi / 2.0); }
 inline double u_to_theta_d(double u, int n) { return u / n * (std::numbers::pi / 2.0); }
+// Inverse of the warped map by bisection (it is increasing): setup only, never in a lookup.
+double u_to_theta_d(double u, int n, double w);
 inline double u_to_phi_d(double u, int n) { return u / n * std::numbers::pi; }
 // Nearest bin of a coordinate: floor, clamped to [0, n-1]; NaN goes to 0 (fmax drops NaN) so the
 // int conversion is always defined.
@@ -54,8 +64,10 @@ struct GridSpec {
     int n_theta_d = 90;
     int n_phi_d = 180;
     BinPosition position = BinPosition::Centre;
+    double theta_d_warp = 0.0;  // axis::theta_d_to_u's w; 0: MERL's linear θd axis
 
     static constexpr int kMaxAxis = 4096;  // bound on any axis, checked before allocating
+    static constexpr double kMaxWarp = 0.95;  // the first θd bin 11° wide at 40 bins (linear: 2.25°)
 
     std::size_t bins() const {
         return static_cast<std::size_t>(n_theta_h) * n_theta_d * n_phi_d;
@@ -67,9 +79,10 @@ struct GridSpec {
     double sample_offset() const { return position == BinPosition::Centre ? 0.5 : 0.0; }
     // Angles at which bin (ih, id, ip) is sampled.
     double theta_h_at(int ih) const { return axis::u_to_theta_h(ih + sample_offset(), n_theta_h); }
-    double theta_d_at(int id) const { return axis::u_to_theta_d(id + sample_offset(), n_theta_d); }
+    double theta_d_at(int id) const { return axis::u_to_theta_d(id + sample_offset(), n_theta_d, theta_d_warp); }
+    double theta_d_to_u(double theta_d) const { return axis::theta_d_to_u(theta_d, n_theta_d, theta_d_warp); }
     double phi_d_at(int ip) const { return axis::u_to_phi_d(ip + sample_offset(), n_phi_d); }
-    // Throws ValueError unless every axis is in [1, kMaxAxis].
+    // Throws ValueError unless every axis is in [1, kMaxAxis] and theta_d_warp in [0, kMaxWarp].
     void validate() const;
     std::string str() const;  // "90x90x180"
     bool operator==(const GridSpec&) const = default;

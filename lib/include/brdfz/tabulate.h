@@ -36,7 +36,8 @@ struct TabulateOptions {
     // at most 2^21 points (ValueError beyond).
     enum class Filter { Box, LeastSquares } filter = Filter::Box;
     // Box filter: points with θi or θo above this angle are left out of a bin's mean unless the bin has
-    // no other valid point. Grazing values are the least reliable (extrapolated in RGL files) and can be
+    // no other valid point. LeastSquares: such points, and points beyond the source's
+    // measured_theta_max(), weigh a tenth in the fit. Grazing values are the least reliable (extrapolated in RGL files) and can be
     // orders of magnitude larger than the rest (10^5 against 0.3 in RGL's paper_white), so they would
     // dominate the mean. 90: no cut.
     double box_max_theta_deg = 80.0;

@@ -9,6 +9,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstddef>
+#include <cstdio>
 #include <initializer_list>
 #include <numbers>
 #include <string>
@@ -20,10 +21,18 @@
 
 namespace brdfz::detail {
 
-// The start of a table's describe(): "tabular 90x90x180", or "bivariate 90x90" for one φd bin.
+// The start of a table's describe(): "tabular 90x90x180", or "bivariate 90x90" for one φd bin, and
+// ", theta_d warp 0.6" on a warped θd axis.
 inline std::string table_shape(const GridSpec& g) {
-    return g.n_phi_d == 1 ? "bivariate " + std::to_string(g.n_theta_h) + "x" + std::to_string(g.n_theta_d)
-                          : "tabular " + g.str();
+    std::string warp;
+    if (g.theta_d_warp != 0.0) {
+        char text[48];
+        std::snprintf(text, sizeof text, ", theta_d warp %g", g.theta_d_warp);
+        warp = text;
+    }
+    return (g.n_phi_d == 1 ? "bivariate " + std::to_string(g.n_theta_h) + "x" + std::to_string(g.n_theta_d)
+                           : "tabular " + g.str()) +
+           warp;
 }
 
 // Continuous bin coordinates (θh, θd, φd) of a direction pair on a grid.
@@ -35,7 +44,7 @@ struct BinCoords {
 inline BinCoords bin_coords(const GridSpec& g, const Vec3& wi, const Vec3& wo) {
     const Vec3 h = half_vector(wi, wo);
     const Vec3 d = difference_vector(wi, half_frame(h));
-    return {axis::theta_h_to_u(elevation(h), g.n_theta_h), axis::theta_d_to_u(elevation(d), g.n_theta_d),
+    return {axis::theta_h_to_u(elevation(h), g.n_theta_h), g.theta_d_to_u(elevation(d)),
             axis::phi_d_to_u(std::atan2(d.y, d.x), g.n_phi_d)};
 }
 
@@ -61,8 +70,13 @@ constexpr double kIllConditioned = 1e300;
     constexpr double kMinSin = 1e-6;
     const bool sure = (rxy > kMinSin * len) & (sin_d > kMinSin * len);
     const double up = phi_d * (1.0 / std::numbers::pi) * g.n_phi_d;
-    return {std::sqrt(theta_h * (2.0 / std::numbers::pi)) * g.n_theta_h,
-            theta_d * (2.0 / std::numbers::pi) * g.n_theta_d, std::max(up, sure ? 0.0 : kIllConditioned)};
+    // The warped θd axis (table.h) from cosθd = wi·s/|s|; a select, so the linear axis stays exact and
+    // the loop stays branch-free.
+    const double w = g.theta_d_warp;
+    const double ud_linear = theta_d * (2.0 / std::numbers::pi) * g.n_theta_d;
+    const double ud_warped = ((1.0 - w) * theta_d * (2.0 / std::numbers::pi) + w * (1.0 - dot(wi, s) / len)) * g.n_theta_d;
+    return {std::sqrt(theta_h * (2.0 / std::numbers::pi)) * g.n_theta_h, w == 0.0 ? ud_linear : ud_warped,
+            std::max(up, sure ? 0.0 : kIllConditioned)};
 }
 
 // Clamp to [0, hi] with comparisons, NaN to 0: std::fmin/fmax are out-of-line libm calls here.

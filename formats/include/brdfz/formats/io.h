@@ -51,8 +51,9 @@ struct LoadOptions {
 };
 
 struct SaveOptions {
-    // Table resolution to write. Unset: a TabularBrdf keeps its own grid, anything else is tabulated on
-    // MERL's 90x90x180. A table on another grid is resampled (tabulated through its lookup).
+    // Table resolution to write. Unset: a TabularBrdf keeps its own grid (a warped θd axis, which MERL
+    // and EXR files cannot hold, becomes the linear one), anything else is tabulated on MERL's 90x90x180.
+    // A table on another grid is resampled (tabulated through its lookup).
     std::optional<GridSpec> grid;
     int threads = 0;
     std::function<void(double)> progress;  // tabulation progress, fraction done
