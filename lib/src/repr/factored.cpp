@@ -137,37 +137,41 @@ struct FactorView {
     bool prefetch;          // the factors exceed the L2 cache
 };
 
-// Row-major offsets (index · width) of the factor rows to blend, and their weights.
+constexpr std::size_t kBlock = 64;  // pairs per pass of the kernel
+
+// The corners of a block's pairs: per corner, the factor rows to blend (row indices) and their
+// weights. Stored by corner, not by pair, so the pass that computes them vectorises.
 template <int NR, int NC>
-struct FactorCorners {
-    std::size_t r[NR], c[NC];
-    float rw[NR], cw[NC];
+struct BlockCorners {
+    static constexpr int kRows = NR, kColumns = NC;
+    int r[NR][kBlock], c[NC][kBlock];
+    float rw[NR][kBlock], cw[NC][kBlock];
 };
-using CornersHxDP = FactorCorners<2, 4>;
-using CornersHDxP = FactorCorners<4, 2>;
+// h_dp: θh rows; (θd, φd) columns. hd_p: (θh, θd) rows; φd columns.
+template <FactorLayout L>
+using CornersOf = std::conditional_t<L == FactorLayout::HxDP, BlockCorners<2, 4>, BlockCorners<4, 2>>;
 
-// θh rows; (θd, φd) columns.
-inline CornersHxDP corners_hxdp(const GridSpec& g, const detail::Corners& k, std::size_t m) {
-    const std::size_t np = g.n_phi_d;
-    const double td = k.d.t, tp = k.p.t;
-    return {{k.h.i0 * m, k.h.i1 * m},
-            {(k.d.i0 * np + k.p.i0) * m, (k.d.i0 * np + k.p.i1) * m, (k.d.i1 * np + k.p.i0) * m,
-             (k.d.i1 * np + k.p.i1) * m},
-            {static_cast<float>(1.0 - k.h.t), static_cast<float>(k.h.t)},
-            {static_cast<float>((1.0 - td) * (1.0 - tp)), static_cast<float>((1.0 - td) * tp),
-             static_cast<float>(td * (1.0 - tp)), static_cast<float>(td * tp)}};
-}
-
-// (θh, θd) rows; φd columns.
-inline CornersHDxP corners_hdxp(const GridSpec& g, const detail::Corners& k, std::size_t m) {
-    const std::size_t nd = g.n_theta_d;
-    const double th = k.h.t, td = k.d.t;
-    return {{(k.h.i0 * nd + k.d.i0) * m, (k.h.i0 * nd + k.d.i1) * m, (k.h.i1 * nd + k.d.i0) * m,
-             (k.h.i1 * nd + k.d.i1) * m},
-            {k.p.i0 * m, k.p.i1 * m},
-            {static_cast<float>((1.0 - th) * (1.0 - td)), static_cast<float>((1.0 - th) * td),
-             static_cast<float>(th * (1.0 - td)), static_cast<float>(th * td)},
-            {static_cast<float>(1.0 - k.p.t), static_cast<float>(k.p.t)}};
+// Pair k's corners from its spans along θh, θd and φd. Branch-free.
+template <FactorLayout L>
+[[gnu::always_inline]] inline void set_corners(const GridSpec& g, const detail::Corners& s, std::size_t k,
+                                               CornersOf<L>& out) {
+    const auto hi = [](const detail::Span& a) { return static_cast<float>(a.t); };
+    const auto lo = [](const detail::Span& a) { return static_cast<float>(1.0 - a.t); };
+    // The 2-D axis: outer span a, inner span b, `inner` samples along b.
+    const auto pairs = [&](const detail::Span& a, const detail::Span& b, int inner, int (&idx)[4][kBlock],
+                           float (&w)[4][kBlock]) {
+        idx[0][k] = a.i0 * inner + b.i0, idx[1][k] = a.i0 * inner + b.i1;
+        idx[2][k] = a.i1 * inner + b.i0, idx[3][k] = a.i1 * inner + b.i1;
+        w[0][k] = static_cast<float>((1.0 - a.t) * (1.0 - b.t)), w[1][k] = static_cast<float>((1.0 - a.t) * b.t);
+        w[2][k] = static_cast<float>(a.t * (1.0 - b.t)), w[3][k] = static_cast<float>(a.t * b.t);
+    };
+    if constexpr (L == FactorLayout::HxDP) {
+        out.r[0][k] = s.h.i0, out.r[1][k] = s.h.i1, out.rw[0][k] = lo(s.h), out.rw[1][k] = hi(s.h);
+        pairs(s.d, s.p, g.n_phi_d, out.c, out.cw);
+    } else {
+        pairs(s.h, s.d, g.n_theta_d, out.r, out.rw);
+        out.c[0][k] = s.p.i0, out.c[1][k] = s.p.i1, out.cw[0][k] = lo(s.p), out.cw[1][k] = hi(s.p);
+    }
 }
 
 // The lane sums of three vectors, in lanes 0-2: pairwise adds of shuffled halves (a horizontal add
@@ -185,18 +189,23 @@ inline CornersHDxP corners_hdxp(const GridSpec& g, const detail::Corners& k, std
     return lane_sums(h);
 }
 
-// The transform-space values y_c = Σ_j mix_cj · (Σ_r rw_r U[r][j]) · (Σ_c cw_c V[c][j]), in float, W
-// components at a time. Separate colour's mix is one-hot; multiplying by its zeros costs less than
-// the gathers that would avoid it. The float sums are within ~1e-7 of the factors' magnitude, as the
-// float32 factors themselves.
-template <int W, int NR, int NC>
-[[gnu::always_inline]] inline void blend(const FactorView& f, const FactorCorners<NR, NC>& k, double y[3]) {
+// Pair k's transform-space values y_c = Σ_j mix_cj · (Σ_r rw_r U[r][j]) · (Σ_c cw_c V[c][j]), in
+// float, W components at a time. Separate colour's mix is one-hot; multiplying by its zeros costs
+// less than the gathers that would avoid it. The float sums are within ~1e-7 of the factors'
+// magnitude, as the float32 factors themselves.
+template <int W, typename Corners>
+[[gnu::always_inline]] inline void blend(const FactorView& f, const Corners& k, std::size_t i, double y[3]) {
     using V = FloatV<W>;
+    constexpr int NR = Corners::kRows, NC = Corners::kColumns;
+    const float* u[NR];
+    const float* v[NC];
+    for (int r = 0; r < NR; ++r) u[r] = f.u + static_cast<std::size_t>(k.r[r][i]) * f.width;
+    for (int c = 0; c < NC; ++c) v[c] = f.v + static_cast<std::size_t>(k.c[c][i]) * f.width;
     V acc[3] = {};
     for (std::size_t j = 0; j < f.width; j += W) {
-        V a = k.rw[0] * load<V>(f.u + k.r[0] + j), b = k.cw[0] * load<V>(f.v + k.c[0] + j);
-        for (int r = 1; r < NR; ++r) a += k.rw[r] * load<V>(f.u + k.r[r] + j);
-        for (int c = 1; c < NC; ++c) b += k.cw[c] * load<V>(f.v + k.c[c] + j);
+        V a = k.rw[0][i] * load<V>(u[0] + j), b = k.cw[0][i] * load<V>(v[0] + j);
+        for (int r = 1; r < NR; ++r) a += k.rw[r][i] * load<V>(u[r] + j);
+        for (int c = 1; c < NC; ++c) b += k.cw[c][i] * load<V>(v[c] + j);
         const V p = a * b;
         for (std::size_t ch = 0; ch < 3; ++ch) acc[ch] += load<V>(f.mix + ch * f.width + j) * p;
     }
@@ -205,46 +214,44 @@ template <int W, int NR, int NC>
     for (int ch = 0; ch < 3; ++ch) y[ch] = std::min(static_cast<double>(s[ch]), f.ceiling[ch]);
 }
 
-template <FactorLayout L>
-using CornersOf = std::conditional_t<L == FactorLayout::HxDP, CornersHxDP, CornersHDxP>;
-
-template <FactorLayout L>
-[[gnu::always_inline]] inline CornersOf<L> factor_corners(const FactorView& f, const detail::BinCoords& c,
-                                                          const Vec3& wi, const Vec3& wo) {
-    const detail::Corners k = detail::linear_corners(f.grid, c, wi, wo);
-    if constexpr (L == FactorLayout::HxDP)
-        return corners_hxdp(f.grid, k, f.width);
-    else
-        return corners_hdxp(f.grid, k, f.width);
-}
-
 // Blocks of pairs in passes, as the tabular kernel: (1) the coordinates, branch-free so the compiler
-// vectorises them; (2) the corners, prefetching the factor rows when they miss the cache; (3) the
-// blends; (4) the inverse transform, vectorised over the block. W: the blend's floats per step.
+// vectorises them (the rare pairs whose φd they flag as ill-conditioned recomputed exactly); (2) the
+// corners, branch-free and vectorised too, and the prefetches of the factor rows when they miss the
+// cache; (3) the blends; (4) the inverse transform, vectorised over the block. W: the blend's floats
+// per step.
 template <int W, FactorLayout L>
 [[gnu::always_inline]] inline void eval_pairs(const FactorView& f, FactorSpace space, const Vec3* wi, const Vec3* wo,
                                               Rgb* out, std::size_t n, std::uint64_t& clamped) {
-    constexpr std::size_t kBlock = 64;
+    const GridSpec& g = f.grid;
+    const double off = g.sample_offset();
     detail::BinCoords coords[kBlock];
-    CornersOf<L> corners[kBlock];
+    CornersOf<L> corners;
     bool above[kBlock];
     double y[3 * kBlock], values[3 * kBlock];
     for (std::size_t start = 0; start < n; start += kBlock) {
         const std::size_t m = std::min(kBlock, n - start);
         const Vec3* a = wi + start;
         const Vec3* b = wo + start;
-        for (std::size_t k = 0; k < m; ++k) coords[k] = detail::fast_bin_coords(f.grid, a[k], b[k]);
+        for (std::size_t k = 0; k < m; ++k) coords[k] = detail::fast_bin_coords(g, a[k], b[k]);
         for (std::size_t k = 0; k < m; ++k) above[k] = (a[k].z > 0.0) & (b[k].z > 0.0);
+        for (std::size_t k = 0; k < m; ++k)
+            if (above[k] & !(coords[k].up <= g.n_phi_d)) [[unlikely]]  // kIllConditioned or NaN
+                coords[k] = detail::bin_coords(g, a[k], b[k]);
         for (std::size_t k = 0; k < m; ++k) {
-            if (!above[k]) continue;
-            const CornersOf<L>& c = corners[k] = factor_corners<L>(f, coords[k], a[k], b[k]);
-            if (!f.prefetch) continue;
-            for (std::size_t r : c.r) __builtin_prefetch(f.u + r);
-            for (std::size_t col : c.c) __builtin_prefetch(f.v + col);
+            const detail::BinCoords& c = coords[k];
+            set_corners<L>(g,
+                           {detail::clamped_span(c.uh - off, g.n_theta_h), detail::clamped_span(c.ud - off, g.n_theta_d),
+                            detail::periodic_span(c.up - off, g.n_phi_d)},
+                           k, corners);
         }
+        if (f.prefetch)
+            for (std::size_t k = 0; k < m; ++k) {
+                for (const auto& r : corners.r) __builtin_prefetch(f.u + static_cast<std::size_t>(r[k]) * f.width);
+                for (const auto& c : corners.c) __builtin_prefetch(f.v + static_cast<std::size_t>(c[k]) * f.width);
+            }
         for (std::size_t k = 0; k < m; ++k) {
             if (above[k])
-                blend<W>(f, corners[k], y + 3 * k);
+                blend<W>(f, corners, k, y + 3 * k);
             else
                 y[3 * k] = y[3 * k + 1] = y[3 * k + 2] = 0.0;  // gives the value 0, not counted
         }
