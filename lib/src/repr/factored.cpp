@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <limits>
 #include <type_traits>
 
@@ -11,6 +12,7 @@
 #include "brdfz/errors.h"
 #include "detail/fast_math.h"
 #include "detail/grid_sweep.h"
+#include "detail/simd.h"
 #include "detail/table_lookup.h"
 
 namespace brdfz {
@@ -95,111 +97,161 @@ void from_space_n(FactorSpace s, const double* y, double* out, std::size_t n, st
 // ---------------------------------------------------------------------------------------------
 // Evaluation: interpolation corners in factor rows and columns
 
-constexpr std::size_t kLanes = 4;  // floats per SIMD step of the blend (SSE)
+// The blend's SIMD vectors (GCC vector extensions): 4 floats (SSE) or 8 (AVX). The kernel below is
+// always inlined into its two entry points, so no vector crosses a call and the ABI note GCC warns
+// about for 8-float vectors outside AVX code does not apply.
+#pragma GCC diagnostic ignored "-Wpsabi"
+typedef float Float4 __attribute__((vector_size(16)));
+typedef float Float8 __attribute__((vector_size(32)));
+template <int W>
+struct FloatVector;
+template <>
+struct FloatVector<4> {
+    using type = Float4;
+};
+template <>
+struct FloatVector<8> {
+    using type = Float8;
+};
+template <int W>
+using FloatV = typename FloatVector<W>::type;
+
+template <typename V>
+[[gnu::always_inline]] inline V load(const float* p) {
+    V v;
+    std::memcpy(&v, p, sizeof v);  // unaligned: one movups
+    return v;
+}
+
+// Floats per blend step of each kernel; rows are zero-padded to a multiple of it.
+constexpr std::size_t lanes(detail::Simd s) { return s == detail::Simd::Avx2Fma ? 8 : 4; }
 
 // The factors as evaluation reads them (FactoredBrdf's padded copies): rows `width` floats apart.
 struct FactorView {
     const GridSpec& grid;
-    std::size_t width;  // row_width() rounded up to kLanes, zero-padded
+    std::size_t width;  // row_width() rounded up to the kernel's lanes, zero-padded
     const float* u;
     const float* v;
-    const double* mix;      // 3 × width
+    const float* mix;       // 3 × width
     const double* ceiling;  // 3: max_value in the transform space
+    bool prefetch;          // the factors exceed the L2 cache
 };
 
-// Row-major offsets (index · width) of the factor rows to blend, and their weights.
+constexpr std::size_t kBlock = 64;  // pairs per pass of the kernel
+
+// The corners of a block's pairs: per corner, the factor rows to blend (row indices) and their
+// weights. Stored by corner, not by pair, so the pass that computes them vectorises.
 template <int NR, int NC>
-struct FactorCorners {
-    std::size_t r[NR], c[NC];
-    float rw[NR], cw[NC];
+struct BlockCorners {
+    static constexpr int kRows = NR, kColumns = NC;
+    int r[NR][kBlock], c[NC][kBlock];
+    float rw[NR][kBlock], cw[NC][kBlock];
 };
-using CornersHxDP = FactorCorners<2, 4>;
-using CornersHDxP = FactorCorners<4, 2>;
+// h_dp: θh rows; (θd, φd) columns. hd_p: (θh, θd) rows; φd columns.
+template <FactorLayout L>
+using CornersOf = std::conditional_t<L == FactorLayout::HxDP, BlockCorners<2, 4>, BlockCorners<4, 2>>;
 
-// θh rows; (θd, φd) columns.
-inline CornersHxDP corners_hxdp(const GridSpec& g, const detail::Corners& k, std::size_t m) {
-    const std::size_t np = g.n_phi_d;
-    const double td = k.d.t, tp = k.p.t;
-    return {{k.h.i0 * m, k.h.i1 * m},
-            {(k.d.i0 * np + k.p.i0) * m, (k.d.i0 * np + k.p.i1) * m, (k.d.i1 * np + k.p.i0) * m,
-             (k.d.i1 * np + k.p.i1) * m},
-            {static_cast<float>(1.0 - k.h.t), static_cast<float>(k.h.t)},
-            {static_cast<float>((1.0 - td) * (1.0 - tp)), static_cast<float>((1.0 - td) * tp),
-             static_cast<float>(td * (1.0 - tp)), static_cast<float>(td * tp)}};
-}
-
-// (θh, θd) rows; φd columns.
-inline CornersHDxP corners_hdxp(const GridSpec& g, const detail::Corners& k, std::size_t m) {
-    const std::size_t nd = g.n_theta_d;
-    const double th = k.h.t, td = k.d.t;
-    return {{(k.h.i0 * nd + k.d.i0) * m, (k.h.i0 * nd + k.d.i1) * m, (k.h.i1 * nd + k.d.i0) * m,
-             (k.h.i1 * nd + k.d.i1) * m},
-            {k.p.i0 * m, k.p.i1 * m},
-            {static_cast<float>((1.0 - th) * (1.0 - td)), static_cast<float>((1.0 - th) * td),
-             static_cast<float>(th * (1.0 - td)), static_cast<float>(th * td)},
-            {static_cast<float>(1.0 - k.p.t), static_cast<float>(k.p.t)}};
-}
-
-// The transform-space values y_c = Σ_j mix_cj · (Σ_r rw_r U[r][j]) · (Σ_c cw_c V[c][j]): the row and
-// column blends in float, kLanes components at a time (Eigen's fixed-size arrays: SIMD without
-// loops), their products and the colour mix in double. Separate colour's mix is one-hot; multiplying
-// by its zeros costs less than the gathers that would avoid it.
-template <int NR, int NC>
-inline void blend(const FactorView& f, const FactorCorners<NR, NC>& k, double y[3]) {
-    using Step = Eigen::Array<float, kLanes, 1>;
-    using StepD = Eigen::Array<double, kLanes, 1>;
-    using Map = Eigen::Map<const Step>;
-    using MapD = Eigen::Map<const StepD>;
-    StepD acc[3] = {StepD::Zero(), StepD::Zero(), StepD::Zero()};
-    for (std::size_t j = 0; j < f.width; j += kLanes) {
-        Step a = k.rw[0] * Map(f.u + k.r[0] + j), b = k.cw[0] * Map(f.v + k.c[0] + j);
-        for (int r = 1; r < NR; ++r) a += k.rw[r] * Map(f.u + k.r[r] + j);
-        for (int c = 1; c < NC; ++c) b += k.cw[c] * Map(f.v + k.c[c] + j);
-        const StepD p = a.cast<double>() * b.cast<double>();
-        for (std::size_t ch = 0; ch < 3; ++ch) acc[ch] += MapD(f.mix + ch * f.width + j) * p;
+// Pair k's corners from its spans along θh, θd and φd. Branch-free.
+template <FactorLayout L>
+[[gnu::always_inline]] inline void set_corners(const GridSpec& g, const detail::Corners& s, std::size_t k,
+                                               CornersOf<L>& out) {
+    const auto hi = [](const detail::Span& a) { return static_cast<float>(a.t); };
+    const auto lo = [](const detail::Span& a) { return static_cast<float>(1.0 - a.t); };
+    // The 2-D axis: outer span a, inner span b, `inner` samples along b.
+    const auto pairs = [&](const detail::Span& a, const detail::Span& b, int inner, int (&idx)[4][kBlock],
+                           float (&w)[4][kBlock]) {
+        idx[0][k] = a.i0 * inner + b.i0, idx[1][k] = a.i0 * inner + b.i1;
+        idx[2][k] = a.i1 * inner + b.i0, idx[3][k] = a.i1 * inner + b.i1;
+        w[0][k] = static_cast<float>((1.0 - a.t) * (1.0 - b.t)), w[1][k] = static_cast<float>((1.0 - a.t) * b.t);
+        w[2][k] = static_cast<float>(a.t * (1.0 - b.t)), w[3][k] = static_cast<float>(a.t * b.t);
+    };
+    if constexpr (L == FactorLayout::HxDP) {
+        out.r[0][k] = s.h.i0, out.r[1][k] = s.h.i1, out.rw[0][k] = lo(s.h), out.rw[1][k] = hi(s.h);
+        pairs(s.d, s.p, g.n_phi_d, out.c, out.cw);
+    } else {
+        pairs(s.h, s.d, g.n_theta_d, out.r, out.rw);
+        out.c[0][k] = s.p.i0, out.c[1][k] = s.p.i1, out.cw[0][k] = lo(s.p), out.cw[1][k] = hi(s.p);
     }
-    // At most the data's largest value: bins without data can reconstruct far beyond it (factor.h).
-    for (int ch = 0; ch < 3; ++ch) y[ch] = std::min(acc[ch].sum(), f.ceiling[ch]);
 }
 
-template <FactorLayout L>
-using CornersOf = std::conditional_t<L == FactorLayout::HxDP, CornersHxDP, CornersHDxP>;
+// The lane sums of three vectors, in lanes 0-2: pairwise adds of shuffled halves (a horizontal add
+// per vector would take three times the shuffles).
+[[gnu::always_inline]] inline Float4 lane_sums(const Float4 (&a)[3]) {
+    const auto hadd = [](Float4 x, Float4 y) {
+        return __builtin_shufflevector(x, y, 0, 2, 4, 6) + __builtin_shufflevector(x, y, 1, 3, 5, 7);
+    };
+    return hadd(hadd(a[0], a[1]), hadd(a[2], a[2]));
+}
+[[gnu::always_inline]] inline Float4 lane_sums(const Float8 (&a)[3]) {
+    Float4 h[3];
+    for (int i = 0; i < 3; ++i)
+        h[i] = __builtin_shufflevector(a[i], a[i], 0, 1, 2, 3) + __builtin_shufflevector(a[i], a[i], 4, 5, 6, 7);
+    return lane_sums(h);
+}
 
-template <FactorLayout L>
-inline CornersOf<L> factor_corners(const FactorView& f, const detail::BinCoords& c, const Vec3& wi, const Vec3& wo) {
-    const detail::Corners k = detail::linear_corners(f.grid, c, wi, wo);
-    if constexpr (L == FactorLayout::HxDP)
-        return corners_hxdp(f.grid, k, f.width);
-    else
-        return corners_hdxp(f.grid, k, f.width);
+// Pair k's transform-space values y_c = Σ_j mix_cj · (Σ_r rw_r U[r][j]) · (Σ_c cw_c V[c][j]), in
+// float, W components at a time. Separate colour's mix is one-hot; multiplying by its zeros costs
+// less than the gathers that would avoid it. The float sums are within ~1e-7 of the factors'
+// magnitude, as the float32 factors themselves.
+template <int W, typename Corners>
+[[gnu::always_inline]] inline void blend(const FactorView& f, const Corners& k, std::size_t i, double y[3]) {
+    using V = FloatV<W>;
+    constexpr int NR = Corners::kRows, NC = Corners::kColumns;
+    const float* u[NR];
+    const float* v[NC];
+    for (int r = 0; r < NR; ++r) u[r] = f.u + static_cast<std::size_t>(k.r[r][i]) * f.width;
+    for (int c = 0; c < NC; ++c) v[c] = f.v + static_cast<std::size_t>(k.c[c][i]) * f.width;
+    V acc[3] = {};
+    for (std::size_t j = 0; j < f.width; j += W) {
+        V a = k.rw[0][i] * load<V>(u[0] + j), b = k.cw[0][i] * load<V>(v[0] + j);
+        for (int r = 1; r < NR; ++r) a += k.rw[r][i] * load<V>(u[r] + j);
+        for (int c = 1; c < NC; ++c) b += k.cw[c][i] * load<V>(v[c] + j);
+        const V p = a * b;
+        for (std::size_t ch = 0; ch < 3; ++ch) acc[ch] += load<V>(f.mix + ch * f.width + j) * p;
+    }
+    const Float4 s = lane_sums(acc);
+    // At most the data's largest value: bins without data can reconstruct far beyond it (factor.h).
+    for (int ch = 0; ch < 3; ++ch) y[ch] = std::min(static_cast<double>(s[ch]), f.ceiling[ch]);
 }
 
 // Blocks of pairs in passes, as the tabular kernel: (1) the coordinates, branch-free so the compiler
-// vectorises them; (2) the corners, prefetching the factor rows (large factors miss the cache); (3)
-// the blends; (4) the inverse transform, vectorised over the block.
-template <FactorLayout L>
-void eval_pairs(const FactorView& f, FactorSpace space, const Vec3* wi, const Vec3* wo, Rgb* out, std::size_t n,
-                std::uint64_t& clamped) {
-    constexpr std::size_t kBlock = 64;
+// vectorises them (the rare pairs whose φd they flag as ill-conditioned recomputed exactly); (2) the
+// corners, branch-free and vectorised too, and the prefetches of the factor rows when they miss the
+// cache; (3) the blends; (4) the inverse transform, vectorised over the block. W: the blend's floats
+// per step.
+template <int W, FactorLayout L>
+[[gnu::always_inline]] inline void eval_pairs(const FactorView& f, FactorSpace space, const Vec3* wi, const Vec3* wo,
+                                              Rgb* out, std::size_t n, std::uint64_t& clamped) {
+    const GridSpec& g = f.grid;
+    const double off = g.sample_offset();
     detail::BinCoords coords[kBlock];
-    CornersOf<L> corners[kBlock];
+    CornersOf<L> corners;
     bool above[kBlock];
     double y[3 * kBlock], values[3 * kBlock];
     for (std::size_t start = 0; start < n; start += kBlock) {
         const std::size_t m = std::min(kBlock, n - start);
         const Vec3* a = wi + start;
         const Vec3* b = wo + start;
-        for (std::size_t k = 0; k < m; ++k) coords[k] = detail::fast_bin_coords(f.grid, a[k], b[k]);
+        for (std::size_t k = 0; k < m; ++k) coords[k] = detail::fast_bin_coords(g, a[k], b[k]);
         for (std::size_t k = 0; k < m; ++k) above[k] = (a[k].z > 0.0) & (b[k].z > 0.0);
+        for (std::size_t k = 0; k < m; ++k)
+            if (above[k] & !(coords[k].up <= g.n_phi_d)) [[unlikely]]  // kIllConditioned or NaN
+                coords[k] = detail::bin_coords(g, a[k], b[k]);
         for (std::size_t k = 0; k < m; ++k) {
-            if (!above[k]) continue;
-            const CornersOf<L>& c = corners[k] = factor_corners<L>(f, coords[k], a[k], b[k]);
-            for (std::size_t r : c.r) __builtin_prefetch(f.u + r);
-            for (std::size_t col : c.c) __builtin_prefetch(f.v + col);
+            const detail::BinCoords& c = coords[k];
+            set_corners<L>(g,
+                           {detail::clamped_span(c.uh - off, g.n_theta_h), detail::clamped_span(c.ud - off, g.n_theta_d),
+                            detail::periodic_span(c.up - off, g.n_phi_d)},
+                           k, corners);
         }
+        if (f.prefetch)
+            for (std::size_t k = 0; k < m; ++k) {
+                for (const auto& r : corners.r) __builtin_prefetch(f.u + static_cast<std::size_t>(r[k]) * f.width);
+                for (const auto& c : corners.c) __builtin_prefetch(f.v + static_cast<std::size_t>(c[k]) * f.width);
+            }
         for (std::size_t k = 0; k < m; ++k) {
             if (above[k])
-                blend(f, corners[k], y + 3 * k);
+                blend<W>(f, corners, k, y + 3 * k);
             else
                 y[3 * k] = y[3 * k + 1] = y[3 * k + 2] = 0.0;  // gives the value 0, not counted
         }
@@ -208,13 +260,30 @@ void eval_pairs(const FactorView& f, FactorSpace space, const Vec3* wi, const Ve
     }
 }
 
-// One pair with the batch kernel's arithmetic (bit for bit).
+// The kernel's two builds. Single-pair eval runs the same one as the batch (bit for bit: FMA
+// contraction makes the two builds' results differ in the last bits).
 template <FactorLayout L>
-Rgb eval_one(const FactorView& f, FactorSpace space, const Vec3& wi, const Vec3& wo, std::uint64_t& clamped) {
-    double y[3], values[3];
-    blend(f, factor_corners<L>(f, detail::fast_bin_coords(f.grid, wi, wo), wi, wo), y);
-    from_space_n(space, y, values, 3, clamped);
-    return {values[0], values[1], values[2]};
+[[gnu::flatten]] void eval_pairs_sse2(const FactorView& f, FactorSpace space, const Vec3* wi, const Vec3* wo,
+                                      Rgb* out, std::size_t n, std::uint64_t& clamped) {
+    eval_pairs<4, L>(f, space, wi, wo, out, n, clamped);
+}
+
+template <FactorLayout L>
+[[gnu::flatten, gnu::target("avx2,fma")]] void eval_pairs_avx2(const FactorView& f, FactorSpace space, const Vec3* wi,
+                                                                const Vec3* wo, Rgb* out, std::size_t n,
+                                                                std::uint64_t& clamped) {
+    eval_pairs<8, L>(f, space, wi, wo, out, n, clamped);
+}
+
+void eval_kernel(detail::Simd simd, FactorLayout layout, const FactorView& f, FactorSpace space, const Vec3* wi,
+                const Vec3* wo, Rgb* out, std::size_t n, std::uint64_t& clamped) {
+    const bool hxdp = layout == FactorLayout::HxDP;
+    if (simd == detail::Simd::Avx2Fma)
+        (hxdp ? eval_pairs_avx2<FactorLayout::HxDP> : eval_pairs_avx2<FactorLayout::HDxP>)(f, space, wi, wo, out, n,
+                                                                                           clamped);
+    else
+        (hxdp ? eval_pairs_sse2<FactorLayout::HxDP> : eval_pairs_sse2<FactorLayout::HDxP>)(f, space, wi, wo, out, n,
+                                                                                           clamped);
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -564,19 +633,28 @@ FactoredBrdf::FactoredBrdf(Factors factors) : f_(std::move(factors)) {
         if (!(top >= 0.0f)) throw ValueError("factored: max_value " + std::to_string(top) + " is not a value >= 0");
         ceiling_[c] = to_space(f_.space, std::min(top, std::numeric_limits<float>::max()));
     }
-    // The evaluation copies: rows padded to a whole number of SIMD steps.
-    width_ = (m + kLanes - 1) / kLanes * kLanes;
-    u_.assign(rows * width_, 0.0f);
-    v_.assign(cols * width_, 0.0f);
-    for (std::size_t i = 0; i < rows; ++i) std::copy_n(f_.u.data() + i * m, m, u_.data() + i * width_);
-    for (std::size_t i = 0; i < cols; ++i) std::copy_n(f_.v.data() + i * m, m, v_.data() + i * width_);
-    mix_.assign(3 * width_, 0.0);
+    // The evaluation copies: rows padded to a whole number of the kernel's SIMD steps.
+    avx2_ = detail::simd_level() == detail::Simd::Avx2Fma;
+    const std::size_t step = lanes(avx2_ ? detail::Simd::Avx2Fma : detail::Simd::Sse2);
+    width_ = (m + step - 1) / step * step;
+    // U and V each from a 64-byte boundary: a row of 16 floats (separate colour to rank 5, shared to
+    // rank 16, under AVX) then fills one cache line instead of straddling two.
+    constexpr std::size_t kLine = 64 / sizeof(float);
+    const std::size_t v_offset = (rows * width_ + kLine - 1) / kLine * kLine;
+    storage_.assign(v_offset + cols * width_ + kLine - 1, 0.0f);
+    float* u = storage_.data() + (kLine - reinterpret_cast<std::uintptr_t>(storage_.data()) / sizeof(float) % kLine) % kLine;
+    float* v = u + v_offset;
+    for (std::size_t i = 0; i < rows; ++i) std::copy_n(f_.u.data() + i * m, m, u + i * width_);
+    for (std::size_t i = 0; i < cols; ++i) std::copy_n(f_.v.data() + i * m, m, v + i * width_);
+    u_ = u;
+    v_ = v;
+    mix_.assign(3 * width_, 0.0f);
     for (std::size_t c = 0; c < 3; ++c)
         for (std::size_t j = 0; j < static_cast<std::size_t>(f_.rank); ++j) {
             if (f_.colour == FactorColour::Shared)
                 mix_[c * width_ + j] = f_.colour_weights[c * f_.rank + j];
             else
-                mix_[c * width_ + c * f_.rank + j] = 1.0;
+                mix_[c * width_ + c * f_.rank + j] = 1.0f;
         }
 }
 
@@ -611,22 +689,21 @@ Table FactoredBrdf::reconstruct(std::size_t* clamped) const {
     return t;
 }
 
+// Above the L2 cache (512 KiB per core on the machines measured), the blends' factor rows miss it
+// and are prefetched a block ahead; below, the prefetches only cost instructions.
+constexpr std::size_t kPrefetchBytes = 512 * 1024;
+
 Rgb FactoredBrdf::eval_above(const Vec3& wi, const Vec3& wo) const {
-    std::uint64_t clamped = 0;
-    const FactorView view{f_.grid, width_, u_.data(), v_.data(), mix_.data(), ceiling_};
-    const Rgb f = f_.layout == FactorLayout::HxDP ? eval_one<FactorLayout::HxDP>(view, f_.space, wi, wo, clamped)
-                                                  : eval_one<FactorLayout::HDxP>(view, f_.space, wi, wo, clamped);
-    if (clamped) clamped_.fetch_add(clamped, std::memory_order_relaxed);
+    Rgb f;
+    eval_batch(&wi, &wo, &f, 1);
     return f;
 }
 
 void FactoredBrdf::eval_batch(const Vec3* wi, const Vec3* wo, Rgb* out, std::size_t n) const {
     std::uint64_t clamped = 0;
-    const FactorView view{f_.grid, width_, u_.data(), v_.data(), mix_.data(), ceiling_};
-    if (f_.layout == FactorLayout::HxDP)
-        eval_pairs<FactorLayout::HxDP>(view, f_.space, wi, wo, out, n, clamped);
-    else
-        eval_pairs<FactorLayout::HDxP>(view, f_.space, wi, wo, out, n, clamped);
+    const bool prefetch = storage_.size() * sizeof(float) > kPrefetchBytes;
+    const FactorView view{f_.grid, width_, u_, v_, mix_.data(), ceiling_, prefetch};
+    eval_kernel(avx2_ ? detail::Simd::Avx2Fma : detail::Simd::Sse2, f_.layout, view, f_.space, wi, wo, out, n, clamped);
     if (clamped) clamped_.fetch_add(clamped, std::memory_order_relaxed);
 }
 

@@ -117,12 +117,15 @@ protected:
 
 private:
     Factors f_;
-    // Evaluation copies (factored.cpp): U and V with rows zero-padded from m to width_ entries (whole
-    // SIMD steps), and the colour mix, 3 × width_: the colour weights, or for separate colour a one-hot
-    // selection of each channel's components.
+    // Evaluation copies (factored.cpp): U and V (u_, v_: in storage_, each from a cache line) with rows
+    // zero-padded from m to width_ entries (whole SIMD steps of the kernel's build: AVX2 + FMA when
+    // avx2_, chosen from the CPU at construction, else SSE2), and the colour mix, 3 × width_: the colour
+    // weights, or for separate colour a one-hot selection of each channel's components.
+    bool avx2_ = false;
     std::size_t width_ = 0;
-    std::vector<float> u_, v_;
-    std::vector<double> mix_;
+    std::vector<float> storage_, mix_;
+    const float* u_ = nullptr;
+    const float* v_ = nullptr;
     double ceiling_[3];  // max_value in the transform space (within the float range)
     mutable std::atomic<std::uint64_t> clamped_{0};
     Lazy<HalfVectorSampler> sampler_;
