@@ -1,0 +1,111 @@
+// Sampling a Rusinkiewicz table together with its weight (TabularBrdf, CompactTableBrdf): the
+// half-vector sampler draws h by its angles relative to wo, and the lookup of f(wi, wo) needs the
+// pair's (θh, θd, φd). θh is the drawn one (its bin coordinate is y·n, y = √(θh/(π/2)) as drawn), and
+// θd, φd are the angles of wi in h's frame, a rotation of wo = (sinθo, 0, cosθo) by the drawn angles:
+// no half vector, cross product or normalisation recomputed from wi and wo, and one arctangent fewer
+// than fast_bin_coords. Draws from the cosine share carry no angles and take fast_bin_coords.
+#pragma once
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <cstddef>
+#include <numbers>
+
+#include "brdfz/sample/halfvector.h"
+#include "detail/table_lookup.h"
+
+namespace brdfz::detail {
+
+// fast_bin_coords(g, wi, wo) for a half-vector draw (d.half), from its angles. In h's frame
+// (half_frame's t, b, h) wi = reflect(wo, h) is the mirror of wo: (−wo·t, −wo·b, wo·h), with
+// wo·t = sinθo cosφ cosθh − cosθo sinθh and wo·b = −sinθo sinφ. The angles agree with fast_bin_coords'
+// to ~1e-15 (the same polynomial arctangent of the same ratios; tests/lib/tabular_test.cpp), and φd is
+// flagged ill-conditioned where fast_bin_coords flags it (θh or θd below 1e-6).
+[[gnu::always_inline]] inline BinCoords drawn_bin_coords(const GridSpec& g, const HalfVectorSampler::Draw& d) {
+    const double a = d.sin_o * d.cos_p;
+    const double dx = d.cos_o * d.sin_h - a * d.cos_h, dy = d.sin_o * d.sin_p, dz = a * d.sin_h + d.cos_o * d.cos_h;
+    const double sin_d = std::sqrt(dx * dx + dy * dy);
+    const double theta_d = fast_half_turn_angle(sin_d, dz);
+    const double phi_d = fast_half_turn_angle(dy, dx);
+    constexpr double kMinSin = 1e-6;
+    const bool sure = (d.sin_h > kMinSin) & (sin_d > kMinSin);
+    const double up = phi_d * (1.0 / std::numbers::pi) * g.n_phi_d;
+    // θh through the same arctangent as fast_bin_coords rather than the drawn y: the polynomial's error
+    // (up to 6e-11 relative) is then the same in both, where y·n differs from eval's coordinate by up
+    // to ~4e-9 bins, which moved the weight 6e-9 (relative) off eval's on a glossy table.
+    const double theta_h = fast_half_turn_angle(d.sin_h, d.cos_h);
+    return {std::sqrt(theta_h * (2.0 / std::numbers::pi)) * g.n_theta_h, theta_d * (2.0 / std::numbers::pi) * g.n_theta_d,
+            std::max(up, sure ? 0.0 : kIllConditioned)};
+}
+
+// The bin coordinates of a draw's pair (d.sample.pdf > 0).
+inline BinCoords draw_bin_coords(const GridSpec& g, const HalfVectorSampler::Draw& d, const Vec3& wo) {
+    return d.half ? drawn_bin_coords(g, d) : fast_bin_coords(g, d.sample.wi, wo);
+}
+
+inline void set_weight(BrdfSample& s, const Rgb& f) {
+    for (int ch = 0; ch < 3; ++ch) s.weight[ch] = f[ch] * s.wi.z / s.pdf;
+}
+
+// One sample with its weight, for wo above the horizon and u in [0, 1)² (Brdf::sample_above).
+template <typename Values>
+BrdfSample sample_table(const GridSpec& g, const Values& values, Lookup lookup, const HalfVectorSampler& sampler,
+                        const Vec3& wo, double u1, double u2) {
+    const HalfVectorSampler::Draw d = sampler.draw(wo, u1, u2);
+    BrdfSample s = d.sample;
+    if (!Brdf::usable(s)) return {};
+    const BinCoords c = draw_bin_coords(g, d, wo);
+    set_weight(s, lookup == Lookup::Nearest ? read_nearest(values, nearest_bin(g, c, s.wi, wo))
+                                            : read_linear(g, values, linear_corners(g, c, s.wi, wo)));
+    return s;
+}
+
+// Brdf::sample_batch: blocks of draws in passes, as eval_table_batch does for pairs: (1) the draws,
+// (2) their bin coordinates, branch-free so that the loop vectorises, (3) bins or corners, prefetching
+// the table lines, (4) the table reads and the weights. Each result is sample_table's, bit for bit.
+template <typename Values>
+void sample_table_batch(const GridSpec& g, const Values& values, Lookup lookup, const HalfVectorSampler& sampler,
+                        const Vec3* wo, const std::array<double, 2>* u, BrdfSample* out, std::size_t n) {
+    constexpr std::size_t kBlock = 64;
+    HalfVectorSampler::Draw draws[kBlock];
+    BinCoords coords[kBlock];
+    std::size_t bins[kBlock];
+    Corners corners[kBlock];
+    bool ok[kBlock];
+    for (std::size_t start = 0; start < n; start += kBlock) {
+        const std::size_t m = std::min(kBlock, n - start);
+        BrdfSample* s = out + start;
+        const Vec3* w = wo + start;
+        for (std::size_t k = 0; k < m; ++k) {
+            const std::array<double, 2>& v = u[start + k];
+            draws[k] = Brdf::can_draw(w[k], v[0], v[1]) ? sampler.draw(w[k], v[0], v[1]) : HalfVectorSampler::Draw{};
+            ok[k] = Brdf::usable(draws[k].sample);
+            s[k] = ok[k] ? draws[k].sample : BrdfSample{};
+        }
+        // Every draw's angles, set or not (unset ones are zeros, whose coordinates are not used).
+        for (std::size_t k = 0; k < m; ++k) coords[k] = drawn_bin_coords(g, draws[k]);
+        for (std::size_t k = 0; k < m; ++k)
+            if (ok[k] && !draws[k].half) coords[k] = fast_bin_coords(g, s[k].wi, w[k]);
+        if (lookup == Lookup::Nearest) {
+            for (std::size_t k = 0; k < m; ++k) {
+                if (!ok[k]) continue;
+                bins[k] = nearest_bin(g, coords[k], s[k].wi, w[k]);
+                __builtin_prefetch(values.address(bins[k]));
+            }
+            for (std::size_t k = 0; k < m; ++k)
+                if (ok[k]) set_weight(s[k], read_nearest(values, bins[k]));
+        } else {
+            for (std::size_t k = 0; k < m; ++k) {
+                if (!ok[k]) continue;
+                const Corners& c = corners[k] = linear_corners(g, coords[k], s[k].wi, w[k]);
+                for (int ih : {c.h.i0, c.h.i1})
+                    for (int id : {c.d.i0, c.d.i1}) __builtin_prefetch(values.address(g.index(ih, id, c.p.i0)));
+            }
+            for (std::size_t k = 0; k < m; ++k)
+                if (ok[k]) set_weight(s[k], read_linear(g, values, corners[k]));
+        }
+    }
+}
+
+}  // namespace brdfz::detail
