@@ -22,21 +22,26 @@ namespace brdfz::detail {
 // wo·t = sinθo cosφ cosθh − cosθo sinθh and wo·b = −sinθo sinφ. The angles agree with fast_bin_coords'
 // to ~1e-15 (the same polynomial arctangent of the same ratios; tests/lib/tabular_test.cpp), and φd is
 // flagged ill-conditioned where fast_bin_coords flags it (θh or θd below 1e-6).
-[[gnu::always_inline]] inline BinCoords drawn_bin_coords(const GridSpec& g, const HalfVectorSampler::Draw& d) {
-    const double a = d.sin_o * d.cos_p;
-    const double dx = d.cos_o * d.sin_h - a * d.cos_h, dy = d.sin_o * d.sin_p, dz = a * d.sin_h + d.cos_o * d.cos_h;
+[[gnu::always_inline]] inline BinCoords drawn_bin_coords(const GridSpec& g, double sin_h, double cos_h, double sin_p,
+                                                        double cos_p, double sin_o, double cos_o) {
+    const double a = sin_o * cos_p;
+    const double dx = cos_o * sin_h - a * cos_h, dy = sin_o * sin_p, dz = a * sin_h + cos_o * cos_h;
     const double sin_d = std::sqrt(dx * dx + dy * dy);
     const double theta_d = fast_half_turn_angle(sin_d, dz);
     const double phi_d = fast_half_turn_angle(dy, dx);
-    constexpr double kMinSin = 1e-6;
-    const bool sure = (d.sin_h > kMinSin) & (sin_d > kMinSin);
-    const double up = phi_d * (1.0 / std::numbers::pi) * g.n_phi_d;
     // θh through the same arctangent as fast_bin_coords rather than the drawn y: the polynomial's error
     // (up to 6e-11 relative) is then the same in both, where y·n differs from eval's coordinate by up
     // to ~4e-9 bins, which moved the weight 6e-9 (relative) off eval's on a glossy table.
-    const double theta_h = fast_half_turn_angle(d.sin_h, d.cos_h);
-    return {std::sqrt(theta_h * (2.0 / std::numbers::pi)) * g.n_theta_h, theta_d * (2.0 / std::numbers::pi) * g.n_theta_d,
-            std::max(up, sure ? 0.0 : kIllConditioned)};
+    const double theta_h = fast_half_turn_angle(sin_h, cos_h);
+    constexpr double kMinSin = 1e-6;
+    const bool sure = (sin_h > kMinSin) & (sin_d > kMinSin);
+    const double up = phi_d * (1.0 / std::numbers::pi) * g.n_phi_d;
+    return {std::sqrt(theta_h * (2.0 / std::numbers::pi)) * g.n_theta_h,
+            theta_d * (2.0 / std::numbers::pi) * g.n_theta_d, std::max(up, sure ? 0.0 : kIllConditioned)};
+}
+
+inline BinCoords drawn_bin_coords(const GridSpec& g, const HalfVectorSampler::Draw& d) {
+    return drawn_bin_coords(g, d.sin_h, d.cos_h, d.sin_p, d.cos_p, d.sin_o, d.cos_o);
 }
 
 // The bin coordinates of a draw's pair (d.sample.pdf > 0).
@@ -68,25 +73,31 @@ template <typename Values>
 void sample_table_batch(const GridSpec& g, const Values& values, Lookup lookup, const HalfVectorSampler& sampler,
                         const Vec3* wo, const std::array<double, 2>* u, BrdfSample* out, std::size_t n) {
     constexpr std::size_t kBlock = 64;
-    HalfVectorSampler::Draw draws[kBlock];
+    // The angles as arrays of doubles (not Draw structs), or the coordinate loop does not vectorise.
+    double sin_h[kBlock], cos_h[kBlock], sin_p[kBlock], cos_p[kBlock], sin_o[kBlock], cos_o[kBlock];
     BinCoords coords[kBlock];
     std::size_t bins[kBlock];
     Corners corners[kBlock];
-    bool ok[kBlock];
+    bool ok[kBlock], half[kBlock];
     for (std::size_t start = 0; start < n; start += kBlock) {
         const std::size_t m = std::min(kBlock, n - start);
         BrdfSample* s = out + start;
         const Vec3* w = wo + start;
         for (std::size_t k = 0; k < m; ++k) {
             const std::array<double, 2>& v = u[start + k];
-            draws[k] = Brdf::can_draw(w[k], v[0], v[1]) ? sampler.draw(w[k], v[0], v[1]) : HalfVectorSampler::Draw{};
-            ok[k] = Brdf::usable(draws[k].sample);
-            s[k] = ok[k] ? draws[k].sample : BrdfSample{};
+            const HalfVectorSampler::Draw d =
+                Brdf::can_draw(w[k], v[0], v[1]) ? sampler.draw(w[k], v[0], v[1]) : HalfVectorSampler::Draw{};
+            ok[k] = Brdf::usable(d.sample);
+            half[k] = d.half;
+            s[k] = ok[k] ? d.sample : BrdfSample{};
+            sin_h[k] = d.sin_h, cos_h[k] = d.cos_h, sin_p[k] = d.sin_p, cos_p[k] = d.cos_p;
+            sin_o[k] = d.sin_o, cos_o[k] = d.cos_o;
         }
         // Every draw's angles, set or not (unset ones are zeros, whose coordinates are not used).
-        for (std::size_t k = 0; k < m; ++k) coords[k] = drawn_bin_coords(g, draws[k]);
         for (std::size_t k = 0; k < m; ++k)
-            if (ok[k] && !draws[k].half) coords[k] = fast_bin_coords(g, s[k].wi, w[k]);
+            coords[k] = drawn_bin_coords(g, sin_h[k], cos_h[k], sin_p[k], cos_p[k], sin_o[k], cos_o[k]);
+        for (std::size_t k = 0; k < m; ++k)
+            if (ok[k] && !half[k]) coords[k] = fast_bin_coords(g, s[k].wi, w[k]);
         if (lookup == Lookup::Nearest) {
             for (std::size_t k = 0; k < m; ++k) {
                 if (!ok[k]) continue;
