@@ -1,9 +1,8 @@
 // Sampling a Rusinkiewicz table together with its weight (TabularBrdf, CompactTableBrdf): the
 // half-vector sampler draws h by its angles relative to wo, and the lookup of f(wi, wo) needs the
-// pair's (θh, θd, φd). θh is the drawn one (its bin coordinate is y·n, y = √(θh/(π/2)) as drawn), and
-// θd, φd are the angles of wi in h's frame, a rotation of wo = (sinθo, 0, cosθo) by the drawn angles:
-// no half vector, cross product or normalisation recomputed from wi and wo, and one arctangent fewer
-// than fast_bin_coords. Draws from the cosine share carry no angles and take fast_bin_coords.
+// pair's (θh, θd, φd). θd and φd are the angles of wi in h's frame, a rotation of wo = (sinθo, 0, cosθo)
+// by the drawn angles, so no half vector, cross product or normalisation is rebuilt from wi and wo.
+// Draws from the cosine share carry no angles and take fast_bin_coords.
 #pragma once
 
 #include <algorithm>
@@ -19,9 +18,10 @@ namespace brdfz::detail {
 
 // fast_bin_coords(g, wi, wo) for a half-vector draw (d.half), from its angles. In h's frame
 // (half_frame's t, b, h) wi = reflect(wo, h) is the mirror of wo: (−wo·t, −wo·b, wo·h), with
-// wo·t = sinθo cosφ cosθh − cosθo sinθh and wo·b = −sinθo sinφ. The angles agree with fast_bin_coords'
-// to ~1e-15 (the same polynomial arctangent of the same ratios; tests/lib/tabular_test.cpp), and φd is
-// flagged ill-conditioned where fast_bin_coords flags it (θh or θd below 1e-6).
+// wo·t = sinθo cosφ cosθh − cosθo sinθh and wo·b = −sinθo sinφ. The coordinates agree with
+// fast_bin_coords' to ~5e-12 bins in θh and θd (the same polynomial arctangent of the same ratios) and
+// in φd to ~1e-12 bins / (sinθh sinθd), its conditioning in fast_bin_coords (tests/lib/sample_test.cpp);
+// φd is flagged ill-conditioned where fast_bin_coords flags it (θh or θd below 1e-6).
 [[gnu::always_inline]] inline BinCoords drawn_bin_coords(const GridSpec& g, double sin_h, double cos_h, double sin_p,
                                                         double cos_p, double sin_o, double cos_o) {
     const double a = sin_o * cos_p;

@@ -29,8 +29,7 @@ const detail::SinCosTable& half_turn() {
 }
 
 // wo's elevation without asin, to ~1e-10: it only places wo between two slices, and sample() and
-// pdf() place it alike.
-// sin_o = ‖wo_xy‖, which draw() also needs for wo's azimuth.
+// pdf() place it alike. sin_o = ‖wo_xy‖, which draw() also needs for wo's azimuth.
 double view_elevation(double sin_o, const Vec3& wo) { return detail::fast_half_turn_angle(sin_o, wo.z); }
 
 constexpr double kBelowOne = 0x1.fffffffffffffp-1;  // the largest double below 1
@@ -147,7 +146,7 @@ HalfVectorSampler::Draw HalfVectorSampler::draw(const Vec3& wo, double u1, doubl
     const double jac = 4.0 * cos_d * 2.0 * kPi * kPi * p.y * th.s;
     const double data = p_xy / jac;
     if (!(std::isfinite(data) && data > 0.0)) return {};
-    return {{wi, share * wi.z / kPi + (1.0 - share) * data, {}}, true, p.y, th.s, th.c, sin_p, ph.c, sin_o, wo.z};
+    return {{wi, share * wi.z / kPi + (1.0 - share) * data, {}}, true, th.s, th.c, sin_p, ph.c, sin_o, wo.z};
 }
 
 }  // namespace brdfz

@@ -43,7 +43,6 @@ public:
     struct Draw {
         BrdfSample sample;       // wi and pdf, the weight unset; pdf 0 when wi falls below the horizon
         bool half = false;       // drawn from the data's half-vector share: the angles below are set
-        double y = 0;            // √(θh / (π/2)), exactly as drawn
         double sin_h = 0, cos_h = 0, sin_p = 0, cos_p = 0, sin_o = 0, cos_o = 0;
     };
     Draw draw(const Vec3& wo, double u1, double u2) const;
