@@ -34,10 +34,9 @@ void Brdf::eval_batch(const Vec3* wi, const Vec3* wo, Rgb* out, std::size_t n) c
 }
 
 BrdfSample Brdf::draw(const Vec3& wo, double u1, double u2) const {
-    if (!(wo.z > 0.0 && u1 >= 0.0 && u1 < 1.0 && u2 >= 0.0 && u2 < 1.0)) return {};
+    if (!can_draw(wo, u1, u2)) return {};
     const BrdfSample s = sample_above(wo, u1, u2);
-    if (!(s.wi.z > 0.0 && s.pdf > 0.0 && std::isfinite(s.pdf))) return {};
-    return s;
+    return usable(s) ? s : BrdfSample{};
 }
 
 namespace {
@@ -64,13 +63,17 @@ void Brdf::sample(std::span<const Vec3> wo, std::span<const std::array<double, 2
     if (wo.size() != u.size() || wo.size() != out.size())
         throw ValueError("sample: batch sizes differ (wo " + std::to_string(wo.size()) + ", u " +
                          std::to_string(u.size()) + ", out " + std::to_string(out.size()) + ")");
+    sample_batch(wo.data(), u.data(), out.data(), wo.size());
+}
+
+void Brdf::sample_batch(const Vec3* wo, const std::array<double, 2>* u, BrdfSample* out, std::size_t n) const {
     // Draw a block, then evaluate the weights it needs in one batch (eval_batch is the fast kernel).
     constexpr std::size_t kBlock = 64;
     Vec3 wi[kBlock], wos[kBlock];
     Rgb f[kBlock];
     std::size_t slot[kBlock];
-    for (std::size_t start = 0; start < wo.size(); start += kBlock) {
-        const std::size_t m = std::min(kBlock, wo.size() - start);
+    for (std::size_t start = 0; start < n; start += kBlock) {
+        const std::size_t m = std::min(kBlock, n - start);
         std::size_t pending = 0;
         for (std::size_t k = 0; k < m; ++k) {
             BrdfSample& s = out[start + k] = draw(wo[start + k], u[start + k][0], u[start + k][1]);

@@ -17,6 +17,7 @@
 
 #include <array>
 #include <cstddef>
+#include <limits>
 #include <numbers>
 #include <span>
 #include <string>
@@ -55,9 +56,17 @@ public:
     // Density of sample(wo, ·) at wi, per unit solid angle; 0 below the horizon.
     double pdf(const Vec3& wo, const Vec3& wi) const;
     // Batches: out[k] = sample(wo[k], u[k][0], u[k][1]) / pdf(wo[k], wi[k]); equal lengths or ValueError.
-    // The batch sample evaluates the weights with the batch eval kernel.
     void sample(std::span<const Vec3> wo, std::span<const std::array<double, 2>> u, std::span<BrdfSample> out) const;
     void pdf(std::span<const Vec3> wo, std::span<const Vec3> wi, std::span<double> out) const;
+    // The batch sample evaluates the weights with the batch eval kernel, or with a kernel fusing draw and
+    // weight (sample_batch). sample()'s rules, which such kernels follow too: the inputs it draws for (wo
+    // above the horizon, u in [0, 1)²) and the draws it keeps (wi above the horizon, pdf positive and finite).
+    static bool can_draw(const Vec3& wo, double u1, double u2) {
+        return wo.z > 0.0 && u1 >= 0.0 && u1 < 1.0 && u2 >= 0.0 && u2 < 1.0;
+    }
+    static bool usable(const BrdfSample& s) {
+        return s.wi.z > 0.0 && s.pdf > 0.0 && s.pdf < std::numeric_limits<double>::infinity();
+    }
 
     // 1 (monochrome) or 3 (RGB).
     virtual int channels() const = 0;
@@ -83,6 +92,10 @@ protected:
     virtual BrdfSample sample_above(const Vec3& wo, double u1, double u2) const;
     // Density for wo and wi above the horizon, consistent with sample_above. Default cosθi/π.
     virtual double pdf_above(const Vec3& wo, const Vec3& wi) const;
+    // Batch kernel of sample(span) over n draws, each as sample(wo[k], u[k][0], u[k][1]) gives it. The
+    // default draws blocks with sample_above and evaluates the weights they need with eval_batch;
+    // overrides fuse the two (TabularBrdf: the lookup from the draw's own angles).
+    virtual void sample_batch(const Vec3* wo, const std::array<double, 2>* u, BrdfSample* out, std::size_t n) const;
 
 private:
     // sample() without the weight when the sampler left it unset: a failed draw is returned as {}.

@@ -11,8 +11,9 @@ namespace brdfz::detail {
 // wo's azimuth as a rotation (cos, sin); the identity at the pole.
 struct Azimuth {
     double c = 1.0, s = 0.0;
-    explicit Azimuth(const Vec3& w) {
-        const double r = std::sqrt(w.x * w.x + w.y * w.y);
+    explicit Azimuth(const Vec3& w) : Azimuth(w, std::sqrt(w.x * w.x + w.y * w.y)) {}
+    // With r = ‖w_xy‖ already at hand.
+    Azimuth(const Vec3& w, double r) {
         if (r > 0.0) c = w.x / r, s = w.y / r;
     }
     Vec3 to_local(const Vec3& v) const { return {c * v.x + s * v.y, -s * v.x + c * v.y, v.z}; }

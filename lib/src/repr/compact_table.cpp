@@ -10,6 +10,7 @@
 
 #include "brdfz/errors.h"
 #include "detail/table_lookup.h"
+#include "detail/table_sample.h"
 
 namespace brdfz {
 namespace {
@@ -260,8 +261,24 @@ const HalfVectorSampler& CompactTableBrdf::sampler() const {
     return sampler_.get([this] { return std::make_unique<HalfVectorSampler>(*this); });
 }
 
+// The weight comes with the draw (detail/table_sample.h), as for TabularBrdf.
 BrdfSample CompactTableBrdf::sample_above(const Vec3& wo, double u1, double u2) const {
-    return sampler().sample(wo, u1, u2);
+    const GridSpec& g = table_.grid();
+    if (table_.dtype() == TableDtype::F16)
+        return detail::sample_table(g, HalfValues{table_.codes().data(), table_.half_scales()}, lookup_, sampler(), wo,
+                                    u1, u2);
+    return detail::sample_table(g, LogU8Values{table_.codes().data(), &table_.lut()}, lookup_, sampler(), wo, u1, u2);
+}
+
+void CompactTableBrdf::sample_batch(const Vec3* wo, const std::array<double, 2>* u, BrdfSample* out,
+                                    std::size_t n) const {
+    const GridSpec& g = table_.grid();
+    if (table_.dtype() == TableDtype::F16)
+        detail::sample_table_batch(g, HalfValues{table_.codes().data(), table_.half_scales()}, lookup_, sampler(), wo,
+                                   u, out, n);
+    else
+        detail::sample_table_batch(g, LogU8Values{table_.codes().data(), &table_.lut()}, lookup_, sampler(), wo, u,
+                                   out, n);
 }
 
 double CompactTableBrdf::pdf_above(const Vec3& wo, const Vec3& wi) const { return sampler().pdf(wo, wi); }

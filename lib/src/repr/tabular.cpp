@@ -4,6 +4,7 @@
 
 #include "brdfz/errors.h"
 #include "detail/table_lookup.h"
+#include "detail/table_sample.h"
 
 namespace brdfz {
 namespace {
@@ -48,8 +49,13 @@ const HalfVectorSampler& TabularBrdf::sampler() const {
     return sampler_.get([this] { return std::make_unique<HalfVectorSampler>(*this); });
 }
 
+// The weight comes with the draw (detail/table_sample.h), so sample() does not evaluate it again.
 BrdfSample TabularBrdf::sample_above(const Vec3& wo, double u1, double u2) const {
-    return sampler().sample(wo, u1, u2);
+    return detail::sample_table(table_.grid(), Float32Values{table_.data()}, lookup_, sampler(), wo, u1, u2);
+}
+
+void TabularBrdf::sample_batch(const Vec3* wo, const std::array<double, 2>* u, BrdfSample* out, std::size_t n) const {
+    detail::sample_table_batch(table_.grid(), Float32Values{table_.data()}, lookup_, sampler(), wo, u, out, n);
 }
 
 double TabularBrdf::pdf_above(const Vec3& wo, const Vec3& wi) const { return sampler().pdf(wo, wi); }

@@ -29,10 +29,10 @@ const detail::SinCosTable& half_turn() {
 }
 
 // wo's elevation without asin, to ~1e-10: it only places wo between two slices, and sample() and
-// pdf() place it alike.
-double view_elevation(const Vec3& wo) {
-    return detail::fast_half_turn_angle(std::sqrt(wo.x * wo.x + wo.y * wo.y), wo.z);
-}
+// pdf() place it alike. sin_o = ‖wo_xy‖, which draw() also needs for wo's azimuth.
+double view_elevation(double sin_o, const Vec3& wo) { return detail::fast_half_turn_angle(sin_o, wo.z); }
+
+constexpr double kBelowOne = 0x1.fffffffffffffp-1;  // the largest double below 1
 
 }  // namespace
 
@@ -87,7 +87,9 @@ std::size_t HalfVectorSampler::nbytes() const {
 
 HalfVectorSampler::SlicePair HalfVectorSampler::slices_for(double theta_o) const {
     const int K = static_cast<int>(theta_o_.size());
-    const double pos = std::fmin(std::fmax(theta_o / theta_o_[K - 1] * (K - 1), 0.0), K - 1.0);
+    // Comparisons, not std::fmin/fmax (out-of-line libm calls); NaN goes to slice 0.
+    const double scaled = theta_o / theta_o_[K - 1] * (K - 1);
+    const double pos = scaled > 0.0 ? (scaled < K - 1.0 ? scaled : K - 1.0) : 0.0;
     const int k0 = std::min(static_cast<int>(pos), K - 2);
     return {k0, k0 + 1, pos - k0};
 }
@@ -99,9 +101,9 @@ double HalfVectorSampler::data_pdf(const Vec3& wo, const Vec3& wi) const {
     if (!(theta_h < kPi / 2.0)) return 0.0;
     const double y = std::sqrt(theta_h / (kPi / 2.0));
     const double x = std::fabs(std::atan2(h.y, h.x)) / kPi;
-    const SlicePair sp = slices_for(view_elevation(wo));
-    const double p_xy = (1.0 - sp.t) * slices_[sp.k0].pdf(std::fmin(x, std::nextafter(1.0, 0.0)), y) +
-                        sp.t * slices_[sp.k1].pdf(std::fmin(x, std::nextafter(1.0, 0.0)), y);
+    const SlicePair sp = slices_for(view_elevation(std::sqrt(wo.x * wo.x + wo.y * wo.y), wo));
+    const double xc = x < kBelowOne ? x : kBelowOne;
+    const double p_xy = (1.0 - sp.t) * slices_[sp.k0].pdf(xc, y) + sp.t * slices_[sp.k1].pdf(xc, y);
     const double jac = 4.0 * dot(wo, hw) * 2.0 * kPi * kPi * y * std::sin(theta_h);
     const double p = p_xy / jac;
     return std::isfinite(p) && p > 0.0 ? p : 0.0;
@@ -111,35 +113,40 @@ double HalfVectorSampler::pdf(const Vec3& wo, const Vec3& wi) const {
     return options_.cosine_share * wi.z / kPi + (1.0 - options_.cosine_share) * data_pdf(wo, wi);
 }
 
-BrdfSample HalfVectorSampler::sample(const Vec3& wo, double u1, double u2) const {
+HalfVectorSampler::Draw HalfVectorSampler::draw(const Vec3& wo, double u1, double u2) const {
+    // Each path builds its result whole: a Draw zeroed up front cost a `rep stos` per draw.
     const double share = options_.cosine_share;
     if (u1 < share) {
         const double v = u1 / share, r = std::sqrt(v), phi = 2.0 * kPi * u2;
         const Vec3 wi{r * std::cos(phi), r * std::sin(phi), std::sqrt(std::fmax(0.0, 1.0 - v))};
-        return wi.z > 0.0 ? BrdfSample{wi, pdf(wo, wi), {}} : BrdfSample{};
+        return wi.z > 0.0 ? Draw{{wi, pdf(wo, wi), {}}} : Draw{};
     }
     double v1 = (u1 - share) / (1.0 - share);
-    const SlicePair sp = slices_for(view_elevation(wo));
+    const double sin_o = std::sqrt(wo.x * wo.x + wo.y * wo.y);
+    const SlicePair sp = slices_for(view_elevation(sin_o, wo));
     const bool upper = !(v1 < 1.0 - sp.t);
     v1 = upper ? (v1 - (1.0 - sp.t)) / sp.t : v1 / (1.0 - sp.t);
     // One bit of u2 picks the side of wo's plane; the rest drives the column.
     const double sign = u2 < 0.5 ? 1.0 : -1.0;
     const double v2 = u2 < 0.5 ? 2.0 * u2 : 2.0 * u2 - 1.0;
-    const Piecewise2D::Point p = slices_[upper ? sp.k1 : sp.k0].sample(std::fmin(v1, std::nextafter(1.0, 0.0)), v2);
+    const Piecewise2D::Point p = slices_[upper ? sp.k1 : sp.k0].sample(v1 < kBelowOne ? v1 : kBelowOne, v2);
     // half_at(p.x, p.y, sign), with table-based sines and cosines (sinθh is also the Jacobian's).
-    const double theta_h = kPi / 2.0 * p.y * p.y;
-    const detail::SinCosTable::SinCos th = half_turn()(theta_h), ph = half_turn()(kPi * p.x);
-    const Vec3 h = Azimuth(wo).to_world({th.s * ph.c, sign * th.s * ph.s, th.c});
-    const Vec3 wi = reflect(wo, h);
+    const detail::SinCosTable& table = half_turn();
+    const detail::SinCosTable::SinCos th = table(kPi / 2.0 * p.y * p.y), ph = table(kPi * p.x);
+    const double sin_p = sign * ph.s;
+    const Vec3 h = Azimuth(wo, sin_o).to_world({th.s * ph.c, th.s * sin_p, th.c});
+    const double cos_d = dot(wo, h);
+    const Vec3 wi = (2.0 * cos_d) * h - wo;  // reflect(wo, h)
     if (!(wi.z > 0.0)) return {};
     // The pdf from what is known here (the cell, θh, h) rather than by inverting wi again: the same
-    // value pdf(wo, wi) computes, without its atan2 and elevation calls.
-    const double p_other = slices_[upper ? sp.k0 : sp.k1].pdf(p.x, p.y);
+    // value pdf(wo, wi) computes, without its atan2 and elevation calls. Both slices share the grid,
+    // so the other slice's density is that of the same cell.
+    const double p_other = slices_[upper ? sp.k0 : sp.k1].density(p.row, p.col);
     const double p_xy = upper ? (1.0 - sp.t) * p_other + sp.t * p.pdf : (1.0 - sp.t) * p.pdf + sp.t * p_other;
-    const double jac = 4.0 * dot(wo, h) * 2.0 * kPi * kPi * p.y * th.s;
+    const double jac = 4.0 * cos_d * 2.0 * kPi * kPi * p.y * th.s;
     const double data = p_xy / jac;
     if (!(std::isfinite(data) && data > 0.0)) return {};
-    return {wi, share * wi.z / kPi + (1.0 - share) * data, {}};
+    return {{wi, share * wi.z / kPi + (1.0 - share) * data, {}}, true, th.s, th.c, sin_p, ph.c, sin_o, wo.z};
 }
 
 }  // namespace brdfz

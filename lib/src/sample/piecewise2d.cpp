@@ -96,7 +96,7 @@ Piecewise2D::Point Piecewise2D::sample(double u1, double u2) const {
     const float* cdf = &conditional_[static_cast<std::size_t>(r) * (cols_ + 1)];
     const int c = find_interval(cdf, &conditional_guide_[static_cast<std::size_t>(r) * cols_], cols_, u2);
     const double fx = std::clamp((u2 - cdf[c]) / (cdf[c + 1] - cdf[c]), 0.0, 1.0);
-    return {cell_coord(c, cols_, fx), cell_coord(r, rows_, fy), density_[static_cast<std::size_t>(r) * cols_ + c]};
+    return {cell_coord(c, cols_, fx), cell_coord(r, rows_, fy), density(r, c), r, c};
 }
 
 double Piecewise2D::pdf(double x, double y) const {

@@ -34,7 +34,18 @@ public:
     HalfVectorSampler(const Brdf& brdf, const HalfVectorSamplerOptions& options = {});
 
     // For wo above the horizon and u in [0, 1)²: wi and its pdf (pdf 0 when wi falls below the horizon).
-    BrdfSample sample(const Vec3& wo, double u1, double u2) const;
+    BrdfSample sample(const Vec3& wo, double u1, double u2) const { return draw(wo, u1, u2).sample; }
+
+    // A draw with the angles it was made from, so that a representation looking f up by the pair's
+    // half-vector angles gets them without recomputing them from wi and wo (detail/table_sample.h).
+    // In wo's azimuthal frame wo = (sin_o, 0, cos_o) and h = (sin_h·cos_p, sin_h·sin_p, cos_h), with
+    // φ = |φh − φo| drawn in [0, π] and sin_p carrying the side of wo's plane; wi = reflect(wo, h).
+    struct Draw {
+        BrdfSample sample;       // wi and pdf, the weight unset; pdf 0 when wi falls below the horizon
+        bool half = false;       // drawn from the data's half-vector share: the angles below are set
+        double sin_h = 0, cos_h = 0, sin_p = 0, cos_p = 0, sin_o = 0, cos_o = 0;
+    };
+    Draw draw(const Vec3& wo, double u1, double u2) const;
     // Density of sample() at wi, per unit solid angle, for wo and wi above the horizon.
     double pdf(const Vec3& wo, const Vec3& wi) const;
 

@@ -17,11 +17,14 @@ public:
     Piecewise2D(std::span<const float> weights, int rows, int cols);
 
     struct Point {
-        double x, y;  // x across columns, y across rows, in [0, 1)
-        double pdf;   // density on [0,1]²
+        double x, y;   // x across columns, y across rows, in [0, 1)
+        double pdf;    // density on [0,1]²
+        int row, col;  // the cell (x, y) lies in
     };
     Point sample(double u1, double u2) const;
     double pdf(double x, double y) const;
+    // The density of cell (row, col): pdf(x, y) for any (x, y) in it, without locating it.
+    double density(int row, int col) const { return density_[static_cast<std::size_t>(row) * cols_ + col]; }
 
     int rows() const { return rows_; }
     int cols() const { return cols_; }

@@ -1,0 +1,68 @@
+// Instruction counts of the tabular sampler under valgrind (robust to the machine's load, unlike the
+// wall clock of bench/sample):
+//   valgrind --tool=callgrind --toggle-collect='measured_*' build/bench/sample_count FILE [N]
+// then callgrind_annotate: each measured_* function's inclusive count divided by N is its cost per
+// sample. N random wo (uniform on the hemisphere) and u; the sampler is built before measuring.
+//   measured_sample: Brdf::sample(span), the whole sample including its weight
+//   measured_draw:   the sampler's own sample() (direction and pdf), one at a time
+//   measured_eval:   Brdf::eval(span) at the drawn pairs (the weight's lookup alone)
+#include <array>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <random>
+#include <vector>
+
+#include "brdfz/formats/io.h"
+#include "brdfz/repr/tabular.h"
+
+using namespace brdfz;
+
+extern "C" {
+[[gnu::noinline]] double measured_sample(const Brdf& b, const std::vector<Vec3>& wo,
+                                         const std::vector<std::array<double, 2>>& u, std::vector<BrdfSample>& out) {
+    b.sample(wo, u, out);
+    return out[0].pdf;
+}
+[[gnu::noinline]] double measured_draw(const HalfVectorSampler& s, const std::vector<Vec3>& wo,
+                                       const std::vector<std::array<double, 2>>& u, std::vector<BrdfSample>& out) {
+    for (std::size_t k = 0; k < wo.size(); ++k) out[k] = s.sample(wo[k], u[k][0], u[k][1]);
+    return out[0].pdf;
+}
+[[gnu::noinline]] double measured_eval(const Brdf& b, const std::vector<Vec3>& wi, const std::vector<Vec3>& wo,
+                                       std::vector<Rgb>& f) {
+    b.eval(wi, wo, f);
+    return f[0][0];
+}
+}
+
+int main(int argc, char** argv) {
+    if (argc < 2) {
+        std::fprintf(stderr, "usage: sample_count FILE [N]\n");
+        return 2;
+    }
+    const std::size_t n = argc > 2 ? std::strtoul(argv[2], nullptr, 10) : 16384;
+    const Loaded l = load(argv[1]);
+    const auto* t = dynamic_cast<const TabularBrdf*>(l.brdf.get());
+    if (!t || n == 0) {
+        std::fprintf(stderr, "sample_count: %s is not a table, or N is 0\n", argv[1]);
+        return 2;
+    }
+    std::mt19937_64 rng(5);
+    std::uniform_real_distribution<double> u01(0.0, 1.0);
+    std::vector<std::array<double, 2>> u(n);
+    std::vector<Vec3> wo(n), wi(n);
+    for (std::size_t k = 0; k < n; ++k) {
+        u[k] = {u01(rng), u01(rng)};
+        const double z = u01(rng), r = std::sqrt(1.0 - z * z), phi = 2.0 * M_PI * u01(rng);
+        wo[k] = {r * std::cos(phi), r * std::sin(phi), z};
+    }
+    const HalfVectorSampler& sampler = t->sampler();  // built here, outside the measured calls
+    std::vector<BrdfSample> out(n), drawn(n);
+    std::vector<Rgb> f(n);
+    double check = measured_sample(*t, wo, u, out);
+    check += measured_draw(sampler, wo, u, drawn);
+    for (std::size_t k = 0; k < n; ++k) wi[k] = drawn[k].pdf > 0 ? drawn[k].wi : Vec3{0, 0, 1};
+    check += measured_eval(*t, wi, wo, f);
+    std::printf("%zu samples [%g]\n", n, check);
+}

@@ -1,0 +1,122 @@
+// Sampling a Rusinkiewicz table together with its weight (TabularBrdf, CompactTableBrdf): the
+// half-vector sampler draws h by its angles relative to wo, and the lookup of f(wi, wo) needs the
+// pair's (θh, θd, φd). θd and φd are the angles of wi in h's frame, a rotation of wo = (sinθo, 0, cosθo)
+// by the drawn angles, so no half vector, cross product or normalisation is rebuilt from wi and wo.
+// Draws from the cosine share carry no angles and take fast_bin_coords.
+#pragma once
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <cstddef>
+#include <numbers>
+
+#include "brdfz/sample/halfvector.h"
+#include "detail/table_lookup.h"
+
+namespace brdfz::detail {
+
+// fast_bin_coords(g, wi, wo) for a half-vector draw (d.half), from its angles. In h's frame
+// (half_frame's t, b, h) wi = reflect(wo, h) is the mirror of wo: (−wo·t, −wo·b, wo·h), with
+// wo·t = sinθo cosφ cosθh − cosθo sinθh and wo·b = −sinθo sinφ. The coordinates agree with
+// fast_bin_coords' to ~5e-12 bins in θh and θd (the same polynomial arctangent of the same ratios) and
+// in φd to ~1e-12 bins / (sinθh sinθd), its conditioning in fast_bin_coords (tests/lib/sample_test.cpp);
+// φd is flagged ill-conditioned where fast_bin_coords flags it (θh or θd below 1e-6).
+[[gnu::always_inline]] inline BinCoords drawn_bin_coords(const GridSpec& g, double sin_h, double cos_h, double sin_p,
+                                                        double cos_p, double sin_o, double cos_o) {
+    const double a = sin_o * cos_p;
+    const double dx = cos_o * sin_h - a * cos_h, dy = sin_o * sin_p, dz = a * sin_h + cos_o * cos_h;
+    const double sin_d = std::sqrt(dx * dx + dy * dy);
+    const double theta_d = fast_half_turn_angle(sin_d, dz);
+    const double phi_d = fast_half_turn_angle(dy, dx);
+    // θh through the same arctangent as fast_bin_coords rather than the drawn y: the polynomial's error
+    // (up to 6e-11 relative) is then the same in both, where y·n differs from eval's coordinate by up
+    // to ~4e-9 bins, which moved the weight 6e-9 (relative) off eval's on a glossy table.
+    const double theta_h = fast_half_turn_angle(sin_h, cos_h);
+    constexpr double kMinSin = 1e-6;
+    const bool sure = (sin_h > kMinSin) & (sin_d > kMinSin);
+    const double up = phi_d * (1.0 / std::numbers::pi) * g.n_phi_d;
+    return {std::sqrt(theta_h * (2.0 / std::numbers::pi)) * g.n_theta_h,
+            theta_d * (2.0 / std::numbers::pi) * g.n_theta_d, std::max(up, sure ? 0.0 : kIllConditioned)};
+}
+
+inline BinCoords drawn_bin_coords(const GridSpec& g, const HalfVectorSampler::Draw& d) {
+    return drawn_bin_coords(g, d.sin_h, d.cos_h, d.sin_p, d.cos_p, d.sin_o, d.cos_o);
+}
+
+// The bin coordinates of a draw's pair (d.sample.pdf > 0).
+inline BinCoords draw_bin_coords(const GridSpec& g, const HalfVectorSampler::Draw& d, const Vec3& wo) {
+    return d.half ? drawn_bin_coords(g, d) : fast_bin_coords(g, d.sample.wi, wo);
+}
+
+inline void set_weight(BrdfSample& s, const Rgb& f) {
+    for (int ch = 0; ch < 3; ++ch) s.weight[ch] = f[ch] * s.wi.z / s.pdf;
+}
+
+// One sample with its weight, for wo above the horizon and u in [0, 1)² (Brdf::sample_above).
+template <typename Values>
+BrdfSample sample_table(const GridSpec& g, const Values& values, Lookup lookup, const HalfVectorSampler& sampler,
+                        const Vec3& wo, double u1, double u2) {
+    const HalfVectorSampler::Draw d = sampler.draw(wo, u1, u2);
+    BrdfSample s = d.sample;
+    if (!Brdf::usable(s)) return {};
+    const BinCoords c = draw_bin_coords(g, d, wo);
+    set_weight(s, lookup == Lookup::Nearest ? read_nearest(values, nearest_bin(g, c, s.wi, wo))
+                                            : read_linear(g, values, linear_corners(g, c, s.wi, wo)));
+    return s;
+}
+
+// Brdf::sample_batch: blocks of draws in passes, as eval_table_batch does for pairs: (1) the draws,
+// (2) their bin coordinates, branch-free so that the loop vectorises, (3) bins or corners, prefetching
+// the table lines, (4) the table reads and the weights. Each result is sample_table's, bit for bit.
+template <typename Values>
+void sample_table_batch(const GridSpec& g, const Values& values, Lookup lookup, const HalfVectorSampler& sampler,
+                        const Vec3* wo, const std::array<double, 2>* u, BrdfSample* out, std::size_t n) {
+    constexpr std::size_t kBlock = 64;
+    // The angles as arrays of doubles (not Draw structs), or the coordinate loop does not vectorise.
+    double sin_h[kBlock], cos_h[kBlock], sin_p[kBlock], cos_p[kBlock], sin_o[kBlock], cos_o[kBlock];
+    BinCoords coords[kBlock];
+    std::size_t bins[kBlock];
+    Corners corners[kBlock];
+    bool ok[kBlock], half[kBlock];
+    for (std::size_t start = 0; start < n; start += kBlock) {
+        const std::size_t m = std::min(kBlock, n - start);
+        BrdfSample* s = out + start;
+        const Vec3* w = wo + start;
+        for (std::size_t k = 0; k < m; ++k) {
+            const std::array<double, 2>& v = u[start + k];
+            const HalfVectorSampler::Draw d =
+                Brdf::can_draw(w[k], v[0], v[1]) ? sampler.draw(w[k], v[0], v[1]) : HalfVectorSampler::Draw{};
+            ok[k] = Brdf::usable(d.sample);
+            half[k] = d.half;
+            s[k] = ok[k] ? d.sample : BrdfSample{};
+            sin_h[k] = d.sin_h, cos_h[k] = d.cos_h, sin_p[k] = d.sin_p, cos_p[k] = d.cos_p;
+            sin_o[k] = d.sin_o, cos_o[k] = d.cos_o;
+        }
+        // Every draw's angles, set or not (unset ones are zeros, whose coordinates are not used).
+        for (std::size_t k = 0; k < m; ++k)
+            coords[k] = drawn_bin_coords(g, sin_h[k], cos_h[k], sin_p[k], cos_p[k], sin_o[k], cos_o[k]);
+        for (std::size_t k = 0; k < m; ++k)
+            if (ok[k] && !half[k]) coords[k] = fast_bin_coords(g, s[k].wi, w[k]);
+        if (lookup == Lookup::Nearest) {
+            for (std::size_t k = 0; k < m; ++k) {
+                if (!ok[k]) continue;
+                bins[k] = nearest_bin(g, coords[k], s[k].wi, w[k]);
+                __builtin_prefetch(values.address(bins[k]));
+            }
+            for (std::size_t k = 0; k < m; ++k)
+                if (ok[k]) set_weight(s[k], read_nearest(values, bins[k]));
+        } else {
+            for (std::size_t k = 0; k < m; ++k) {
+                if (!ok[k]) continue;
+                const Corners& c = corners[k] = linear_corners(g, coords[k], s[k].wi, w[k]);
+                for (int ih : {c.h.i0, c.h.i1})
+                    for (int id : {c.d.i0, c.d.i1}) __builtin_prefetch(values.address(g.index(ih, id, c.p.i0)));
+            }
+            for (std::size_t k = 0; k < m; ++k)
+                if (ok[k]) set_weight(s[k], read_linear(g, values, corners[k]));
+        }
+    }
+}
+
+}  // namespace brdfz::detail
