@@ -32,7 +32,12 @@ struct MerlReference {
         const int i = static_cast<int>(std::sqrt(th / (M_PI / 2.0) * 90 * 90));
         return std::clamp(i, 0, 89);
     }
-    static int theta_diff_index(double td) { return std::clamp(static_cast<int>(td / (M_PI * 0.5) * 90), 0, 89); }
+    // MERL's code casts acos of a rounded cosine just above 1 (wi == wo), NaN, to int: undefined
+    // behaviour, which on x86 gives INT_MIN, clamped to bin 0. Bin 0 without the undefined cast.
+    static int theta_diff_index(double td) {
+        if (std::isnan(td)) return 0;
+        return std::clamp(static_cast<int>(td / (M_PI * 0.5) * 90), 0, 89);
+    }
     static int phi_diff_index(double pd) {
         if (pd < 0.0) pd += M_PI;
         return std::clamp(static_cast<int>(pd / M_PI * 360 / 2), 0, 179);
