@@ -216,6 +216,15 @@ TEST_CASE("Piecewise2D: sampling by inversion with guide tables lands in the rig
 TEST_CASE("tabular sample: the weight from the draw's angles is eval's", "[sample][tabular]") {
     std::vector<std::pair<std::string, std::unique_ptr<Brdf>>> tables;
     tables.emplace_back("coated diffuse alpha 0.05", std::make_unique<TabularBrdf>(tabulated(0.05)));
+    {  // a warped θd axis: the draw's θd maps to the table's coordinate as eval's does
+        CoatedDiffuseParams p;
+        p.alpha = 0.05;
+        TabulateOptions o;
+        o.grid = GridSpec{45, 30, 90};
+        o.grid.theta_d_warp = 0.8;
+        tables.emplace_back("coated diffuse alpha 0.05, 45x30x90, θd warp 0.8",
+                            std::make_unique<TabularBrdf>(tabulate(CoatedDiffuse(p), o).table));
+    }
     const auto files = test::merl_tables();
     if (files.empty())
         WARN("real-data part skipped: no MERL tables (../shared missing, or numpy unavailable to generate them)");

@@ -56,6 +56,16 @@ inline BinCoords bin_coords(const GridSpec& g, const Vec3& wi, const Vec3& wo) {
 // where φd is ill-conditioned (θh or θd below 1e-6): there up is kIllConditioned, beyond any grid, for
 // the callers to fall back to bin_coords. Branch-free, so the compiler vectorises it across pairs.
 constexpr double kIllConditioned = 1e300;
+
+// θd's bin coordinate on the grid's axis, from θd and cosθd: the warped axis (table.h) is a select,
+// so the linear axis stays exact and the callers' loops stay branch-free.
+[[gnu::always_inline]] inline double theta_d_coord(const GridSpec& g, double theta_d, double cos_d) {
+    const double w = g.theta_d_warp;
+    const double ud_linear = theta_d * (2.0 / std::numbers::pi) * g.n_theta_d;
+    const double ud_warped = ((1.0 - w) * theta_d * (2.0 / std::numbers::pi) + w * (1.0 - cos_d)) * g.n_theta_d;
+    return w == 0.0 ? ud_linear : ud_warped;
+}
+
 // Always inlined: a call per pair would keep the callers' coordinate loops from vectorising.
 [[gnu::always_inline]] inline BinCoords fast_bin_coords(const GridSpec& g, const Vec3& wi, const Vec3& wo) {
     const Vec3 s = wi + wo;
@@ -70,12 +80,7 @@ constexpr double kIllConditioned = 1e300;
     constexpr double kMinSin = 1e-6;
     const bool sure = (rxy > kMinSin * len) & (sin_d > kMinSin * len);
     const double up = phi_d * (1.0 / std::numbers::pi) * g.n_phi_d;
-    // The warped θd axis (table.h) from cosθd = wi·s/|s|; a select, so the linear axis stays exact and
-    // the loop stays branch-free.
-    const double w = g.theta_d_warp;
-    const double ud_linear = theta_d * (2.0 / std::numbers::pi) * g.n_theta_d;
-    const double ud_warped = ((1.0 - w) * theta_d * (2.0 / std::numbers::pi) + w * (1.0 - dot(wi, s) / len)) * g.n_theta_d;
-    return {std::sqrt(theta_h * (2.0 / std::numbers::pi)) * g.n_theta_h, w == 0.0 ? ud_linear : ud_warped,
+    return {std::sqrt(theta_h * (2.0 / std::numbers::pi)) * g.n_theta_h, theta_d_coord(g, theta_d, dot(wi, s) / len),
             std::max(up, sure ? 0.0 : kIllConditioned)};
 }
 

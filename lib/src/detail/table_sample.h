@@ -36,8 +36,9 @@ namespace brdfz::detail {
     constexpr double kMinSin = 1e-6;
     const bool sure = (sin_h > kMinSin) & (sin_d > kMinSin);
     const double up = phi_d * (1.0 / std::numbers::pi) * g.n_phi_d;
-    return {std::sqrt(theta_h * (2.0 / std::numbers::pi)) * g.n_theta_h,
-            theta_d * (2.0 / std::numbers::pi) * g.n_theta_d, std::max(up, sure ? 0.0 : kIllConditioned)};
+    // dz is cosθd: wi is a unit vector in h's frame.
+    return {std::sqrt(theta_h * (2.0 / std::numbers::pi)) * g.n_theta_h, theta_d_coord(g, theta_d, dz),
+            std::max(up, sure ? 0.0 : kIllConditioned)};
 }
 
 inline BinCoords drawn_bin_coords(const GridSpec& g, const HalfVectorSampler::Draw& d) {
