@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <numbers>
 #include <type_traits>
 
 #include "brdfz/coords.h"
@@ -501,6 +502,9 @@ Data prepare(const Table& table, const FactorOptions& o, int rows, int cols, con
                       ih = static_cast<int>(bin / g.n_phi_d / g.n_theta_d);
             const double cos_i = from_half_diff({g.theta_h_at(ih), 0.0, g.theta_d_at(id), g.phi_d_at(ip)}).first.z;
             weight = cos_i > 0.0 ? cos_i * cos_i : 0.0;
+            // On a warped θd axis, each sample stands for dθd/du of the metric's linear θd axis.
+            if (g.theta_d_warp != 0.0)
+                weight *= 1.0 / (1.0 - g.theta_d_warp + g.theta_d_warp * std::numbers::pi / 2.0 * std::sin(g.theta_d_at(id)));
         }
         if (!(weight > 0.0)) continue;
         ++d.valid;
