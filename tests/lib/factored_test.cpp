@@ -538,6 +538,7 @@ TEST_CASE("factored: compress kinds svd and nmf", "[factored][compress]") {
     const auto* fd = dynamic_cast<const FactoredBrdf*>(d.brdf.get());
     REQUIRE(fd);
     CHECK(fd->factors().grid == GridSpec{8, 8, 16, BinPosition::Centre, 0.8});
+    CHECK_THAT(d.brdf->describe(), Catch::Contains("(bin centre, theta_d warp 0.8)"));
     CHECK(d.brdf->nbytes() == 4 * (2 * (8 + 8 * 16) + 6));
     CHECK_THROWS_WITH(compress(source, "svd:rank=2,dwarp=0.8"), Catch::Contains("dwarp= applies to the res= grid"));
     CHECK_THROWS_WITH(compress(source, "nmf:rank=2,res=8x8x16,dwarp=0.99"), Catch::Contains("dwarp=0.99 is outside"));

@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <limits>
 #include <numbers>
 #include <type_traits>
@@ -589,10 +590,13 @@ std::size_t FactoredBrdf::nbytes() const {
 }
 
 std::string FactoredBrdf::describe() const {
+    char warp[48] = "";
+    if (f_.grid.theta_d_warp != 0.0) std::snprintf(warp, sizeof warp, ", theta_d warp %g", f_.grid.theta_d_warp);
     return std::string(factor_method_name(f_.method)) + " rank " + std::to_string(f_.rank) + ", " +
            factor_space_name(f_.space) + " space, layout " + factor_layout_name(f_.layout) + ", " +
            factor_colour_name(f_.colour) + " colour, on " + f_.grid.str() + " (bin " +
-           (f_.grid.position == BinPosition::Start ? "start" : "centre") + "), float32 factors";
+           (f_.grid.position == BinPosition::Start ? "start" : "centre") +
+           warp + "), float32 factors";
 }
 
 Table FactoredBrdf::reconstruct(std::size_t* clamped) const {
