@@ -10,9 +10,13 @@ namespace brdfz::container::detail {
 namespace {
 
 const Feature kFactored{"factored", 2};
+const Feature kWarpedThetaD{"factored.warped-theta-d", 2};
 
 std::vector<Feature> needs(const Brdf& brdf) {
-    if (!dynamic_cast<const FactoredBrdf*>(&brdf)) return {};
+    const auto* f = dynamic_cast<const FactoredBrdf*>(&brdf);
+    if (!f) return {};
+    // As for tables: only a warped grid needs the feature, so linear-axis factors stay readable without it.
+    if (f->factors().grid.theta_d_warp != 0.0) return {kFactored, kWarpedThetaD};
     return {kFactored};
 }
 
@@ -24,6 +28,7 @@ void write(h5::WriteNode& rep, const Brdf& brdf) {
     rep.attr("grid", std::span<const std::uint64_t>(dims));
     rep.attr("bin_position", std::string(g.position == BinPosition::Centre ? "centre" : "start"));
     rep.attr("theta_h_axis", std::string("sqrt"));
+    write_theta_d_axis(rep, g);
     rep.attr("method", std::string(factor_method_name(f.method)));
     rep.attr("space", std::string(factor_space_name(f.space)));
     rep.attr("layout", std::string(factor_layout_name(f.layout)));
@@ -67,7 +72,7 @@ std::unique_ptr<Brdf> read(const h5::ReadNode& rep, const ReadContext&) {
         if (d < 1 || d > static_cast<std::uint64_t>(GridSpec::kMaxAxis))
             bad("grid axis " + std::to_string(d) + " outside 1.." + std::to_string(GridSpec::kMaxAxis));
     f.grid = GridSpec{static_cast<int>(dims[0]), static_cast<int>(dims[1]), static_cast<int>(dims[2]),
-                      position == "centre" ? BinPosition::Centre : BinPosition::Start};
+                      position == "centre" ? BinPosition::Centre : BinPosition::Start, read_theta_d_warp(rep)};
     const std::uint64_t rows = static_cast<std::uint64_t>(f.rows()), cols = static_cast<std::uint64_t>(f.columns());
     const std::uint64_t rank = rep.u64("rank");
     if (rank < 1 || rank > std::min(rows, cols))
@@ -104,7 +109,7 @@ std::unique_ptr<Brdf> read(const h5::ReadNode& rep, const ReadContext&) {
 }  // namespace
 
 const StorageModule& factored_storage() {
-    static const StorageModule m{"factored", {kFactored}, &needs, &write, &read};
+    static const StorageModule m{"factored", {kFactored, kWarpedThetaD}, &needs, &write, &read};
     return m;
 }
 

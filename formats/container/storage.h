@@ -39,6 +39,12 @@ const StorageModule& factored_storage();
 std::span<const StorageModule* const> storage_modules();
 const StorageModule* find_storage(std::string_view type);
 
+// The θd axis of a grid (formats/SPEC.md, `theta_d_axis`/`theta_d_warp`), shared by the modules that
+// store grids (tabular.cpp): nothing is written for the linear axis; reading returns its warp (0: linear)
+// and throws FormatError for an unknown axis or a warp outside (0, GridSpec::kMaxWarp].
+void write_theta_d_axis(h5::WriteNode& rep, const GridSpec& g);
+double read_theta_d_warp(const h5::ReadNode& rep);
+
 // Features of the container itself (layout, metadata, CRC-32C checksums).
 inline const Feature kCore{"core", 1};
 

@@ -34,10 +34,7 @@ void write_grid(h5::WriteNode& rep, const GridSpec& g) {
     rep.attr("grid", std::span<const std::uint64_t>(dims));
     rep.attr("bin_position", std::string(position_name(g.position)));
     rep.attr("theta_h_axis", std::string("sqrt"));
-    if (g.theta_d_warp != 0.0) {
-        rep.attr("theta_d_axis", std::string("warped"));
-        rep.attr("theta_d_warp", g.theta_d_warp);
-    }
+    write_theta_d_axis(rep, g);
 }
 
 std::vector<std::uint64_t> values_shape(const GridSpec& g) {
@@ -100,14 +97,7 @@ std::unique_ptr<Brdf> read(const h5::ReadNode& rep, const ReadContext& ctx) {
     const std::string axis = rep.str("theta_h_axis");
     if (axis != "sqrt") bad("unknown theta_h_axis '" + axis + "'");
 
-    double warp = 0.0;  // absent: the linear θd axis
-    if (rep.has_attr("theta_d_axis")) {
-        const std::string d_axis = rep.str("theta_d_axis");
-        if (d_axis != "warped") bad("unknown theta_d_axis '" + d_axis + "'");
-        warp = rep.f64("theta_d_warp");
-        if (!(warp > 0.0 && warp <= GridSpec::kMaxWarp)) bad("theta_d_warp " + std::to_string(warp) + " outside (0, 0.95]");
-    }
-
+    const double warp = read_theta_d_warp(rep);
     const GridSpec grid{static_cast<int>(dims[0]), static_cast<int>(dims[1]), static_cast<int>(dims[2]),
                         position == "centre" ? BinPosition::Centre : BinPosition::Start, warp};
     const h5::Dataset values = rep.dataset("values");
@@ -143,6 +133,22 @@ std::unique_ptr<Brdf> read(const h5::ReadNode& rep, const ReadContext& ctx) {
 }
 
 }  // namespace
+
+void write_theta_d_axis(h5::WriteNode& rep, const GridSpec& g) {
+    if (g.theta_d_warp == 0.0) return;
+    rep.attr("theta_d_axis", std::string("warped"));
+    rep.attr("theta_d_warp", g.theta_d_warp);
+}
+
+double read_theta_d_warp(const h5::ReadNode& rep) {
+    if (!rep.has_attr("theta_d_axis")) return 0.0;  // the linear θd axis
+    const auto bad = [&](const std::string& what) { throw FormatError(rep.file(), rep.path() + ": " + what); };
+    const std::string d_axis = rep.str("theta_d_axis");
+    if (d_axis != "warped") bad("unknown theta_d_axis '" + d_axis + "'");
+    const double warp = rep.f64("theta_d_warp");
+    if (!(warp > 0.0 && warp <= GridSpec::kMaxWarp)) bad("theta_d_warp " + std::to_string(warp) + " outside (0, 0.95]");
+    return warp;
+}
 
 const StorageModule& tabular_storage() {
     static const StorageModule m{"tabular", {kTabular, kFloat32, kFloat16, kUint8Log, kWarpedThetaD}, &needs, &write, &read};

@@ -14,8 +14,9 @@
 //   analytic:MODEL[,loss=log|cos|cbrt,starts=N,seed=S]   a Ceres fit (fit/fit.h)
 //   pca:basis=FILE,k=K[,store=reference|embed,lookup=linear|nearest]   k coefficients of a shared
 //                                                   basis read from FILE (repr/pca.h)
-//   svd:rank=K,space=linear|cos|log|cbrt,layout=h_dp|hd_p,colour=separate|shared[,res=AxBxC,iterations=N]
-//   nmf:(the same keys)                     low-rank / non-negative factorisation (repr/factored.h)
+//   svd:rank=K,space=linear|cos|log|cbrt,layout=h_dp|hd_p,colour=separate|shared[,res=AxBxC,iterations=N,dwarp=W]
+//   nmf:(the same keys)                     low-rank / non-negative factorisation (repr/factored.h);
+//                                           dwarp=W (with res=): the res grid's θd axis warped as for tables
 #pragma once
 
 #include <functional>

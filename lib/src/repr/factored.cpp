@@ -4,8 +4,10 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <cstring>
 #include <limits>
+#include <numbers>
 #include <type_traits>
 
 #include "brdfz/coords.h"
@@ -570,6 +572,9 @@ Data prepare(const Table& table, const FactorOptions& o, int rows, int cols, con
                       ih = static_cast<int>(bin / g.n_phi_d / g.n_theta_d);
             const double cos_i = from_half_diff({g.theta_h_at(ih), 0.0, g.theta_d_at(id), g.phi_d_at(ip)}).first.z;
             weight = cos_i > 0.0 ? cos_i * cos_i : 0.0;
+            // On a warped θd axis, each sample stands for dθd/du of the metric's linear θd axis.
+            if (g.theta_d_warp != 0.0)
+                weight *= 1.0 / (1.0 - g.theta_d_warp + g.theta_d_warp * std::numbers::pi / 2.0 * std::sin(g.theta_d_at(id)));
         }
         if (!(weight > 0.0)) continue;
         ++d.valid;
@@ -663,10 +668,13 @@ std::size_t FactoredBrdf::nbytes() const {
 }
 
 std::string FactoredBrdf::describe() const {
+    char warp[48] = "";
+    if (f_.grid.theta_d_warp != 0.0) std::snprintf(warp, sizeof warp, ", theta_d warp %g", f_.grid.theta_d_warp);
     return std::string(factor_method_name(f_.method)) + " rank " + std::to_string(f_.rank) + ", " +
            factor_space_name(f_.space) + " space, layout " + factor_layout_name(f_.layout) + ", " +
            factor_colour_name(f_.colour) + " colour, on " + f_.grid.str() + " (bin " +
-           (f_.grid.position == BinPosition::Start ? "start" : "centre") + "), float32 factors";
+           (f_.grid.position == BinPosition::Start ? "start" : "centre") +
+           warp + "), float32 factors";
 }
 
 Table FactoredBrdf::reconstruct(std::size_t* clamped) const {
