@@ -315,7 +315,7 @@ TEST_CASE("table sample_batch: each result is the one-at-a-time sample; bad inpu
             const BrdfSample s = b->sample(wo[k], us[k][0], us[k][1]);
             REQUIRE(out[k].pdf == s.pdf);
             REQUIRE(std::isfinite(s.pdf));
-            if (k == 4 || k == 6 || k >= 8 && k <= 11) REQUIRE(s.pdf == 0.0);  // outside sample()'s domain
+            if (k == 4 || k == 6 || (k >= 8 && k <= 11)) REQUIRE(s.pdf == 0.0);  // outside sample()'s domain
             if (s.pdf == 0.0) continue;
             REQUIRE(out[k].wi.x == s.wi.x);
             for (int c = 0; c < 3; ++c) {
