@@ -25,6 +25,11 @@ struct TempDir {
     TempDir& operator=(const TempDir&) = delete;
 };
 
+// A shared RGL-EPFL file by material name (it may be missing: callers skip with a message).
+inline std::filesystem::path rgl_file(const char* name) {
+    return std::filesystem::path(BRDFZ_SHARED_DIR) / "data" / "rgl" / (std::string(name) + "_rgb.bsdf");
+}
+
 // MERL tables generated from ../shared by the ctest fixture (env BRDFZ_MERL_DIR); empty if none.
 inline std::vector<std::filesystem::path> merl_tables() {
     std::vector<std::filesystem::path> files;

@@ -536,16 +536,9 @@ TEST_CASE("compact tables of real RGL data: quantisation costs little against re
     CHECK(compare(*src.brdf, *compress(*src.brdf, "bivariate:res=90x90").brdf).cos_rmse_rel.mean < 0.03);
 }
 
-namespace {
-
-std::filesystem::path rgl_file(const char* name) {
-    return std::filesystem::path(BRDFZ_SHARED_DIR) / "data" / "rgl" / (std::string(name) + "_rgb.bsdf");
-}
-
-}  // namespace
 
 TEST_CASE("warped θd tables of real RGL data: below the linear axis's error at the same size", "[compact][data][rgl][warp]") {
-    const std::filesystem::path file = rgl_file("satin_rosaline");
+    const std::filesystem::path file = test::rgl_file("satin_rosaline");
     if (!std::filesystem::exists(file)) {
         WARN("skipped: " << file.string() << " missing");
         return;
@@ -568,7 +561,7 @@ TEST_CASE("≤ 16 KB within 2 %: tabular:res=24x28x8,dtype=u8log,filter=lsq,dwar
     const char* spec = "tabular:res=24x28x8,dtype=u8log,filter=lsq,dwarp=0.8";
     for (const char* name : {"cc_ibiza_sunset", "paper_white", "satin_rosaline", "vch_golden_yellow"}) {
         INFO(name);
-        const std::filesystem::path file = rgl_file(name);
+        const std::filesystem::path file = test::rgl_file(name);
         if (!std::filesystem::exists(file)) {
             WARN("skipped: " << file.string() << " missing");
             continue;

@@ -247,7 +247,7 @@ TEST_CASE("factored: bins without data do not extrapolate beyond the data (log a
 }
 
 TEST_CASE("factored: RGL cc_ibiza_sunset factors to a finite sampler (nmf and svd)", "[factored][data][heavy]") {
-    const std::filesystem::path file = std::filesystem::path(BRDFZ_SHARED_DIR) / "data/rgl/cc_ibiza_sunset_rgb.bsdf";
+    const std::filesystem::path file = test::rgl_file("cc_ibiza_sunset");
     if (!std::filesystem::exists(file)) {
         WARN("skipped: " << file << " is missing");
         return;
@@ -267,7 +267,7 @@ TEST_CASE("factored: RGL cc_ibiza_sunset factors to a finite sampler (nmf and sv
 }
 
 TEST_CASE("factored: a warped θd axis lowers the error on RGL satin_rosaline", "[factored][data][rgl][warp]") {
-    const std::filesystem::path file = std::filesystem::path(BRDFZ_SHARED_DIR) / "data/rgl/satin_rosaline_rgb.bsdf";
+    const std::filesystem::path file = test::rgl_file("satin_rosaline");
     if (!std::filesystem::exists(file)) {
         WARN("skipped: " << file << " is missing");
         return;

@@ -100,8 +100,10 @@ TEST_CASE("nearest lookup picks MERL's bin, bit for bit", "[tabular][merl]") {
     }
 }
 
-TEST_CASE("linear lookup reproduces samples, interpolates between them, skips invalid ones", "[tabular]") {
-    const GridSpec g{8, 8, 16};
+namespace {
+
+// Values that change along every axis, distinct per channel: 1 + ih + 10 id + 100 cos(2π ip / n), times 1, 2, 3.
+Table ramp_table(const GridSpec& g) {
     Table t(g);
     for (int ih = 0; ih < g.n_theta_h; ++ih)
         for (int id = 0; id < g.n_theta_d; ++id)
@@ -109,6 +111,14 @@ TEST_CASE("linear lookup reproduces samples, interpolates between them, skips in
                 const double v = 1.0 + ih + 10.0 * id + 100.0 * std::cos(2 * M_PI * ip / g.n_phi_d);
                 t.set(g.index(ih, id, ip), {v, 2 * v, 3 * v});
             }
+    return t;
+}
+
+}  // namespace
+
+TEST_CASE("linear lookup reproduces samples, interpolates between them, skips invalid ones", "[tabular]") {
+    const GridSpec g{8, 8, 16};
+    const Table t = ramp_table(g);
     TabularBrdf brdf(t, Lookup::Linear);
     auto at = [&](int ih, int id, int ip, int c = 0) { return static_cast<double>(t.at(g.index(ih, id, ip), c)); };
 
@@ -208,13 +218,7 @@ TEST_CASE("a warped θd axis: exact inverse, linear at w = 0, bins denser toward
 
 TEST_CASE("lookups on a warped θd axis read the samples where the axis puts them", "[tabular][warp]") {
     const GridSpec g{8, 8, 16, BinPosition::Centre, 0.7};
-    Table t(g);
-    for (int ih = 0; ih < g.n_theta_h; ++ih)
-        for (int id = 0; id < g.n_theta_d; ++id)
-            for (int ip = 0; ip < g.n_phi_d; ++ip) {
-                const double v = 1.0 + ih + 10.0 * id + 100.0 * std::cos(2 * M_PI * ip / g.n_phi_d);
-                t.set(g.index(ih, id, ip), {v, 2 * v, 3 * v});
-            }
+    const Table t = ramp_table(g);
     const TabularBrdf linear(t, Lookup::Linear), nearest(t, Lookup::Nearest);
     auto at = [&](int ih, int id, int ip) { return static_cast<double>(t.at(g.index(ih, id, ip), 0)); };
     auto pair_at = [&](double uh, double ud, double up) {
