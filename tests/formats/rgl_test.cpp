@@ -485,7 +485,10 @@ TEST_CASE("rgl sampler on the shared RGL-EPFL files: chi-square, normalisation, 
     }
 }
 
-TEST_CASE("rgl sampler: 10^6 random (wo, u) give finite non-negative pdfs and finite weights", "[rgl][sample]") {
+namespace {
+
+// n random (wo, u) on every shared RGL file and a synthetic one: finite non-negative pdfs, finite weights.
+void check_random_draws(std::size_t n) {
     auto files = shared_rgl_files();
     const std::size_t real = files.size();
     TempDir dir;
@@ -497,8 +500,7 @@ TEST_CASE("rgl sampler: 10^6 random (wo, u) give finite non-negative pdfs and fi
         std::mt19937_64 rng(29);
         std::uniform_real_distribution<double> u(0, 1);
         std::size_t bad = 0, failed = 0;
-        const int n = 1000000;
-        for (int k = 0; k < n; ++k) {
+        for (std::size_t k = 0; k < n; ++k) {
             // Elevations uniform in θ, so grazing views are as common as any.
             const Vec3 wo = spherical_direction(std::numbers::pi / 2 * u(rng), 2 * std::numbers::pi * u(rng));
             const BrdfSample s = r.brdf->sample(wo, u(rng), u(rng));
@@ -511,6 +513,17 @@ TEST_CASE("rgl sampler: 10^6 random (wo, u) give finite non-negative pdfs and fi
         // one does so about a third of the time.
         if (f < real) CHECK(failed < n / 50);
     }
+}
+
+}  // namespace
+
+TEST_CASE("rgl sampler: 10^6 random (wo, u) give finite non-negative pdfs and finite weights", "[rgl][sample][heavy]") {
+    check_random_draws(1000000);
+}
+
+// The sanitizers' share of the test above (the same draws, first 10^4 per file).
+TEST_CASE("rgl sampler: 10^4 random (wo, u) give finite non-negative pdfs and finite weights", "[rgl][sample]") {
+    check_random_draws(10000);
 }
 
 // ---- The measured range: tables extrapolate from its edge, metrics leave out what lies beyond. ----
