@@ -118,20 +118,23 @@ TEST_CASE("factored fit=lsq: an interpolated rank-k product is recovered through
 }
 
 TEST_CASE("factored fit=lsq: beats point-sampled factors between the samples", "[factored][lsq]") {
+    // A glossy coat on a coarse grid at a rank that leaves the interpolation between samples as the main
+    // error (at rank 3 on this grid the rank limits first, and the refit, which weighs the grid's points
+    // rather than the held-out pairs' uniform directions, can lose: 1.2-1.5x at alpha 0.2-0.35).
     CoatedDiffuseParams p;
-    p.alpha = 0.15;
+    p.alpha = 0.1;
     const CoatedDiffuse source(p);
     const GridSpec g{12, 10, 12, BinPosition::Centre, 0.8};
     const Table t = tabulated(source, g);
     for (FactorMethod method : {FactorMethod::Svd, FactorMethod::Nmf}) {
         INFO(factor_method_name(method));
-        FactorOptions samples = lsq_options(3, method);
+        FactorOptions samples = lsq_options(5, method);
         samples.fit = FactorFit::Samples;
-        const Factored a = factor(source, t, samples), b = factor(source, t, lsq_options(3, method));
+        const Factored a = factor(source, t, samples), b = factor(source, t, lsq_options(5, method));
         const double ea = held_out_error(*a.brdf, source, 20000, 7), eb = held_out_error(*b.brdf, source, 20000, 7);
         CAPTURE(ea, eb, b.report.fit_residual_start, b.report.fit_residual);
         CHECK(b.report.fit_residual < 0.9 * b.report.fit_residual_start);
-        CHECK(eb < 0.8 * ea);
+        CHECK(eb < (method == FactorMethod::Svd ? 0.5 : 0.8) * ea);  // svd: 0.219 -> 0.074
         if (method == FactorMethod::Nmf) {  // the refit keeps every factor ≥ 0
             const Factors& f = b.brdf->factors();
             for (const std::vector<float>* x : {&f.u, &f.v, &f.colour_weights})
@@ -337,4 +340,19 @@ TEST_CASE("factored fit=lsq: RGL satin_rosaline, a small grid", "[factored][lsq]
     const double ea = compare(*l.brdf, *a.brdf, coarse).cos_rmse_rel.mean, eb = compare(*l.brdf, *b.brdf, coarse).cos_rmse_rel.mean;
     CAPTURE(ea, eb, b.build_seconds);
     CHECK(eb < 0.9 * ea);
+}
+
+// The default candidate (select.cpp) that meets #4's target on satin_rosaline: ≤ 16 KB within 2 % (~15 s).
+TEST_CASE("factored fit=lsq, dtype=f16: RGL satin_rosaline within 2 % at 14,944 bytes", "[factored][lsq][data][rgl][heavy]") {
+    const std::filesystem::path file = test::rgl_file("satin_rosaline");
+    if (!std::filesystem::exists(file)) {
+        WARN("skipped: " << file << " is missing");
+        return;
+    }
+    const Loaded l = load(file.string());
+    const Compressed c = compress(*l.brdf, "svd:rank=8,space=cos,colour=shared,res=64x48x18,dwarp=0.9,fit=lsq,dtype=f16");
+    CHECK(c.brdf->nbytes() == 14944);
+    const Metrics m = compare(*l.brdf, *c.brdf);
+    CAPTURE(m.cos_rmse_rel.mean, c.build_seconds);
+    CHECK(m.cos_rmse_rel.mean < 0.02);  // bench/README.md: 1.82 %
 }
