@@ -24,8 +24,20 @@
 // for nmf), so their values never influence the result, and the factors fill them in from the rest.
 //
 // Evaluation interpolates the factors linearly in the grid's bin coordinates (table.h's axis maps and
-// bin position; φd periodic), multiplies and sums them: f(wi, wo) = T⁻¹(Σ_j Ũ_j·s_cj·Ṽ_j). Factors are
-// stored as float32: nbytes() = 4 · (number of U, V and s entries).
+// bin position; φd periodic), multiplies and sums them: f(wi, wo) = T⁻¹(Σ_j Ũ_j·s_cj·Ṽ_j).
+//
+// Fit (fit=): by default the factors fit the table's values at its bins' sample positions (`samples`).
+// With `lsq` they are then refitted by alternating weighted least squares THROUGH that interpolation
+// (each point's design row is eval's own corner blend: 2 θh rows of U and 4 (θd, φd) rows of V in
+// h_dp) to the source's values at the points of a grid `ss` times finer per axis, as tabulate.h's
+// filter=lsq fits table bins: eval then errs less between the samples (bench/README.md: satin_rosaline,
+// rank 8 on 64x48x18 with float16 factors, 2.07 -> 1.82 %).
+//
+// Storage (dtype=): U and V as float32 or float16 (IEEE binary16: half the bytes, 2^-11 relative
+// rounding; each component's columns scaled to a largest magnitude of 1 first, the scale moved into the
+// colour weights, which stay float32). float16 factors are kept in memory as the floats they round to,
+// so eval reads them as it reads float32 ones: nbytes() = 4 (float32) or 2 (float16) per U and V entry
+// + 4 per colour weight, the bytes the container stores.
 #pragma once
 
 #include <array>
