@@ -601,7 +601,6 @@ Data prepare(const Table& table, const FactorOptions& o, int rows, int cols, con
     return d;
 }
 
-
 // ---------------------------------------------------------------------------------------------
 // Fit through the lookup (fit=lsq)
 
@@ -833,7 +832,6 @@ void update_mix(Mat& mix, const MixSums& sums, bool nonneg) {
         mix.row(c) = s.transpose();
     }
 }
-
 
 // float16 storage: each component's U and V columns scaled to a largest magnitude of 1, the scale
 // moved into the (float32) colour weights; for separate colour both to the geometric mean of their
