@@ -88,6 +88,7 @@ double held_out_error(const Brdf& approx, const Brdf& ref, int n, std::uint64_t 
 TEST_CASE("factored fit=lsq: an interpolated rank-k product is recovered through the lookup", "[factored][lsq]") {
     for (const GridSpec g : {GridSpec{8, 6, 10, BinPosition::Centre}, GridSpec{8, 6, 10, BinPosition::Centre, 0.8}})
         for (FactorColour colour : {FactorColour::Separate, FactorColour::Shared}) {
+            if (colour == FactorColour::Shared && g.theta_d_warp == 0.0) continue;  // one slow CP case is enough
             CAPTURE(g.theta_d_warp, factor_colour_name(colour));
             const std::unique_ptr<FactoredBrdf> truth = known_product(g, colour);
             FactorOptions o = lsq_options(3);
