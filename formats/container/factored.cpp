@@ -1,7 +1,10 @@
-// Factored storage: a FactoredBrdf's float32 factors as datasets "u" [rows, m] and "v" [columns, m]
-// (and "colour" [3, rank] for shared colour), exactly the arrays FactoredBrdf keeps, with the grid,
-// layout, transform space, method and colour mode as attributes (formats/SPEC.md). Factors round-trip
-// bit for bit, so evaluation does too.
+// Factored storage: a FactoredBrdf's factors as datasets "u" [rows, m] and "v" [columns, m], float32
+// or float16 (Factors::dtype; FactoredBrdf keeps float16 factors as the floats they are, so writing
+// them as float16 is exact), and "colour" [3, rank] float32 for shared colour, with the grid, layout,
+// transform space, method and colour mode as attributes (formats/SPEC.md). Factors round-trip bit for
+// bit, so evaluation does too.
+#include <Eigen/Core>
+
 #include "brdfz/errors.h"
 #include "brdfz/repr/factored.h"
 #include "storage.h"
@@ -11,13 +14,23 @@ namespace {
 
 const Feature kFactored{"factored", 2};
 const Feature kWarpedThetaD{"factored.warped-theta-d", 2};
+// Readers without it refuse float16 factors by this name rather than misreading them.
+const Feature kFloat16{"factored.float16", 2};
 
 std::vector<Feature> needs(const Brdf& brdf) {
     const auto* f = dynamic_cast<const FactoredBrdf*>(&brdf);
     if (!f) return {};
     // As for tables: only a warped grid needs the feature, so linear-axis factors stay readable without it.
-    if (f->factors().grid.theta_d_warp != 0.0) return {kFactored, kWarpedThetaD};
-    return {kFactored};
+    std::vector<Feature> out{kFactored};
+    if (f->factors().grid.theta_d_warp != 0.0) out.push_back(kWarpedThetaD);
+    if (f->factors().dtype == FactorDtype::F16) out.push_back(kFloat16);
+    return out;
+}
+
+std::vector<std::uint16_t> to_half_bits(const std::vector<float>& values) {
+    std::vector<std::uint16_t> bits(values.size());
+    for (std::size_t i = 0; i < values.size(); ++i) bits[i] = Eigen::numext::bit_cast<std::uint16_t>(Eigen::half(values[i]));
+    return bits;
 }
 
 void write(h5::WriteNode& rep, const Brdf& brdf) {
@@ -34,12 +47,20 @@ void write(h5::WriteNode& rep, const Brdf& brdf) {
     rep.attr("layout", std::string(factor_layout_name(f.layout)));
     rep.attr("colour", std::string(factor_colour_name(f.colour)));
     rep.attr("rank", static_cast<std::uint64_t>(f.rank));
-    rep.attr("dtype", std::string("float32"));
+    const bool half = f.dtype == FactorDtype::F16;
+    rep.attr("dtype", std::string(half ? "float16" : "float32"));
     const double top[3] = {f.max_value[0], f.max_value[1], f.max_value[2]};
     rep.attr("max_value", std::span<const double>(top));
     const std::uint64_t m = static_cast<std::uint64_t>(f.row_width());
-    rep.dataset("u", h5::DType::F32, {static_cast<std::uint64_t>(f.rows()), m}, f.u.data());
-    rep.dataset("v", h5::DType::F32, {static_cast<std::uint64_t>(f.columns()), m}, f.v.data());
+    const std::vector<std::uint64_t> u_shape{static_cast<std::uint64_t>(f.rows()), m},
+        v_shape{static_cast<std::uint64_t>(f.columns()), m};
+    if (half) {
+        rep.dataset("u", h5::DType::F16, u_shape, to_half_bits(f.u).data());
+        rep.dataset("v", h5::DType::F16, v_shape, to_half_bits(f.v).data());
+    } else {
+        rep.dataset("u", h5::DType::F32, u_shape, f.u.data());
+        rep.dataset("v", h5::DType::F32, v_shape, f.v.data());
+    }
     if (f.colour == FactorColour::Shared)
         rep.dataset("colour", h5::DType::F32, {3, static_cast<std::uint64_t>(f.rank)}, f.colour_weights.data());
 }
@@ -62,7 +83,9 @@ std::unique_ptr<Brdf> read(const h5::ReadNode& rep, const ReadContext&) {
     f.space = choice("space", parse_factor_space);
     f.layout = choice("layout", parse_factor_layout);
     f.colour = choice("colour", parse_factor_colour);
-    if (rep.str("dtype") != "float32") bad("unsupported factor element type '" + rep.str("dtype") + "'");
+    const std::string dtype = rep.str("dtype");
+    if (dtype != "float32" && dtype != "float16") bad("unsupported factor element type '" + dtype + "'");
+    f.dtype = dtype == "float16" ? FactorDtype::F16 : FactorDtype::F32;
     if (rep.str("theta_h_axis") != "sqrt") bad("unknown theta_h_axis '" + rep.str("theta_h_axis") + "'");
     const std::string position = rep.str("bin_position");
     if (position != "centre" && position != "start") bad("unknown bin_position '" + position + "'");
@@ -87,17 +110,21 @@ std::unique_ptr<Brdf> read(const h5::ReadNode& rep, const ReadContext&) {
     const std::uint64_t m = static_cast<std::uint64_t>(f.row_width());
 
     // Shapes checked against the attributes (and by the reader, sizes against the file) before allocating.
-    const auto load = [&](const char* name, std::uint64_t n, std::uint64_t width, std::vector<float>& out) {
+    const auto load = [&](const char* name, std::uint64_t n, std::uint64_t width, bool half, std::vector<float>& out) {
         const h5::Dataset d = rep.dataset(name);
-        if (d.type() != h5::DType::F32 || d.shape() != std::vector<std::uint64_t>{n, width})
-            bad(std::string("dataset '") + name + "' is not a float32 array of shape " + std::to_string(n) + "x" +
-                std::to_string(width));
+        if (d.type() != (half ? h5::DType::F16 : h5::DType::F32) || d.shape() != std::vector<std::uint64_t>{n, width})
+            bad(std::string("dataset '") + name + "' is not a " + (half ? "float16" : "float32") + " array of shape " +
+                std::to_string(n) + "x" + std::to_string(width));
         out.resize(n * width);
-        d.read(out.data());
+        if (!half) return d.read(out.data());
+        std::vector<std::uint16_t> bits(n * width);
+        d.read(bits.data());
+        for (std::size_t i = 0; i < bits.size(); ++i) out[i] = static_cast<float>(Eigen::numext::bit_cast<Eigen::half>(bits[i]));
     };
-    load("u", rows, m, f.u);
-    load("v", cols, m, f.v);
-    if (f.colour == FactorColour::Shared) load("colour", 3, rank, f.colour_weights);
+    const bool half = f.dtype == FactorDtype::F16;
+    load("u", rows, m, half, f.u);
+    load("v", cols, m, half, f.v);
+    if (f.colour == FactorColour::Shared) load("colour", 3, rank, false, f.colour_weights);
     try {
         return std::make_unique<FactoredBrdf>(std::move(f));
     } catch (const ValueError& e) {
@@ -109,7 +136,7 @@ std::unique_ptr<Brdf> read(const h5::ReadNode& rep, const ReadContext&) {
 }  // namespace
 
 const StorageModule& factored_storage() {
-    static const StorageModule m{"factored", {kFactored, kWarpedThetaD}, &needs, &write, &read};
+    static const StorageModule m{"factored", {kFactored, kWarpedThetaD, kFloat16}, &needs, &write, &read};
     return m;
 }
 

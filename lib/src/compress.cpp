@@ -177,11 +177,20 @@ Compressed build_factored(FactorMethod method, const Brdf& source, const ReprSpe
     fo.layout = parse_factor_layout(spec.get_choice("layout", "h_dp", {"h_dp", "hd_p"}));
     fo.colour = parse_factor_colour(spec.get_choice("colour", "separate", {"separate", "shared"}));
     fo.max_iterations = spec.get_int("iterations", method == FactorMethod::Svd ? 50 : 100, 1, 100000);
+    fo.fit = parse_factor_fit(spec.get_choice("fit", "samples", {"samples", "lsq"}));
+    const bool lsq = fo.fit == FactorFit::LeastSquares;
+    if (!lsq && (spec.has("ss") || spec.has("fit_iterations")))
+        throw ValueError(spec.kind() + ": ss= and fit_iterations= belong to fit=lsq");
+    fo.supersample = spec.get_int("ss", fo.supersample, 1, 16);
+    fo.fit_iterations = spec.get_int("fit_iterations", fo.fit_iterations, 1, 10000);
+    fo.dtype = parse_factor_dtype(spec.get_choice("dtype", "f32", {"f32", "f16"}));
     const auto* tabular = dynamic_cast<const TabularBrdf*>(&source);
     const bool resample = !tabular || spec.has("res");
     const std::vector<int> res = spec.get_dims("res", {90, 90, 180});
     const double warp = theta_d_warp_option(spec);
     if (warp != 0.0 && !resample) throw ValueError(spec.kind() + ": dwarp= applies to the res= grid; give res= as well");
+    if (lsq && !resample)
+        throw ValueError(spec.kind() + ": fit=lsq fits the factors on the res= grid to the source; give res= as well");
     spec.finish();
     fo.threads = options.threads;
     fo.progress = options.progress;
@@ -194,7 +203,7 @@ Compressed build_factored(FactorMethod method, const Brdf& source, const ReprSpe
         tab.threads = options.threads;
         Tabulated t = tabulate(source, tab);
         note_tabulation(source, t, out);
-        factored = factor(t.table, fo);
+        factored = factor(source, t.table, fo);
     } else {
         factored = factor(tabular->table(), fo);
     }
@@ -202,6 +211,10 @@ Compressed build_factored(FactorMethod method, const Brdf& source, const ReprSpe
     out.notes.push_back(std::string(factor_method_name(method)) + ": " + std::to_string(r.iterations) + " iterations, " +
                         (r.converged ? "converged" : "iteration cap reached") + ", weighted residual " +
                         std::to_string(r.residual) + " over " + std::to_string(r.valid_bins) + " valid bins");
+    if (lsq)
+        out.notes.push_back("fit=lsq: " + std::to_string(r.fit_iterations) + " iterations through the lookup over " +
+                            std::to_string(r.fit_points) + " points, weighted residual " +
+                            std::to_string(r.fit_residual_start) + " -> " + std::to_string(r.fit_residual));
     if (r.clamped > 0)
         out.notes.push_back(std::to_string(r.clamped) + " reconstructed values below 0 at the grid's samples (clamped to 0 at eval)");
     out.brdf = std::move(factored.brdf);

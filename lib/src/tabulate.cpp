@@ -8,6 +8,7 @@
 #include <Eigen/Sparse>
 
 #include "brdfz/errors.h"
+#include "detail/fit_points.h"
 #include "detail/grid_sweep.h"
 #include "detail/table_lookup.h"
 
@@ -137,67 +138,42 @@ Tabulated tabulate_boxes(const Brdf& brdf, const TabulateOptions& options) {
 }
 
 // Least squares over the points of the fine grid: minimise Σ cos²θi (f − lookup(x))² over the valid
-// points (row weights below), lookup(x) being the linear lookup's weighted mean of x at the point's
-// valid corners, by the normal equations. A tiny pull towards the point samples x0 (1e-9 of the mean diagonal) keeps them
-// positive definite and leaves bins that no point reaches at their point sample.
+// points (detail::fit_points, with their scales), lookup(x) being the linear lookup's weighted mean of x
+// at the point's valid corners, by the normal equations. A tiny pull towards the point samples x0 (1e-9
+// of the mean diagonal) keeps them positive definite and leaves bins that no point reaches at their
+// point sample.
 Tabulated tabulate_least_squares(const Brdf& brdf, const TabulateOptions& options) {
     const GridSpec& g = options.grid;
-    const auto [sh, sd, sp] = options.supersample;
     Tabulated result = tabulate_points(brdf, options);  // validity, counts and x0
-    TabulateOptions fine_options = options;
-    fine_options.grid = GridSpec{g.n_theta_h * sh, g.n_theta_d * sd, g.n_phi_d * sp, BinPosition::Centre, g.theta_d_warp};
-    fine_options.grid.validate();
-    const GridSpec& fg = fine_options.grid;
-    if (fg.bins() > (std::size_t{1} << 21))
-        throw ValueError("tabulate: least squares over " + std::to_string(fg.bins()) +
-                         " points (more than 2^21); lower the supersampling");
-    const Tabulated fine = tabulate_points(brdf, fine_options);
-
-    // On a warped θd axis the points crowd towards grazing; each row is scaled by the square root of
-    // dθd/du relative to the linear axis so that the sum still weights θd uniformly, as the metrics'
-    // linear grid does (1 on the linear axis).
-    std::vector<double> density(static_cast<std::size_t>(fg.n_theta_d), 1.0);
-    if (fg.theta_d_warp != 0.0)
-        for (int jd = 0; jd < fg.n_theta_d; ++jd) {
-            const double w = fg.theta_d_warp, t = fg.theta_d_at(jd);
-            density[jd] = std::sqrt(2.0 / std::numbers::pi / ((1.0 - w) * 2.0 / std::numbers::pi + w * std::sin(t)));
-        }
-    // Rows of points with θi or θo beyond box_max_theta_deg or the source's measured range are scaled by
-    // a tenth (a hundredth of their squared error): the metrics leave them out and the source extrapolates
-    // there, so at full weight they pulled the bins they share with measured points (cc_ibiza 16x40x8
-    // u8log: 2.39 % at full weight, 2.23 % at a tenth, 2.21 % at 0); a tenth still anchors bins that only
-    // such points reach.
-    const double min_cos =
-        std::cos(std::min(options.box_max_theta_deg * std::numbers::pi / 180.0, brdf.measured_theta_max()));
-    constexpr double kOutsideWeight = 0.1;
+    // Points beyond the measured range or box_max_theta_deg weigh a tenth (a hundredth of their squared
+    // error): the metrics leave them out and the source extrapolates there, so at full weight they pulled
+    // the bins they share with measured points (cc_ibiza 16x40x8 u8log: 2.39 % at full weight, 2.23 % at
+    // a tenth, 2.21 % at 0); a tenth still anchors bins that only such points reach.
+    constexpr double kOutsideScale = 0.1;
+    const detail::FitPoints points = detail::fit_points(brdf, options, kOutsideScale);
     const Table& coarse = result.table;
     std::vector<Eigen::Triplet<double>> entries;
     std::vector<double> rhs[3];
     int row = 0;
-    for (int jh = 0; jh < fg.n_theta_h; ++jh)
-        for (int jd = 0; jd < fg.n_theta_d; ++jd)
-            for (int jp = 0; jp < fg.n_phi_d; ++jp) {
-                const std::size_t bin = fg.index(jh, jd, jp);
-                if (!fine.table.valid(bin)) continue;
-                const auto [wi, wo] = from_half_diff({fg.theta_h_at(jh), 0.0, fg.theta_d_at(jd), fg.phi_d_at(jp)});
-                const detail::Corners k = detail::linear_corners(g, detail::fast_bin_coords(g, wi, wo), wi, wo);
-                double w[8];
-                std::size_t at[8];
-                double wsum = 0.0;
-                for (int c = 0; c < 8; ++c) {
-                    at[c] = g.index(c & 4 ? k.h.i1 : k.h.i0, c & 2 ? k.d.i1 : k.d.i0, c & 1 ? k.p.i1 : k.p.i0);
-                    w[c] = (c & 4 ? k.h.t : 1.0 - k.h.t) * (c & 2 ? k.d.t : 1.0 - k.d.t) * (c & 1 ? k.p.t : 1.0 - k.p.t);
-                    if (!coarse.valid(at[c])) w[c] = 0.0;  // the lookup skips invalid corners
-                    wsum += w[c];
-                }
-                if (!(wsum > 0.0)) continue;
-                const bool outside = !(wi.z > min_cos && wo.z > min_cos);
-                const double row_weight = wi.z * density[jd] * (outside ? kOutsideWeight : 1.0);
-                for (int c = 0; c < 8; ++c)
-                    if (w[c] > 0.0) entries.emplace_back(row, static_cast<int>(at[c]), row_weight * w[c] / wsum);
-                for (int ch = 0; ch < 3; ++ch) rhs[ch].push_back(row_weight * fine.table.at(bin, ch));
-                ++row;
-            }
+    for (std::size_t k = 0; k < points.wi.size(); ++k) {
+        const Vec3 &wi = points.wi[k], &wo = points.wo[k];
+        const detail::Corners c = detail::linear_corners(g, detail::fast_bin_coords(g, wi, wo), wi, wo);
+        double w[8];
+        std::size_t at[8];
+        double wsum = 0.0;
+        for (int i = 0; i < 8; ++i) {
+            at[i] = g.index(i & 4 ? c.h.i1 : c.h.i0, i & 2 ? c.d.i1 : c.d.i0, i & 1 ? c.p.i1 : c.p.i0);
+            w[i] = (i & 4 ? c.h.t : 1.0 - c.h.t) * (i & 2 ? c.d.t : 1.0 - c.d.t) * (i & 1 ? c.p.t : 1.0 - c.p.t);
+            if (!coarse.valid(at[i])) w[i] = 0.0;  // the lookup skips invalid corners
+            wsum += w[i];
+        }
+        if (!(wsum > 0.0)) continue;
+        const double row_weight = wi.z * points.scale[k];
+        for (int i = 0; i < 8; ++i)
+            if (w[i] > 0.0) entries.emplace_back(row, static_cast<int>(at[i]), row_weight * w[i] / wsum);
+        for (int ch = 0; ch < 3; ++ch) rhs[ch].push_back(row_weight * points.value[k][ch]);
+        ++row;
+    }
 
     const int n = static_cast<int>(g.bins());
     Eigen::SparseMatrix<double> a(row, n);
@@ -233,6 +209,47 @@ Tabulated tabulate_least_squares(const Brdf& brdf, const TabulateOptions& option
 }
 
 }  // namespace
+
+namespace detail {
+
+FitPoints fit_points(const Brdf& brdf, const TabulateOptions& options, double outside_scale) {
+    const GridSpec& g = options.grid;
+    const auto [sh, sd, sp] = options.supersample;
+    TabulateOptions fine_options = options;
+    fine_options.grid = GridSpec{g.n_theta_h * sh, g.n_theta_d * sd, g.n_phi_d * sp, BinPosition::Centre, g.theta_d_warp};
+    fine_options.grid.validate();
+    const GridSpec& fg = fine_options.grid;
+    if (fg.bins() > kMaxFitPoints)
+        throw ValueError("least squares over " + std::to_string(fg.bins()) +
+                         " points (more than 2^21); lower the supersampling or the resolution");
+    const Tabulated fine = tabulate_points(brdf, fine_options);
+
+    // On a warped θd axis the points crowd towards grazing: dθd/du relative to the linear axis.
+    std::vector<double> density(static_cast<std::size_t>(fg.n_theta_d), 1.0);
+    if (fg.theta_d_warp != 0.0)
+        for (int jd = 0; jd < fg.n_theta_d; ++jd) {
+            const double w = fg.theta_d_warp, t = fg.theta_d_at(jd);
+            density[jd] = std::sqrt(2.0 / std::numbers::pi / ((1.0 - w) * 2.0 / std::numbers::pi + w * std::sin(t)));
+        }
+    const double min_cos =
+        std::cos(std::min(options.box_max_theta_deg * std::numbers::pi / 180.0, brdf.measured_theta_max()));
+    FitPoints points;
+    for (int jh = 0; jh < fg.n_theta_h; ++jh)
+        for (int jd = 0; jd < fg.n_theta_d; ++jd)
+            for (int jp = 0; jp < fg.n_phi_d; ++jp) {
+                const std::size_t bin = fg.index(jh, jd, jp);
+                if (!fine.table.valid(bin)) continue;
+                const auto [wi, wo] = from_half_diff({fg.theta_h_at(jh), 0.0, fg.theta_d_at(jd), fg.phi_d_at(jp)});
+                const bool outside = !(wi.z > min_cos && wo.z > min_cos);
+                points.wi.push_back(wi);
+                points.wo.push_back(wo);
+                points.value.push_back({fine.table.at(bin, 0), fine.table.at(bin, 1), fine.table.at(bin, 2)});
+                points.scale.push_back(density[jd] * (outside ? outside_scale : 1.0));
+            }
+    return points;
+}
+
+}  // namespace detail
 
 Tabulated tabulate(const Brdf& brdf, const TabulateOptions& options) {
     options.grid.validate();

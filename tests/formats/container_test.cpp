@@ -20,6 +20,7 @@
 #include "brdfz/repr/analytic/coated_diffuse.h"
 #include "brdfz/repr/analytic/model.h"
 #include "brdfz/repr/compact_table.h"
+#include "brdfz/repr/factored.h"
 #include "container/checksum.h"
 #include "container/h5.h"
 #include "test_util.h"
@@ -582,4 +583,43 @@ TEST_CASE("Files needing unknown features are refused, naming the feature", "[co
     }
     reseal(q);
     CHECK_THAT(read_error(q), Catch::Contains("feature_versions"));
+}
+
+TEST_CASE("float16 factors cannot be misread as float32 ones", "[container][factored][f16]") {
+    test::TempDir dir;
+    Factors f;
+    f.grid = {3, 2, 4};
+    f.rank = 1;
+    f.colour = FactorColour::Shared;
+    f.dtype = FactorDtype::F16;
+    f.u = {0.5f, 1.0f, 0.25f};
+    f.v = {1.0f, 0.5f, 0.75f, 1.0f, 0.125f, 1.0f, 0.5f, 1.0f};
+    f.colour_weights = {1.0f, 2.0f, 3.0f};
+    const fs::path p = dir.path / "h.brdfz";
+    container::write(p.string(), FactoredBrdf(f));
+    CHECK(container::read(p.string()).meta.features.back() == container::Feature{"factored.float16", 2});
+    // A float32-only reading of it: the element type attribute rewritten to say float32, the datasets
+    // stay float16. Their type is checked, not trusted: refused, naming the dataset.
+    {
+        container::h5::Quiet quiet;
+        const hid_t file = H5Fopen(p.string().c_str(), H5F_ACC_RDWR, H5P_DEFAULT);
+        REQUIRE(file >= 0);
+        const hid_t group = H5Gopen2(file, "representation", H5P_DEFAULT);
+        REQUIRE(group >= 0);
+        REQUIRE(H5Adelete(group, "dtype") >= 0);
+        const hid_t t = H5Tcopy(H5T_C_S1);
+        H5Tset_size(t, 7);
+        H5Tset_strpad(t, H5T_STR_NULLPAD);
+        const hid_t space = H5Screate(H5S_SCALAR);
+        const hid_t a = H5Acreate2(group, "dtype", t, space, H5P_DEFAULT, H5P_DEFAULT);
+        REQUIRE(a >= 0);
+        REQUIRE(H5Awrite(a, t, "float32") >= 0);
+        H5Aclose(a);
+        H5Sclose(space);
+        H5Tclose(t);
+        H5Gclose(group);
+        H5Fclose(file);
+    }
+    reseal(p);
+    CHECK_THAT(read_error(p), Catch::Contains("dataset 'u' is not a float32 array"));
 }

@@ -14,9 +14,13 @@
 //   analytic:MODEL[,loss=log|cos|cbrt,starts=N,seed=S]   a Ceres fit (fit/fit.h)
 //   pca:basis=FILE,k=K[,store=reference|embed,lookup=linear|nearest]   k coefficients of a shared
 //                                                   basis read from FILE (repr/pca.h)
-//   svd:rank=K,space=linear|cos|log|cbrt,layout=h_dp|hd_p,colour=separate|shared[,res=AxBxC,iterations=N,dwarp=W]
+//   svd:rank=K,space=linear|cos|log|cbrt,layout=h_dp|hd_p,colour=separate|shared[,res=AxBxC,iterations=N,dwarp=W,
+//       fit=samples|lsq,ss=N,fit_iterations=N,dtype=f32|f16]
 //   nmf:(the same keys)                     low-rank / non-negative factorisation (repr/factored.h);
-//                                           dwarp=W (with res=): the res grid's θd axis warped as for tables
+//                                           dwarp=W (with res=): the res grid's θd axis warped as for tables;
+//                                           fit=lsq (with res=): the factors refitted through eval's
+//                                           interpolation to N³ points per bin (ss=N, default 2), as
+//                                           filter=lsq fits tables; dtype=f16: float16 factors (half the bytes)
 #pragma once
 
 #include <functional>

@@ -24,8 +24,20 @@
 // for nmf), so their values never influence the result, and the factors fill them in from the rest.
 //
 // Evaluation interpolates the factors linearly in the grid's bin coordinates (table.h's axis maps and
-// bin position; φd periodic), multiplies and sums them: f(wi, wo) = T⁻¹(Σ_j Ũ_j·s_cj·Ṽ_j). Factors are
-// stored as float32: nbytes() = 4 · (number of U, V and s entries).
+// bin position; φd periodic), multiplies and sums them: f(wi, wo) = T⁻¹(Σ_j Ũ_j·s_cj·Ṽ_j).
+//
+// Fit (fit=): by default the factors fit the table's values at its bins' sample positions (`samples`).
+// With `lsq` they are then refitted by alternating weighted least squares THROUGH that interpolation
+// (each point's design row is eval's own corner blend: 2 θh rows of U and 4 (θd, φd) rows of V in
+// h_dp) to the source's values at the points of a grid `ss` times finer per axis, as tabulate.h's
+// filter=lsq fits table bins: eval then errs less between the samples (bench/README.md: satin_rosaline,
+// rank 8 on 64x48x18 with float16 factors, 2.07 -> 1.82 %).
+//
+// Storage (dtype=): U and V as float32 or float16 (IEEE binary16: half the bytes, 2^-11 relative
+// rounding; each component's columns scaled to a largest magnitude of 1 first, the scale moved into the
+// colour weights, which stay float32). float16 factors are kept in memory as the floats they round to,
+// so eval reads them as it reads float32 ones: nbytes() = 4 (float32) or 2 (float16) per U and V entry
+// + 4 per colour weight, the bytes the container stores.
 #pragma once
 
 #include <array>
@@ -49,20 +61,27 @@ enum class FactorMethod { Svd, Nmf };
 enum class FactorSpace { Linear, Cos, Log, Cbrt };
 enum class FactorLayout { HxDP, HDxP };
 enum class FactorColour { Separate, Shared };
+enum class FactorFit { Samples, LeastSquares };
+enum class FactorDtype { F32, F16 };
 
 // Names as the spec strings spell them ("svd", "log", "h_dp", "shared"); parse_* throw ValueError.
 const char* factor_method_name(FactorMethod m);
 const char* factor_space_name(FactorSpace s);
 const char* factor_layout_name(FactorLayout l);
 const char* factor_colour_name(FactorColour c);
+const char* factor_fit_name(FactorFit f);      // "samples", "lsq"
+const char* factor_dtype_name(FactorDtype d);  // "f32", "f16"
 FactorMethod parse_factor_method(const std::string& name);
 FactorSpace parse_factor_space(const std::string& name);
 FactorLayout parse_factor_layout(const std::string& name);
 FactorColour parse_factor_colour(const std::string& name);
+FactorFit parse_factor_fit(const std::string& name);
+FactorDtype parse_factor_dtype(const std::string& name);
 
-// The stored parameters (what the container writes), row-major float32:
-//   u       rows × m,  v  columns × m,   m = rank (shared) or 3·rank (separate: entry c·rank + j)
-//   colour  3 × rank, the weights s_cj (shared); empty for separate.
+// The stored parameters (what the container writes), row-major:
+//   u       rows × m,  v  columns × m,   m = rank (shared) or 3·rank (separate: entry c·rank + j);
+//           float32, or with dtype F16 floats that are float16 values (FactoredBrdf rounds them)
+//   colour  3 × rank, the weights s_cj (shared; float32); empty for separate.
 // max_value is the ceiling of eval per channel (factor() sets the data's maximum); +inf, as in
 // containers written before it, leaves only the float range as a ceiling, so eval stays finite.
 struct Factors {
@@ -72,6 +91,7 @@ struct Factors {
     FactorLayout layout = FactorLayout::HxDP;
     FactorColour colour = FactorColour::Separate;
     int rank = 1;
+    FactorDtype dtype = FactorDtype::F32;
     static constexpr float kUnbounded = std::numeric_limits<float>::infinity();
     std::vector<float> u, v, colour_weights;
     std::array<float, 3> max_value{kUnbounded, kUnbounded, kUnbounded};
@@ -83,8 +103,9 @@ struct Factors {
 
 class FactoredBrdf final : public Brdf {
 public:
-    // ValueError when the shapes disagree with the grid, layout and rank, a factor is not finite, or
-    // a max_value is NaN or negative.
+    // ValueError when the shapes disagree with the grid, layout and rank, a factor is not finite (for
+    // F16: beyond the float16 range), or a max_value is NaN or negative. F16 factors are rounded to
+    // float16 (round to nearest even).
     explicit FactoredBrdf(Factors factors);
     FactoredBrdf(const FactoredBrdf&) = delete;
     FactoredBrdf& operator=(const FactoredBrdf&) = delete;
@@ -135,7 +156,9 @@ private:
 // Options of factor(). The spec-string kinds (compress.h) `svd:...` and `nmf:...` map onto these:
 //   rank=K (default 4), space=linear|cos|log|cbrt (default log), layout=h_dp|hd_p (default h_dp),
 //   colour=separate|shared (default separate), res=AxBxC (default: the source table's own grid, or
-//   90x90x180 for a source that is not a table), iterations=N (default 50 svd, 100 nmf).
+//   90x90x180 for a source that is not a table), iterations=N (default 50 svd, 100 nmf),
+//   fit=samples|lsq (default samples; lsq needs res=), ss=N (fit=lsq: points per bin and axis,
+//   default 2), fit_iterations=N (fit=lsq: the refit's cap, default 20), dtype=f32|f16 (default f32).
 // Alternating least squares gains little after a few tens of iterations (gold-metallic-paint, rank 4,
 // log: residual 0.00957 after 20 svd iterations, 0.00941 after 100), hence the caps and tolerance.
 struct FactorOptions {
@@ -146,6 +169,10 @@ struct FactorOptions {
     FactorColour colour = FactorColour::Separate;
     int max_iterations = 50;
     double tolerance = 1e-4;  // stop when an iteration lowers Σ w·(y − ŷ)² by less than this fraction
+    FactorFit fit = FactorFit::Samples;
+    int supersample = 2;      // fit=lsq: the fine grid's points per bin and axis
+    int fit_iterations = 20;  // fit=lsq: the refit's cap (same tolerance)
+    FactorDtype dtype = FactorDtype::F32;
     int threads = 0;          // 0: one per hardware thread
     // Fraction done (0..1] after each iteration, from the calling thread.
     std::function<void(double)> progress;
@@ -158,6 +185,11 @@ struct FactorReport {
     double residual = 0;        // sqrt(Σ w·(y − ŷ)² / Σ w·y²) over the valid bins, in the transform space
     std::size_t valid_bins = 0; // bins that took part (weight > 0)
     std::size_t clamped = 0;    // reconstructed channel values at the grid's samples clamped to 0 (svd)
+    // fit=lsq: the refit's iterations and sqrt(Σ w·(y − ŷ)² / Σ w·y²) over its points before (the
+    // sample fit's factors) and after.
+    int fit_iterations = 0;
+    double fit_residual_start = 0, fit_residual = 0;
+    std::size_t fit_points = 0;
 };
 
 struct Factored {
@@ -166,7 +198,15 @@ struct Factored {
 };
 
 // Factor a table's valid bins. ValueError for a rank outside [1, min(rows, columns)], a table without
-// valid bins, or a factorisation that produced non-finite values (diverged).
+// valid bins, a factorisation that produced non-finite values (diverged), or fit=lsq (it needs the
+// source: the overload below).
 Factored factor(const Table& table, const FactorOptions& options = {});
+
+// The same, and with fit=lsq the refit through eval's interpolation to `source` at the points of
+// `table`'s grid options.supersample times finer per axis (tabulate.h's filter=lsq points: elevations
+// beyond the source's measured range taken at it, such points and those beyond 80° weighing a tenth;
+// cos²θi weights in cos space). `table` is the source tabulated on the grid (the start, and its ceiling).
+// ValueError beyond 2^21 points or 2^18 unknowns in one side's sparse normal equations.
+Factored factor(const Brdf& source, const Table& table, const FactorOptions& options);
 
 }  // namespace brdfz
