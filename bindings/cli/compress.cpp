@@ -98,7 +98,7 @@ void add_compress(CLI::App& app) {
     CLI::Option* repr = cmd->add_option("--repr", args->repr, "representation spec KIND[:KEY=VALUE,...]; kinds: " + [] {
         std::string kinds;
         for (const std::string& k : compress_kinds()) kinds += (kinds.empty() ? "" : ", ") + k;
-        return kinds;
+        return kinds + " (keys and defaults: docs/repr-specs.md)";
     }());
     CLI::Option* automatic =
         cmd->add_flag("--auto", args->automatic, "choose the smallest candidate that meets --max-error")->excludes(repr);
