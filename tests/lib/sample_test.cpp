@@ -16,6 +16,7 @@
 #include "brdfz/sample/piecewise2d.h"
 #include "brdfz/tabulate.h"
 #include "brdfz/formats/io.h"
+#include "detail/simd.h"
 #include "detail/table_sample.h"
 #include "sample_stats.h"
 #include "test_util.h"
@@ -306,10 +307,17 @@ TEST_CASE("table sample_batch: each result is the one-at-a-time sample; bad inpu
     wo[3] = {nan, 0.0, 1.0}, wo[4] = {0.0, 0.0, nan}, wo[5] = {inf, 0.0, 1.0}, wo[6] = {0.0, 0.0, -1.0};
     wo[7] = {0.0, 0.0, 1.0}, us[7] = {0.5, 0.3};  // the pole (wo's azimuth undefined), a data draw
     us[8] = {nan, 0.5}, us[9] = {0.5, inf}, us[10] = {1.0, 0.5}, us[11] = {-0.1, 0.5};
-    for (const Brdf* b : {static_cast<const Brdf*>(&t), static_cast<const Brdf*>(u8.brdf.get())}) {
-        INFO(b->describe());
+    // The batch kernel is built twice (detail/simd.h), both without FMA: each gives sample()'s results.
+    if (detail::simd_level() != detail::Simd::Avx2Fma) WARN("no AVX2 on this CPU: both runs use the SSE2 kernel");
+    for (const auto& [b, simd] : {std::pair{static_cast<const Brdf*>(&t), detail::Simd::Avx2Fma},
+                                  std::pair{static_cast<const Brdf*>(&t), detail::Simd::Sse2},
+                                  std::pair{static_cast<const Brdf*>(u8.brdf.get()), detail::Simd::Avx2Fma},
+                                  std::pair{static_cast<const Brdf*>(u8.brdf.get()), detail::Simd::Sse2}}) {
+        INFO(b->describe() << (simd == detail::Simd::Sse2 ? ", SSE2 kernel" : ", AVX2 kernel"));
         std::vector<BrdfSample> out(count);
+        detail::simd_cap = simd;
         b->sample(wo, us, out);
+        detail::simd_cap = detail::Simd::Avx2Fma;
         for (std::size_t k = 0; k < count; ++k) {
             INFO(k);
             const BrdfSample s = b->sample(wo[k], us[k][0], us[k][1]);
@@ -318,6 +326,8 @@ TEST_CASE("table sample_batch: each result is the one-at-a-time sample; bad inpu
             if (k == 4 || k == 6 || (k >= 8 && k <= 11)) REQUIRE(s.pdf == 0.0);  // outside sample()'s domain
             if (s.pdf == 0.0) continue;
             REQUIRE(out[k].wi.x == s.wi.x);
+            REQUIRE(out[k].wi.y == s.wi.y);
+            REQUIRE(out[k].wi.z == s.wi.z);
             for (int c = 0; c < 3; ++c) {
                 REQUIRE(std::isfinite(s.weight[c]));
                 REQUIRE(out[k].weight[c] == s.weight[c]);
