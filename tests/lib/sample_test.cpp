@@ -336,3 +336,57 @@ TEST_CASE("table sample_batch: each result is the one-at-a-time sample; bad inpu
         CHECK(out[7].pdf > 0.0);
     }
 }
+
+// draw_block searches the CDFs across draws in two steps of the guided scan and hands longer scans
+// (and cell coordinates needing a nudge) to Piecewise2D::sample: every draw must still be draw()'s,
+// angles included, in both builds. A near-specular table has the steepest CDFs (the longest scans).
+TEST_CASE("HalfVectorSampler::draw_block: each draw is draw()'s, in both builds", "[sample][tabular]") {
+    const TabularBrdf t = tabulated(0.02);
+    const HalfVectorSampler& sampler = t.sampler();
+    std::mt19937_64 rng(31);
+    std::uniform_real_distribution<double> u(0, 1);
+    std::normal_distribution<double> nd;
+    const std::size_t count = 20000;
+    std::vector<Vec3> wo(count);
+    std::vector<std::array<double, 2>> us(count);
+    for (std::size_t k = 0; k < count; ++k) {
+        wo[k] = normalize({nd(rng), nd(rng), nd(rng)});
+        wo[k].z = std::fabs(wo[k].z);
+        us[k] = {u(rng), u(rng)};
+    }
+    us[1] = {0.999999999, 0.9999999999};  // u rounding to 1 in float: the scans' last intervals
+    us[2] = {0.5, INFINITY}, us[3] = {2.0, 0.5}, wo[4] = {0.0, 0.0, -1.0};
+    for (detail::Simd simd : {detail::Simd::Avx2Fma, detail::Simd::Sse2}) {
+        INFO((simd == detail::Simd::Sse2 ? "SSE2" : "AVX2") << " build");
+        std::size_t half = 0;
+        HalfVectorSampler::Draws block;
+        for (std::size_t start = 0; start < count; start += HalfVectorSampler::kBlock) {
+            const std::size_t m = std::min(HalfVectorSampler::kBlock, count - start);
+            detail::simd_cap = simd;
+            sampler.draw_block(wo.data() + start, us.data() + start, m, block);
+            detail::simd_cap = detail::Simd::Avx2Fma;
+            for (std::size_t i = 0; i < m; ++i) {
+                const std::size_t k = start + i;
+                INFO(k);
+                const HalfVectorSampler::Draw d = Brdf::can_draw(wo[k], us[k][0], us[k][1])
+                                                      ? sampler.draw(wo[k], us[k][0], us[k][1])
+                                                      : HalfVectorSampler::Draw{};
+                REQUIRE(block.pdf[i] == d.sample.pdf);
+                if (d.sample.pdf == 0.0) continue;
+                REQUIRE(block.wi_x[i] == d.sample.wi.x);
+                REQUIRE(block.wi_y[i] == d.sample.wi.y);
+                REQUIRE(block.wi_z[i] == d.sample.wi.z);
+                REQUIRE(block.half[i] == d.half);
+                if (!d.half) continue;
+                ++half;
+                REQUIRE(block.sin_h[i] == d.sin_h);
+                REQUIRE(block.cos_h[i] == d.cos_h);
+                REQUIRE(block.sin_p[i] == d.sin_p);
+                REQUIRE(block.cos_p[i] == d.cos_p);
+                REQUIRE(block.sin_o[i] == d.sin_o);
+                REQUIRE(block.cos_o[i] == d.cos_o);
+            }
+        }
+        CHECK(half > count * 9 / 10);
+    }
+}

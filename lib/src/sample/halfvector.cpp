@@ -59,6 +59,13 @@ struct SamplerView {
     int K;
 };
 
+// The slices' stacked tables (HalfVectorSampler::stacked_), each slice rows × cols cells.
+struct StackView {
+    int rows, cols;
+    const float *marginal, *conditional, *density;
+    const std::uint32_t *marginal_guide, *conditional_guide;
+};
+
 struct Placement {
     double sin_o, t, v1, v2, sign;  // v1, v2: the slice's u, v1 below 1
     int slice, other;
@@ -104,10 +111,55 @@ struct Finish {
     return {wi, v.share * wi.z / kPi + (1.0 - v.share) * data, th.s, th.c, sin_p, ph.c, ok};
 }
 
-// HalfVectorSampler::draw_block's data draws in passes over the block: (1) placement, across draws;
-// (2) the cell searches, one draw at a time (their loops' lengths differ); (3) the half vector, wi
-// and the pdf, across draws. Cosine draws are left to the caller.
-[[gnu::always_inline]] inline void draw_lanes(const SamplerView& v, const detail::SinCosTable& table,
+// Piecewise2D::sample's CDF search (find_interval) from the guide entry, in a fixed two steps of its
+// scan (it takes about one on average), on `cdf` from index `base`: the interval, and in `found`
+// whether it is find_interval's. It is when the scan has ended: then cdf[i] <= u < cdf[i + 1], so the
+// interval is not empty either. Every index stays within the tables for any u, NaN or inf. Indices are
+// ints (the stacked tables' sizes are checked), which the gathers need.
+[[gnu::always_inline]] inline int guided_interval(const float* cdf, int base, const std::uint32_t* guide,
+                                                  int guide_base, int n, double u, bool& found) {
+    const float x = static_cast<float>(u);
+    // x is at most 1 for a data draw; the bound keeps the bucket of other lanes (u2 = inf) in range.
+    const int j = std::min(static_cast<int>(x > 0.0f ? std::min(static_cast<double>(x), 1.0) * n : 0.0), n - 1);
+    int i = static_cast<int>(guide[guide_base + j]);
+    for (int step = 0; step < 2; ++step) i += (i < n - 1) & (cdf[base + i + 1] <= x);
+    found = cdf[base + i + 1] > x;
+    return i;
+}
+
+// Piecewise2D's cell_coord, (i + f) / n, and whether it needs no nudge to lie in cell i.
+[[gnu::always_inline]] inline double cell_coord(int i, int n, double f, bool& found) {
+    const double v = (i + f) / n;
+    found = !(v * n >= i + 1.0) & !(v * n < i);
+    return v;
+}
+
+// Piecewise2D::sample(u1, u2) on a slice's stacked tables, with the other slice's density of the cell:
+// the same operations (float differences of CDF entries included), so when `found` the same results.
+struct Cell {
+    double x, y, p_cell, p_other;
+    bool found;
+};
+[[gnu::always_inline]] inline Cell find_cell(const StackView& v, int slice, int other, double u1, double u2) {
+    const int R = v.rows, C = v.cols;
+    bool found_r, found_c, found_x, found_y;
+    const int mb = slice * (R + 1);
+    const int r = guided_interval(v.marginal, mb, v.marginal_guide, slice * R, R, u1, found_r);
+    const float w_r = v.marginal[mb + r + 1] - v.marginal[mb + r];
+    const double fy = std::clamp((u1 - v.marginal[mb + r]) / w_r, 0.0, 1.0);
+    const int row = slice * R + r, cb = row * (C + 1);
+    const int c = guided_interval(v.conditional, cb, v.conditional_guide, row * C, C, u2, found_c);
+    const float w_c = v.conditional[cb + c + 1] - v.conditional[cb + c];
+    const double fx = std::clamp((u2 - v.conditional[cb + c]) / w_c, 0.0, 1.0);
+    const double x = cell_coord(c, C, fx, found_x), y = cell_coord(r, R, fy, found_y);
+    return {x, y, v.density[row * C + c], v.density[(other * R + r) * C + c],
+            static_cast<bool>(found_r & found_c & found_x & found_y)};
+}
+
+// HalfVectorSampler::draw_block's data draws in passes over the block, each across draws: (1) placement;
+// (2) the cell searches (gathers from the stacked tables); (3) the half vector, wi and the pdf.
+// Cosine draws are left to the caller.
+[[gnu::always_inline]] inline void draw_lanes(const SamplerView& v, const StackView& st, const detail::SinCosTable& table,
                                               const Vec3* wo, const std::array<double, 2>* u, std::size_t n,
                                               HalfVectorSampler::Draws& out) {
     constexpr std::size_t B = HalfVectorSampler::kBlock;
@@ -123,9 +175,15 @@ struct Finish {
         sin_o[k] = pl.sin_o, t[k] = pl.t, v1[k] = pl.v1, v2[k] = pl.v2, sign[k] = pl.sign;
         slice[k] = pl.slice, other[k] = pl.other, upper[k] = pl.upper;
     }
+    std::int64_t redo[B];
     for (std::size_t k = 0; k < n; ++k) {
-        x[k] = y[k] = p_cell[k] = p_other[k] = 0.0;
-        if (!data[k]) continue;
+        const Cell c = find_cell(st, slice[k], other[k], v1[k], v2[k]);
+        x[k] = c.x, y[k] = c.y, p_cell[k] = c.p_cell, p_other[k] = c.p_other;
+        redo[k] = data[k] & !c.found;
+    }
+    // The few whose scans are longer, or whose cell coordinates need a nudge: Piecewise2D itself.
+    for (std::size_t k = 0; k < n; ++k) {
+        if (!redo[k]) continue;
         const Piecewise2D::Point p = v.slices[slice[k]].sample(v1[k], v2[k]);
         x[k] = p.x, y[k] = p.y, p_cell[k] = p.pdf, p_other[k] = v.slices[other[k]].density(p.row, p.col);
     }
@@ -153,14 +211,16 @@ struct Finish {
 
 // The kernel's two builds. The AVX2 one has no FMA, whose contraction would round differently from
 // draw(): both give draw()'s results to the bit.
-[[gnu::flatten]] void draw_lanes_sse2(const SamplerView& v, const detail::SinCosTable& table, const Vec3* wo,
-                                      const std::array<double, 2>* u, std::size_t n, HalfVectorSampler::Draws& out) {
-    draw_lanes(v, table, wo, u, n, out);
+[[gnu::flatten]] void draw_lanes_sse2(const SamplerView& v, const StackView& st, const detail::SinCosTable& table,
+                                      const Vec3* wo, const std::array<double, 2>* u, std::size_t n,
+                                      HalfVectorSampler::Draws& out) {
+    draw_lanes(v, st, table, wo, u, n, out);
 }
-[[gnu::flatten, gnu::target("avx2")]] void draw_lanes_avx2(const SamplerView& v, const detail::SinCosTable& table,
-                                                           const Vec3* wo, const std::array<double, 2>* u,
-                                                           std::size_t n, HalfVectorSampler::Draws& out) {
-    draw_lanes(v, table, wo, u, n, out);
+[[gnu::flatten, gnu::target("avx2")]] void draw_lanes_avx2(const SamplerView& v, const StackView& st,
+                                                           const detail::SinCosTable& table, const Vec3* wo,
+                                                           const std::array<double, 2>* u, std::size_t n,
+                                                           HalfVectorSampler::Draws& out) {
+    draw_lanes(v, st, table, wo, u, n, out);
 }
 
 }  // namespace
@@ -206,11 +266,21 @@ HalfVectorSampler::HalfVectorSampler(const Brdf& brdf, const HalfVectorSamplerOp
         }
         slices_[k] = Piecewise2D(weights, R, C);
     });
+    // draw_block indexes the stacked tables with ints.
+    if (static_cast<double>(K) * R * (C + 1) >= 0x1p31) throw ValueError("half-vector sampler: resolutions out of range");
+    const auto append = [](auto& to, auto from) { to.insert(to.end(), from.begin(), from.end()); };
+    for (const Piecewise2D& s : slices_) {
+        append(stacked_.marginal, s.marginal_cdf());
+        append(stacked_.conditional, s.conditional_cdf());
+        append(stacked_.density, s.densities());
+        append(stacked_.marginal_guide, s.marginal_guide());
+        append(stacked_.conditional_guide, s.conditional_guide());
+    }
 }
 
 std::size_t HalfVectorSampler::nbytes() const {
     std::size_t n = theta_o_.size() * sizeof(double);
-    for (const Piecewise2D& s : slices_) n += s.nbytes();
+    for (const Piecewise2D& s : slices_) n += 2 * s.nbytes();  // and stacked_'s copies
     return n;
 }
 
@@ -257,7 +327,11 @@ HalfVectorSampler::Draw HalfVectorSampler::draw(const Vec3& wo, double u1, doubl
 
 void HalfVectorSampler::draw_block(const Vec3* wo, const std::array<double, 2>* u, std::size_t n, Draws& out) const {
     const SamplerView v{slices_.data(), options_.cosine_share, theta_o_.back(), static_cast<int>(theta_o_.size())};
-    (detail::simd_level() == detail::Simd::Avx2Fma ? draw_lanes_avx2 : draw_lanes_sse2)(v, half_turn(), wo, u, n, out);
+    const StackView st{options_.n_theta_h,          options_.n_phi,          stacked_.marginal.data(),
+                       stacked_.conditional.data(), stacked_.density.data(), stacked_.marginal_guide.data(),
+                       stacked_.conditional_guide.data()};
+    (detail::simd_level() == detail::Simd::Avx2Fma ? draw_lanes_avx2 : draw_lanes_sse2)(v, st, half_turn(), wo, u, n,
+                                                                                        out);
     // The cosine share's draws one at a time: a twentieth of them, each with the full pdf() (libm's
     // sin and cos, atan2), which would not vectorise.
     for (std::size_t k = 0; k < n; ++k) {

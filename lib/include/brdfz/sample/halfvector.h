@@ -11,6 +11,7 @@
 
 #include <array>
 #include <cstddef>
+#include <cstdint>
 #include <vector>
 
 #include "brdfz/brdf.h"
@@ -77,6 +78,12 @@ private:
     HalfVectorSamplerOptions options_;
     std::vector<double> theta_o_;
     std::vector<Piecewise2D> slices_;
+    // Copies of the slices' tables end to end (Piecewise2D's accessors), so that draw_block's CDF
+    // searches across draws gather from one base whichever slice each draw uses.
+    struct Stacked {
+        std::vector<float> marginal, conditional, density;
+        std::vector<std::uint32_t> marginal_guide, conditional_guide;
+    } stacked_;
 };
 
 }  // namespace brdfz
