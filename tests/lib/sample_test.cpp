@@ -390,3 +390,11 @@ TEST_CASE("HalfVectorSampler::draw_block: each draw is draw()'s, in both builds"
         CHECK(half > count * 9 / 10);
     }
 }
+
+TEST_CASE("half-vector sampler: resolutions whose stacked tables exceed int indices are refused up front",
+          "[sample]") {
+    const AnalyticBrdf lambert("lambert", {0.5, 0.5, 0.5});
+    HalfVectorSamplerOptions o;
+    o.n_theta_o = 1024, o.n_theta_h = 4096, o.n_phi = 1024;  // each within its own bound: 4.3e9 CDF entries
+    CHECK_THROWS_AS(HalfVectorSampler(lambert, o), ValueError);
+}

@@ -159,8 +159,9 @@ struct Cell {
 // HalfVectorSampler::draw_block's data draws in passes over the block, each across draws: (1) placement;
 // (2) the cell searches (gathers from the stacked tables); (3) the half vector, wi and the pdf.
 // Cosine draws are left to the caller.
-[[gnu::always_inline]] inline void draw_lanes(const SamplerView& v, const StackView& st, const detail::SinCosTable& table,
-                                              const Vec3* wo, const std::array<double, 2>* u, std::size_t n,
+[[gnu::always_inline]] inline void draw_lanes(const SamplerView& v, const StackView& st,
+                                              const detail::SinCosTable& table, const Vec3* wo,
+                                              const std::array<double, 2>* u, std::size_t n,
                                               HalfVectorSampler::Draws& out) {
     constexpr std::size_t B = HalfVectorSampler::kBlock;
     // Arrays of numbers, not of structs, or the loops do not vectorise; flags as 64-bit integers,
@@ -170,7 +171,8 @@ struct Cell {
     std::int64_t upper[B], data[B];
     for (std::size_t k = 0; k < n; ++k) {
         const double u1 = u[k][0], u2 = u[k][1];
-        data[k] = (wo[k].z > 0.0) & (u1 >= v.share) & (u1 < 1.0) & (u2 >= 0.0) & (u2 < 1.0);  // can_draw, not cosine
+        // Brdf::can_draw, and not a cosine draw.
+        data[k] = (wo[k].z > 0.0) & (u1 >= v.share) & (u1 < 1.0) & (u2 >= 0.0) & (u2 < 1.0);
         const Placement pl = place(v, wo[k], u1, u2);
         sin_o[k] = pl.sin_o, t[k] = pl.t, v1[k] = pl.v1, v2[k] = pl.v2, sign[k] = pl.sign;
         slice[k] = pl.slice, other[k] = pl.other, upper[k] = pl.upper;
@@ -226,8 +228,9 @@ struct Cell {
 }  // namespace
 
 HalfVectorSampler::HalfVectorSampler(const Brdf& brdf, const HalfVectorSamplerOptions& o) : options_(o) {
+    // draw_block indexes the slices' stacked tables with ints.
     if (o.n_theta_o < 2 || o.n_theta_h < 1 || o.n_phi < 1 || o.n_theta_o > 1024 || o.n_theta_h > 4096 ||
-        o.n_phi > 4096)
+        o.n_phi > 4096 || static_cast<double>(o.n_theta_o) * o.n_theta_h * (o.n_phi + 1) >= 0x1p31)
         throw ValueError("half-vector sampler: resolutions out of range");
     if (!(o.cosine_share > 0.0 && o.cosine_share < 1.0))
         throw ValueError("half-vector sampler: cosine_share must be in (0, 1)");
@@ -266,8 +269,6 @@ HalfVectorSampler::HalfVectorSampler(const Brdf& brdf, const HalfVectorSamplerOp
         }
         slices_[k] = Piecewise2D(weights, R, C);
     });
-    // draw_block indexes the stacked tables with ints.
-    if (static_cast<double>(K) * R * (C + 1) >= 0x1p31) throw ValueError("half-vector sampler: resolutions out of range");
     const auto append = [](auto& to, auto from) { to.insert(to.end(), from.begin(), from.end()); };
     for (const Piecewise2D& s : slices_) {
         append(stacked_.marginal, s.marginal_cdf());
