@@ -5,6 +5,7 @@
 #include <cmath>
 #include <memory>
 #include <random>
+#include <tuple>
 #include <vector>
 
 #include "brdfz/albedo.h"
@@ -290,7 +291,7 @@ TEST_CASE("tabular sample: the weight from the draw's angles is eval's", "[sampl
 // The fused batch kernels of both table classes against their one-at-a-time path, with bad input mixed in.
 TEST_CASE("table sample_batch: each result is the one-at-a-time sample; bad input gives failed samples",
           "[sample][tabular][compact]") {
-    const TabularBrdf t = tabulated(0.05);
+    TabularBrdf t = tabulated(0.05);
     const Compressed u8 = compress(t, "tabular:res=45x45x90,dtype=u8log");
     const double nan = std::nan(""), inf = INFINITY;
     std::mt19937_64 rng(21);
@@ -309,10 +310,15 @@ TEST_CASE("table sample_batch: each result is the one-at-a-time sample; bad inpu
     us[8] = {nan, 0.5}, us[9] = {0.5, inf}, us[10] = {1.0, 0.5}, us[11] = {-0.1, 0.5};
     // The batch kernel is built twice (detail/simd.h), both without FMA: each gives sample()'s results.
     if (detail::simd_level() != detail::Simd::Avx2Fma) WARN("no AVX2 on this CPU: both runs use the SSE2 kernel");
-    for (const auto& [b, simd] : {std::pair{static_cast<const Brdf*>(&t), detail::Simd::Avx2Fma},
-                                  std::pair{static_cast<const Brdf*>(&t), detail::Simd::Sse2},
-                                  std::pair{static_cast<const Brdf*>(u8.brdf.get()), detail::Simd::Avx2Fma},
-                                  std::pair{static_cast<const Brdf*>(u8.brdf.get()), detail::Simd::Sse2}}) {
+    // The float32 table also with nearest lookup (the kernel's other branch).
+    for (const auto& [b, simd, lookup] :
+         {std::tuple{static_cast<const Brdf*>(&t), detail::Simd::Avx2Fma, Lookup::Linear},
+          std::tuple{static_cast<const Brdf*>(&t), detail::Simd::Sse2, Lookup::Linear},
+          std::tuple{static_cast<const Brdf*>(&t), detail::Simd::Avx2Fma, Lookup::Nearest},
+          std::tuple{static_cast<const Brdf*>(&t), detail::Simd::Sse2, Lookup::Nearest},
+          std::tuple{static_cast<const Brdf*>(u8.brdf.get()), detail::Simd::Avx2Fma, Lookup::Linear},
+          std::tuple{static_cast<const Brdf*>(u8.brdf.get()), detail::Simd::Sse2, Lookup::Linear}}) {
+        t.set_lookup(b == &t ? lookup : Lookup::Linear);
         INFO(b->describe() << (simd == detail::Simd::Sse2 ? ", SSE2 kernel" : ", AVX2 kernel"));
         std::vector<BrdfSample> out(count);
         detail::simd_cap = simd;
