@@ -5,7 +5,9 @@
 // sample. N random wo (uniform on the hemisphere) and u; the sampler is built before measuring.
 //   measured_sample: Brdf::sample(span), the whole sample including its weight
 //   measured_draw:   the sampler's own sample() (direction and pdf), one at a time
+//   measured_draw_block: the same draws in blocks (HalfVectorSampler::draw_block, as sample() draws)
 //   measured_eval:   Brdf::eval(span) at the drawn pairs (the weight's lookup alone)
+#include <algorithm>
 #include <array>
 #include <cmath>
 #include <cstdio>
@@ -28,6 +30,17 @@ extern "C" {
                                        const std::vector<std::array<double, 2>>& u, std::vector<BrdfSample>& out) {
     for (std::size_t k = 0; k < wo.size(); ++k) out[k] = s.sample(wo[k], u[k][0], u[k][1]);
     return out[0].pdf;
+}
+[[gnu::noinline]] double measured_draw_block(const HalfVectorSampler& s, const std::vector<Vec3>& wo,
+                                             const std::vector<std::array<double, 2>>& u) {
+    HalfVectorSampler::Draws block;
+    double check = 0.0;
+    for (std::size_t start = 0; start < wo.size(); start += HalfVectorSampler::kBlock) {
+        const std::size_t m = std::min(HalfVectorSampler::kBlock, wo.size() - start);
+        s.draw_block(wo.data() + start, u.data() + start, m, block);
+        check += block.pdf[0];
+    }
+    return check;
 }
 [[gnu::noinline]] double measured_eval(const Brdf& b, const std::vector<Vec3>& wi, const std::vector<Vec3>& wo,
                                        std::vector<Rgb>& f) {
@@ -62,6 +75,7 @@ int main(int argc, char** argv) {
     std::vector<Rgb> f(n);
     double check = measured_sample(*t, wo, u, out);
     check += measured_draw(sampler, wo, u, drawn);
+    check += measured_draw_block(sampler, wo, u);
     for (std::size_t k = 0; k < n; ++k) wi[k] = drawn[k].pdf > 0 ? drawn[k].wi : Vec3{0, 0, 1};
     check += measured_eval(*t, wi, wo, f);
     std::printf("%zu samples [%g]\n", n, check);

@@ -5,6 +5,7 @@
 #include <cmath>
 #include <memory>
 #include <random>
+#include <tuple>
 #include <vector>
 
 #include "brdfz/albedo.h"
@@ -16,6 +17,7 @@
 #include "brdfz/sample/piecewise2d.h"
 #include "brdfz/tabulate.h"
 #include "brdfz/formats/io.h"
+#include "detail/simd.h"
 #include "detail/table_sample.h"
 #include "sample_stats.h"
 #include "test_util.h"
@@ -308,7 +310,7 @@ TEST_CASE("tabular sample: the weight from the draw's angles is eval's", "[sampl
 // The fused batch kernels of both table classes against their one-at-a-time path, with bad input mixed in.
 TEST_CASE("table sample_batch: each result is the one-at-a-time sample; bad input gives failed samples",
           "[sample][tabular][compact]") {
-    const TabularBrdf t = tabulated(0.05);
+    TabularBrdf t = tabulated(0.05);
     const Compressed u8 = compress(t, "tabular:res=45x45x90,dtype=u8log");
     const double nan = std::nan(""), inf = INFINITY;
     std::mt19937_64 rng(21);
@@ -325,10 +327,22 @@ TEST_CASE("table sample_batch: each result is the one-at-a-time sample; bad inpu
     wo[3] = {nan, 0.0, 1.0}, wo[4] = {0.0, 0.0, nan}, wo[5] = {inf, 0.0, 1.0}, wo[6] = {0.0, 0.0, -1.0};
     wo[7] = {0.0, 0.0, 1.0}, us[7] = {0.5, 0.3};  // the pole (wo's azimuth undefined), a data draw
     us[8] = {nan, 0.5}, us[9] = {0.5, inf}, us[10] = {1.0, 0.5}, us[11] = {-0.1, 0.5};
-    for (const Brdf* b : {static_cast<const Brdf*>(&t), static_cast<const Brdf*>(u8.brdf.get())}) {
-        INFO(b->describe());
+    // The batch kernel is built twice (detail/simd.h), both without FMA: each gives sample()'s results.
+    if (detail::simd_level() != detail::Simd::Avx2Fma) WARN("no AVX2 on this CPU: both runs use the SSE2 kernel");
+    // The float32 table also with nearest lookup (the kernel's other branch).
+    for (const auto& [b, simd, lookup] :
+         {std::tuple{static_cast<const Brdf*>(&t), detail::Simd::Avx2Fma, Lookup::Linear},
+          std::tuple{static_cast<const Brdf*>(&t), detail::Simd::Sse2, Lookup::Linear},
+          std::tuple{static_cast<const Brdf*>(&t), detail::Simd::Avx2Fma, Lookup::Nearest},
+          std::tuple{static_cast<const Brdf*>(&t), detail::Simd::Sse2, Lookup::Nearest},
+          std::tuple{static_cast<const Brdf*>(u8.brdf.get()), detail::Simd::Avx2Fma, Lookup::Linear},
+          std::tuple{static_cast<const Brdf*>(u8.brdf.get()), detail::Simd::Sse2, Lookup::Linear}}) {
+        t.set_lookup(b == &t ? lookup : Lookup::Linear);
+        INFO(b->describe() << (simd == detail::Simd::Sse2 ? ", SSE2 kernel" : ", AVX2 kernel"));
         std::vector<BrdfSample> out(count);
+        detail::simd_cap = simd;
         b->sample(wo, us, out);
+        detail::simd_cap = detail::Simd::Avx2Fma;
         for (std::size_t k = 0; k < count; ++k) {
             INFO(k);
             const BrdfSample s = b->sample(wo[k], us[k][0], us[k][1]);
@@ -337,6 +351,8 @@ TEST_CASE("table sample_batch: each result is the one-at-a-time sample; bad inpu
             if (k == 4 || k == 6 || (k >= 8 && k <= 11)) REQUIRE(s.pdf == 0.0);  // outside sample()'s domain
             if (s.pdf == 0.0) continue;
             REQUIRE(out[k].wi.x == s.wi.x);
+            REQUIRE(out[k].wi.y == s.wi.y);
+            REQUIRE(out[k].wi.z == s.wi.z);
             for (int c = 0; c < 3; ++c) {
                 REQUIRE(std::isfinite(s.weight[c]));
                 REQUIRE(out[k].weight[c] == s.weight[c]);
@@ -344,4 +360,66 @@ TEST_CASE("table sample_batch: each result is the one-at-a-time sample; bad inpu
         }
         CHECK(out[7].pdf > 0.0);
     }
+}
+
+// draw_block searches the CDFs across draws in two steps of the guided scan and hands longer scans
+// (and cell coordinates needing a nudge) to Piecewise2D::sample: every draw must still be draw()'s,
+// angles included, in both builds. A near-specular table has the steepest CDFs (the longest scans).
+TEST_CASE("HalfVectorSampler::draw_block: each draw is draw()'s, in both builds", "[sample][tabular]") {
+    const TabularBrdf t = tabulated(0.02);
+    const HalfVectorSampler& sampler = t.sampler();
+    std::mt19937_64 rng(31);
+    std::uniform_real_distribution<double> u(0, 1);
+    std::normal_distribution<double> nd;
+    const std::size_t count = 20000;
+    std::vector<Vec3> wo(count);
+    std::vector<std::array<double, 2>> us(count);
+    for (std::size_t k = 0; k < count; ++k) {
+        wo[k] = normalize({nd(rng), nd(rng), nd(rng)});
+        wo[k].z = std::fabs(wo[k].z);
+        us[k] = {u(rng), u(rng)};
+    }
+    us[1] = {0.999999999, 0.9999999999};  // u rounding to 1 in float: the scans' last intervals
+    us[2] = {0.5, INFINITY}, us[3] = {2.0, 0.5}, wo[4] = {0.0, 0.0, -1.0};
+    for (detail::Simd simd : {detail::Simd::Avx2Fma, detail::Simd::Sse2}) {
+        INFO((simd == detail::Simd::Sse2 ? "SSE2" : "AVX2") << " build");
+        std::size_t half = 0;
+        HalfVectorSampler::Draws block;
+        for (std::size_t start = 0; start < count; start += HalfVectorSampler::kBlock) {
+            const std::size_t m = std::min(HalfVectorSampler::kBlock, count - start);
+            detail::simd_cap = simd;
+            sampler.draw_block(wo.data() + start, us.data() + start, m, block);
+            detail::simd_cap = detail::Simd::Avx2Fma;
+            for (std::size_t i = 0; i < m; ++i) {
+                const std::size_t k = start + i;
+                INFO(k);
+                const HalfVectorSampler::Draw d = Brdf::can_draw(wo[k], us[k][0], us[k][1])
+                                                      ? sampler.draw(wo[k], us[k][0], us[k][1])
+                                                      : HalfVectorSampler::Draw{};
+                REQUIRE(block.pdf[i] == d.sample.pdf);
+                if (d.sample.pdf == 0.0) continue;
+                REQUIRE(block.wi_x[i] == d.sample.wi.x);
+                REQUIRE(block.wi_y[i] == d.sample.wi.y);
+                REQUIRE(block.wi_z[i] == d.sample.wi.z);
+                REQUIRE(block.half[i] == d.half);
+                if (!d.half) continue;
+                ++half;
+                REQUIRE(block.sin_h[i] == d.sin_h);
+                REQUIRE(block.cos_h[i] == d.cos_h);
+                REQUIRE(block.sin_p[i] == d.sin_p);
+                REQUIRE(block.cos_p[i] == d.cos_p);
+                REQUIRE(block.sin_o[i] == d.sin_o);
+                REQUIRE(block.cos_o[i] == d.cos_o);
+            }
+        }
+        CHECK(half > count * 9 / 10);
+    }
+}
+
+TEST_CASE("half-vector sampler: resolutions whose stacked tables exceed int indices are refused up front",
+          "[sample]") {
+    const AnalyticBrdf lambert("lambert", {0.5, 0.5, 0.5});
+    HalfVectorSamplerOptions o;
+    o.n_theta_o = 1024, o.n_theta_h = 4096, o.n_phi = 1024;  // each within its own bound: 4.3e9 CDF entries
+    CHECK_THROWS_AS(HalfVectorSampler(lambert, o), ValueError);
 }

@@ -12,6 +12,7 @@
 #include <numbers>
 
 #include "brdfz/sample/halfvector.h"
+#include "detail/simd.h"
 #include "detail/table_lookup.h"
 
 namespace brdfz::detail {
@@ -67,57 +68,101 @@ BrdfSample sample_table(const GridSpec& g, const Values& values, Lookup lookup, 
     return s;
 }
 
-// Brdf::sample_batch: blocks of draws in passes, as eval_table_batch does for pairs: (1) the draws,
-// (2) their bin coordinates, branch-free so that the loop vectorises, (3) bins or corners, prefetching
-// the table lines, (4) the table reads and the weights. Each result is sample_table's, bit for bit.
-template <typename Values>
-void sample_table_batch(const GridSpec& g, const Values& values, Lookup lookup, const HalfVectorSampler& sampler,
-                        const Vec3* wo, const std::array<double, 2>* u, BrdfSample* out, std::size_t n) {
-    constexpr std::size_t kBlock = 64;
-    // The angles as arrays of doubles (not Draw structs), or the coordinate loop does not vectorise.
-    double sin_h[kBlock], cos_h[kBlock], sin_p[kBlock], cos_p[kBlock], sin_o[kBlock], cos_o[kBlock];
-    BinCoords coords[kBlock];
+// Brdf::sample_batch: blocks of draws in passes, as eval_table_batch does for pairs: (1) the draws
+// (HalfVectorSampler::draw_block), (2) their bin coordinates, (3) bins or corners, (4) prefetching
+// the table lines, (5) the table reads and the weights. The passes other than the table reads are
+// branch-free over arrays of numbers, so that they vectorise. Each result is sample_table's, bit for bit.
+template <bool Wide, typename Values>
+[[gnu::always_inline]] inline void sample_table_passes(const GridSpec& g, const Values& values, Lookup lookup,
+                                                       const HalfVectorSampler& sampler, const Vec3* wo,
+                                                       const std::array<double, 2>* u, BrdfSample* out,
+                                                       std::size_t n) {
+    constexpr std::size_t kBlock = HalfVectorSampler::kBlock;
+    HalfVectorSampler::Draws d;
+    double uh[kBlock], ud[kBlock], up[kBlock];
+    // Linear lookup's corners (Corners) as arrays.
+    int h0[kBlock], h1[kBlock], d0[kBlock], d1[kBlock], p0[kBlock], p1[kBlock];
+    double ht[kBlock], dt[kBlock], pt[kBlock];
     std::size_t bins[kBlock];
-    Corners corners[kBlock];
-    bool ok[kBlock], half[kBlock];
+    bool ok[kBlock];
+    const double off = g.sample_offset();
     for (std::size_t start = 0; start < n; start += kBlock) {
         const std::size_t m = std::min(kBlock, n - start);
         BrdfSample* s = out + start;
         const Vec3* w = wo + start;
+        sampler.draw_block(w, u + start, m, d);
         for (std::size_t k = 0; k < m; ++k) {
-            const std::array<double, 2>& v = u[start + k];
-            const HalfVectorSampler::Draw d =
-                Brdf::can_draw(w[k], v[0], v[1]) ? sampler.draw(w[k], v[0], v[1]) : HalfVectorSampler::Draw{};
-            ok[k] = Brdf::usable(d.sample);
-            half[k] = d.half;
-            s[k] = ok[k] ? d.sample : BrdfSample{};
-            sin_h[k] = d.sin_h, cos_h[k] = d.cos_h, sin_p[k] = d.sin_p, cos_p[k] = d.cos_p;
-            sin_o[k] = d.sin_o, cos_o[k] = d.cos_o;
+            s[k] = {{d.wi_x[k], d.wi_y[k], d.wi_z[k]}, d.pdf[k], {}};
+            ok[k] = Brdf::usable(s[k]);
+            if (!ok[k]) s[k] = {};
         }
         // Every draw's angles, set or not (unset ones are zeros, whose coordinates are not used).
+        for (std::size_t k = 0; k < m; ++k) {
+            const BinCoords c =
+                drawn_bin_coords(g, d.sin_h[k], d.cos_h[k], d.sin_p[k], d.cos_p[k], d.sin_o[k], d.cos_o[k]);
+            uh[k] = c.uh, ud[k] = c.ud, up[k] = c.up;
+        }
         for (std::size_t k = 0; k < m; ++k)
-            coords[k] = drawn_bin_coords(g, sin_h[k], cos_h[k], sin_p[k], cos_p[k], sin_o[k], cos_o[k]);
-        for (std::size_t k = 0; k < m; ++k)
-            if (ok[k] && !half[k]) coords[k] = fast_bin_coords(g, s[k].wi, w[k]);
+            if (ok[k] && !d.half[k]) {
+                const BinCoords c = fast_bin_coords(g, s[k].wi, w[k]);
+                uh[k] = c.uh, ud[k] = c.ud, up[k] = c.up;
+            }
         if (lookup == Lookup::Nearest) {
             for (std::size_t k = 0; k < m; ++k) {
                 if (!ok[k]) continue;
-                bins[k] = nearest_bin(g, coords[k], s[k].wi, w[k]);
+                bins[k] = nearest_bin(g, {uh[k], ud[k], up[k]}, s[k].wi, w[k]);
                 __builtin_prefetch(values.address(bins[k]));
             }
             for (std::size_t k = 0; k < m; ++k)
                 if (ok[k]) set_weight(s[k], read_nearest(values, bins[k]));
-        } else {
-            for (std::size_t k = 0; k < m; ++k) {
-                if (!ok[k]) continue;
-                const Corners& c = corners[k] = linear_corners(g, coords[k], s[k].wi, w[k]);
-                for (int ih : {c.h.i0, c.h.i1})
-                    for (int id : {c.d.i0, c.d.i1}) __builtin_prefetch(values.address(g.index(ih, id, c.p.i0)));
+            continue;
+        }
+        // linear_corners without its fallback, for every draw; then the fallback where φd was flagged.
+        for (std::size_t k = 0; k < m; ++k) {
+            const Span h = clamped_span(uh[k] - off, g.n_theta_h), dd = clamped_span(ud[k] - off, g.n_theta_d),
+                       p = periodic_span(up[k] - off, g.n_phi_d);
+            h0[k] = h.i0, h1[k] = h.i1, ht[k] = h.t, d0[k] = dd.i0, d1[k] = dd.i1, dt[k] = dd.t;
+            p0[k] = p.i0, p1[k] = p.i1, pt[k] = p.t;
+        }
+        for (std::size_t k = 0; k < m; ++k)
+            if (ok[k] && !(up[k] <= g.n_phi_d)) [[unlikely]] {  // kIllConditioned or NaN
+                const Corners c = linear_corners(g, {uh[k], ud[k], up[k]}, s[k].wi, w[k]);
+                h0[k] = c.h.i0, h1[k] = c.h.i1, ht[k] = c.h.t, d0[k] = c.d.i0, d1[k] = c.d.i1, dt[k] = c.d.t;
+                p0[k] = c.p.i0, p1[k] = c.p.i1, pt[k] = c.p.t;
             }
-            for (std::size_t k = 0; k < m; ++k)
-                if (ok[k]) set_weight(s[k], read_linear(g, values, corners[k]));
+        for (std::size_t k = 0; k < m; ++k) {
+            if (!ok[k]) continue;
+            for (int ih : {h0[k], h1[k]})
+                for (int id : {d0[k], d1[k]}) __builtin_prefetch(values.address(g.index(ih, id, p0[k])));
+        }
+        for (std::size_t k = 0; k < m; ++k) {
+            if (!ok[k]) continue;
+            const Corners c{{h0[k], h1[k], ht[k]}, {d0[k], d1[k], dt[k]}, {p0[k], p1[k], pt[k]}};
+            set_weight(s[k], read_linear<Wide>(g, values, c));
         }
     }
+}
+
+// The kernel's two builds; the AVX2 one without FMA, so that both give sample_table's results to the bit.
+template <typename Values>
+[[gnu::flatten]] void sample_table_batch_sse2(const GridSpec& g, const Values& values, Lookup lookup,
+                                              const HalfVectorSampler& sampler, const Vec3* wo,
+                                              const std::array<double, 2>* u, BrdfSample* out, std::size_t n) {
+    sample_table_passes<false>(g, values, lookup, sampler, wo, u, out, n);
+}
+template <typename Values>
+[[gnu::flatten, gnu::target("avx2")]] void sample_table_batch_avx2(const GridSpec& g, const Values& values,
+                                                                   Lookup lookup, const HalfVectorSampler& sampler,
+                                                                   const Vec3* wo, const std::array<double, 2>* u,
+                                                                   BrdfSample* out, std::size_t n) {
+    sample_table_passes<true>(g, values, lookup, sampler, wo, u, out, n);
+}
+
+template <typename Values>
+void sample_table_batch(const GridSpec& g, const Values& values, Lookup lookup, const HalfVectorSampler& sampler,
+                        const Vec3* wo, const std::array<double, 2>* u, BrdfSample* out, std::size_t n) {
+    (simd_level() == Simd::Avx2Fma ? sample_table_batch_avx2<Values> : sample_table_batch_sse2<Values>)(
+        g, values, lookup, sampler, wo, u, out, n);
 }
 
 }  // namespace brdfz::detail

@@ -1,6 +1,9 @@
 #include "brdfz/sample/halfvector.h"
 
+#include <algorithm>
 #include <cmath>
+#include <cstdint>
+#include <limits>
 #include <numbers>
 
 #include "brdfz/coords.h"
@@ -8,6 +11,7 @@
 #include "detail/azimuth.h"
 #include "detail/fast_math.h"
 #include "detail/grid_sweep.h"
+#include "detail/simd.h"
 
 namespace brdfz {
 namespace {
@@ -34,11 +38,199 @@ double view_elevation(double sin_o, const Vec3& wo) { return detail::fast_half_t
 
 constexpr double kBelowOne = 0x1.fffffffffffffp-1;  // the largest double below 1
 
+// The two slices around wo's elevation: the lower one and the weight of the upper. Comparisons, not
+// std::fmin/fmax (out-of-line libm calls); NaN goes to slice 0.
+struct SliceSpan {
+    int k0;
+    double t;
+};
+[[gnu::always_inline]] inline SliceSpan slice_span(double theta_o, double theta_max, int K) {
+    const double scaled = theta_o / theta_max * (K - 1);
+    const double pos = scaled > 0.0 ? (scaled < K - 1.0 ? scaled : K - 1.0) : 0.0;
+    const int k0 = std::min(static_cast<int>(pos), K - 2);
+    return {k0, pos - k0};
+}
+
+// What a data draw needs before its cell search, and what it needs after: draw() and the block kernel
+// run these same functions, one draw at a time or across a block, so their results agree bit for bit.
+struct SamplerView {
+    const Piecewise2D* slices;
+    double share, theta_max;
+    int K;
+};
+
+// The slices' stacked tables (HalfVectorSampler::stacked_), each slice rows × cols cells.
+struct StackView {
+    int rows, cols;
+    const float *marginal, *conditional, *density;
+    const std::uint32_t *marginal_guide, *conditional_guide;
+};
+
+struct Placement {
+    double sin_o, t, v1, v2, sign;  // v1, v2: the slice's u, v1 below 1
+    int slice, other;
+    bool upper;
+};
+
+[[gnu::always_inline]] inline Placement place(const SamplerView& v, const Vec3& wo, double u1, double u2) {
+    double v1 = (u1 - v.share) / (1.0 - v.share);
+    const double sin_o = std::sqrt(wo.x * wo.x + wo.y * wo.y);
+    const SliceSpan sp = slice_span(view_elevation(sin_o, wo), v.theta_max, v.K);
+    const bool upper = !(v1 < 1.0 - sp.t);
+    v1 = upper ? (v1 - (1.0 - sp.t)) / sp.t : v1 / (1.0 - sp.t);
+    // One bit of u2 picks the side of wo's plane; the rest drives the column.
+    const double sign = u2 < 0.5 ? 1.0 : -1.0;
+    const double v2 = u2 < 0.5 ? 2.0 * u2 : 2.0 * u2 - 1.0;
+    return {sin_o, sp.t, v1 < kBelowOne ? v1 : kBelowOne, v2, sign, upper ? sp.k0 + 1 : sp.k0,
+            upper ? sp.k0 : sp.k0 + 1, upper};
+}
+
+struct Finish {
+    Vec3 wi;
+    double pdf, sin_h, cos_h, sin_p, cos_p;
+    bool ok;  // wi above the horizon, with a finite positive density
+};
+
+// From the drawn cell point (x, y), its density and the other slice's density of the same cell.
+[[gnu::always_inline]] inline Finish finish(const SamplerView& v, const detail::SinCosTable& table, const Vec3& wo,
+                                            const Placement& pl, double x, double y, double p_cell, double p_other) {
+    // half_at(x, y, sign), with table-based sines and cosines (sinθh is also the Jacobian's).
+    const detail::SinCosTable::SinCos th = table(kPi / 2.0 * y * y), ph = table(kPi * x);
+    const double sin_p = pl.sign * ph.s;
+    const Vec3 h = Azimuth(wo, pl.sin_o).to_world({th.s * ph.c, th.s * sin_p, th.c});
+    const double cos_d = dot(wo, h);
+    const Vec3 wi = (2.0 * cos_d) * h - wo;  // reflect(wo, h)
+    // The pdf from what is known here (the cell, θh, h) rather than by inverting wi again: the same
+    // value pdf(wo, wi) computes, without its atan2 and elevation calls. Both slices share the grid,
+    // so the other slice's density is that of the same cell.
+    const double t = pl.t;
+    const double p_xy = pl.upper ? (1.0 - t) * p_other + t * p_cell : (1.0 - t) * p_cell + t * p_other;
+    const double jac = 4.0 * cos_d * 2.0 * kPi * kPi * y * th.s;
+    const double data = p_xy / jac;
+    const bool ok = (wi.z > 0.0) & (std::fabs(data) < std::numeric_limits<double>::infinity()) & (data > 0.0);
+    return {wi, v.share * wi.z / kPi + (1.0 - v.share) * data, th.s, th.c, sin_p, ph.c, ok};
+}
+
+// Piecewise2D::sample's CDF search (find_interval) from the guide entry, in a fixed two steps of its
+// scan (it takes about one on average), on `cdf` from index `base`: the interval, and in `found`
+// whether it is find_interval's. It is when the scan has ended: then cdf[i] <= u < cdf[i + 1], so the
+// interval is not empty either. Every index stays within the tables for any u, NaN or inf. Indices are
+// ints (the stacked tables' sizes are checked), which the gathers need.
+[[gnu::always_inline]] inline int guided_interval(const float* cdf, int base, const std::uint32_t* guide,
+                                                  int guide_base, int n, double u, bool& found) {
+    const float x = static_cast<float>(u);
+    // x is at most 1 for a data draw; the bound keeps the bucket of other lanes (u2 = inf) in range.
+    const int j = std::min(static_cast<int>(x > 0.0f ? std::min(static_cast<double>(x), 1.0) * n : 0.0), n - 1);
+    int i = static_cast<int>(guide[guide_base + j]);
+    for (int step = 0; step < 2; ++step) i += (i < n - 1) & (cdf[base + i + 1] <= x);
+    found = cdf[base + i + 1] > x;
+    return i;
+}
+
+// Piecewise2D's cell_coord, (i + f) / n, and whether it needs no nudge to lie in cell i.
+[[gnu::always_inline]] inline double cell_coord(int i, int n, double f, bool& found) {
+    const double v = (i + f) / n;
+    found = !(v * n >= i + 1.0) & !(v * n < i);
+    return v;
+}
+
+// Piecewise2D::sample(u1, u2) on a slice's stacked tables, with the other slice's density of the cell:
+// the same operations (float differences of CDF entries included), so when `found` the same results.
+struct Cell {
+    double x, y, p_cell, p_other;
+    bool found;
+};
+[[gnu::always_inline]] inline Cell find_cell(const StackView& v, int slice, int other, double u1, double u2) {
+    const int R = v.rows, C = v.cols;
+    bool found_r, found_c, found_x, found_y;
+    const int mb = slice * (R + 1);
+    const int r = guided_interval(v.marginal, mb, v.marginal_guide, slice * R, R, u1, found_r);
+    const float w_r = v.marginal[mb + r + 1] - v.marginal[mb + r];
+    const double fy = std::clamp((u1 - v.marginal[mb + r]) / w_r, 0.0, 1.0);
+    const int row = slice * R + r, cb = row * (C + 1);
+    const int c = guided_interval(v.conditional, cb, v.conditional_guide, row * C, C, u2, found_c);
+    const float w_c = v.conditional[cb + c + 1] - v.conditional[cb + c];
+    const double fx = std::clamp((u2 - v.conditional[cb + c]) / w_c, 0.0, 1.0);
+    const double x = cell_coord(c, C, fx, found_x), y = cell_coord(r, R, fy, found_y);
+    return {x, y, v.density[row * C + c], v.density[(other * R + r) * C + c],
+            static_cast<bool>(found_r & found_c & found_x & found_y)};
+}
+
+// HalfVectorSampler::draw_block's data draws in passes over the block, each across draws: (1) placement;
+// (2) the cell searches (gathers from the stacked tables); (3) the half vector, wi and the pdf.
+// Cosine draws are left to the caller.
+[[gnu::always_inline]] inline void draw_lanes(const SamplerView& v, const StackView& st,
+                                              const detail::SinCosTable& table, const Vec3* wo,
+                                              const std::array<double, 2>* u, std::size_t n,
+                                              HalfVectorSampler::Draws& out) {
+    constexpr std::size_t B = HalfVectorSampler::kBlock;
+    // Arrays of numbers, not of structs, or the loops do not vectorise; flags as 64-bit integers,
+    // the doubles' width (a select on bytes between doubles does not vectorise).
+    double sin_o[B], t[B], v1[B], v2[B], sign[B], x[B], y[B], p_cell[B], p_other[B];
+    int slice[B], other[B];
+    std::int64_t upper[B], data[B];
+    for (std::size_t k = 0; k < n; ++k) {
+        const double u1 = u[k][0], u2 = u[k][1];
+        // Brdf::can_draw, and not a cosine draw.
+        data[k] = (wo[k].z > 0.0) & (u1 >= v.share) & (u1 < 1.0) & (u2 >= 0.0) & (u2 < 1.0);
+        const Placement pl = place(v, wo[k], u1, u2);
+        sin_o[k] = pl.sin_o, t[k] = pl.t, v1[k] = pl.v1, v2[k] = pl.v2, sign[k] = pl.sign;
+        slice[k] = pl.slice, other[k] = pl.other, upper[k] = pl.upper;
+    }
+    std::int64_t redo[B];
+    for (std::size_t k = 0; k < n; ++k) {
+        const Cell c = find_cell(st, slice[k], other[k], v1[k], v2[k]);
+        x[k] = c.x, y[k] = c.y, p_cell[k] = c.p_cell, p_other[k] = c.p_other;
+        redo[k] = data[k] & !c.found;
+    }
+    // The few whose scans are longer, or whose cell coordinates need a nudge: Piecewise2D itself.
+    for (std::size_t k = 0; k < n; ++k) {
+        if (!redo[k]) continue;
+        const Piecewise2D::Point p = v.slices[slice[k]].sample(v1[k], v2[k]);
+        x[k] = p.x, y[k] = p.y, p_cell[k] = p.pdf, p_other[k] = v.slices[other[k]].density(p.row, p.col);
+    }
+    // The results into local arrays first: the compiler cannot rule out that `out` overlaps the sine
+    // table it gathers from, and then does not vectorise.
+    double wx[B], wy[B], wz[B], pdf[B], sh[B], ch[B], sp[B], cp[B], co[B];
+    std::int64_t ok[B];
+    for (std::size_t k = 0; k < n; ++k) {
+        const Placement pl{sin_o[k], t[k], v1[k], v2[k], sign[k], slice[k], other[k], upper[k] != 0};
+        const Finish f = finish(v, table, wo[k], pl, x[k], y[k], p_cell[k], p_other[k]);
+        ok[k] = data[k] & f.ok;
+        wx[k] = f.wi.x, wy[k] = f.wi.y, wz[k] = f.wi.z, pdf[k] = f.pdf;
+        sh[k] = f.sin_h, ch[k] = f.cos_h, sp[k] = f.sin_p, cp[k] = f.cos_p, co[k] = wo[k].z;
+    }
+    for (std::size_t k = 0; k < n; ++k) {
+        const bool o = ok[k] != 0;
+        out.wi_x[k] = o ? wx[k] : 0.0, out.wi_y[k] = o ? wy[k] : 0.0, out.wi_z[k] = o ? wz[k] : 0.0;
+        out.pdf[k] = o ? pdf[k] : 0.0;
+        out.half[k] = o;
+        out.sin_h[k] = o ? sh[k] : 0.0, out.cos_h[k] = o ? ch[k] : 0.0;
+        out.sin_p[k] = o ? sp[k] : 0.0, out.cos_p[k] = o ? cp[k] : 0.0;
+        out.sin_o[k] = o ? sin_o[k] : 0.0, out.cos_o[k] = o ? co[k] : 0.0;
+    }
+}
+
+// The kernel's two builds. The AVX2 one has no FMA, whose contraction would round differently from
+// draw(): both give draw()'s results to the bit.
+[[gnu::flatten]] void draw_lanes_sse2(const SamplerView& v, const StackView& st, const detail::SinCosTable& table,
+                                      const Vec3* wo, const std::array<double, 2>* u, std::size_t n,
+                                      HalfVectorSampler::Draws& out) {
+    draw_lanes(v, st, table, wo, u, n, out);
+}
+[[gnu::flatten, gnu::target("avx2")]] void draw_lanes_avx2(const SamplerView& v, const StackView& st,
+                                                           const detail::SinCosTable& table, const Vec3* wo,
+                                                           const std::array<double, 2>* u, std::size_t n,
+                                                           HalfVectorSampler::Draws& out) {
+    draw_lanes(v, st, table, wo, u, n, out);
+}
+
 }  // namespace
 
 HalfVectorSampler::HalfVectorSampler(const Brdf& brdf, const HalfVectorSamplerOptions& o) : options_(o) {
+    // draw_block indexes the slices' stacked tables with ints.
     if (o.n_theta_o < 2 || o.n_theta_h < 1 || o.n_phi < 1 || o.n_theta_o > 1024 || o.n_theta_h > 4096 ||
-        o.n_phi > 4096)
+        o.n_phi > 4096 || static_cast<double>(o.n_theta_o) * o.n_theta_h * (o.n_phi + 1) >= 0x1p31)
         throw ValueError("half-vector sampler: resolutions out of range");
     if (!(o.cosine_share > 0.0 && o.cosine_share < 1.0))
         throw ValueError("half-vector sampler: cosine_share must be in (0, 1)");
@@ -77,21 +269,26 @@ HalfVectorSampler::HalfVectorSampler(const Brdf& brdf, const HalfVectorSamplerOp
         }
         slices_[k] = Piecewise2D(weights, R, C);
     });
+    const auto append = [](auto& to, auto from) { to.insert(to.end(), from.begin(), from.end()); };
+    for (const Piecewise2D& s : slices_) {
+        append(stacked_.marginal, s.marginal_cdf());
+        append(stacked_.conditional, s.conditional_cdf());
+        append(stacked_.density, s.densities());
+        append(stacked_.marginal_guide, s.marginal_guide());
+        append(stacked_.conditional_guide, s.conditional_guide());
+    }
 }
 
 std::size_t HalfVectorSampler::nbytes() const {
     std::size_t n = theta_o_.size() * sizeof(double);
-    for (const Piecewise2D& s : slices_) n += s.nbytes();
+    for (const Piecewise2D& s : slices_) n += 2 * s.nbytes();  // and stacked_'s copies
     return n;
 }
 
 HalfVectorSampler::SlicePair HalfVectorSampler::slices_for(double theta_o) const {
     const int K = static_cast<int>(theta_o_.size());
-    // Comparisons, not std::fmin/fmax (out-of-line libm calls); NaN goes to slice 0.
-    const double scaled = theta_o / theta_o_[K - 1] * (K - 1);
-    const double pos = scaled > 0.0 ? (scaled < K - 1.0 ? scaled : K - 1.0) : 0.0;
-    const int k0 = std::min(static_cast<int>(pos), K - 2);
-    return {k0, k0 + 1, pos - k0};
+    const SliceSpan sp = slice_span(theta_o, theta_o_[K - 1], K);
+    return {sp.k0, sp.k0 + 1, sp.t};
 }
 
 double HalfVectorSampler::data_pdf(const Vec3& wo, const Vec3& wi) const {
@@ -121,32 +318,30 @@ HalfVectorSampler::Draw HalfVectorSampler::draw(const Vec3& wo, double u1, doubl
         const Vec3 wi{r * std::cos(phi), r * std::sin(phi), std::sqrt(std::fmax(0.0, 1.0 - v))};
         return wi.z > 0.0 ? Draw{{wi, pdf(wo, wi), {}}} : Draw{};
     }
-    double v1 = (u1 - share) / (1.0 - share);
-    const double sin_o = std::sqrt(wo.x * wo.x + wo.y * wo.y);
-    const SlicePair sp = slices_for(view_elevation(sin_o, wo));
-    const bool upper = !(v1 < 1.0 - sp.t);
-    v1 = upper ? (v1 - (1.0 - sp.t)) / sp.t : v1 / (1.0 - sp.t);
-    // One bit of u2 picks the side of wo's plane; the rest drives the column.
-    const double sign = u2 < 0.5 ? 1.0 : -1.0;
-    const double v2 = u2 < 0.5 ? 2.0 * u2 : 2.0 * u2 - 1.0;
-    const Piecewise2D::Point p = slices_[upper ? sp.k1 : sp.k0].sample(v1 < kBelowOne ? v1 : kBelowOne, v2);
-    // half_at(p.x, p.y, sign), with table-based sines and cosines (sinθh is also the Jacobian's).
-    const detail::SinCosTable& table = half_turn();
-    const detail::SinCosTable::SinCos th = table(kPi / 2.0 * p.y * p.y), ph = table(kPi * p.x);
-    const double sin_p = sign * ph.s;
-    const Vec3 h = Azimuth(wo, sin_o).to_world({th.s * ph.c, th.s * sin_p, th.c});
-    const double cos_d = dot(wo, h);
-    const Vec3 wi = (2.0 * cos_d) * h - wo;  // reflect(wo, h)
-    if (!(wi.z > 0.0)) return {};
-    // The pdf from what is known here (the cell, θh, h) rather than by inverting wi again: the same
-    // value pdf(wo, wi) computes, without its atan2 and elevation calls. Both slices share the grid,
-    // so the other slice's density is that of the same cell.
-    const double p_other = slices_[upper ? sp.k0 : sp.k1].density(p.row, p.col);
-    const double p_xy = upper ? (1.0 - sp.t) * p_other + sp.t * p.pdf : (1.0 - sp.t) * p.pdf + sp.t * p_other;
-    const double jac = 4.0 * cos_d * 2.0 * kPi * kPi * p.y * th.s;
-    const double data = p_xy / jac;
-    if (!(std::isfinite(data) && data > 0.0)) return {};
-    return {{wi, share * wi.z / kPi + (1.0 - share) * data, {}}, true, th.s, th.c, sin_p, ph.c, sin_o, wo.z};
+    const SamplerView v{slices_.data(), share, theta_o_.back(), static_cast<int>(theta_o_.size())};
+    const Placement pl = place(v, wo, u1, u2);
+    const Piecewise2D::Point p = slices_[pl.slice].sample(pl.v1, pl.v2);
+    const Finish f = finish(v, half_turn(), wo, pl, p.x, p.y, p.pdf, slices_[pl.other].density(p.row, p.col));
+    if (!f.ok) return {};
+    return {{f.wi, f.pdf, {}}, true, f.sin_h, f.cos_h, f.sin_p, f.cos_p, pl.sin_o, wo.z};
+}
+
+void HalfVectorSampler::draw_block(const Vec3* wo, const std::array<double, 2>* u, std::size_t n, Draws& out) const {
+    const SamplerView v{slices_.data(), options_.cosine_share, theta_o_.back(), static_cast<int>(theta_o_.size())};
+    const StackView st{options_.n_theta_h,          options_.n_phi,          stacked_.marginal.data(),
+                       stacked_.conditional.data(), stacked_.density.data(), stacked_.marginal_guide.data(),
+                       stacked_.conditional_guide.data()};
+    (detail::simd_level() == detail::Simd::Avx2Fma ? draw_lanes_avx2 : draw_lanes_sse2)(v, st, half_turn(), wo, u, n,
+                                                                                        out);
+    // The cosine share's draws one at a time: a twentieth of them, each with the full pdf() (libm's
+    // sin and cos, atan2), which would not vectorise.
+    for (std::size_t k = 0; k < n; ++k) {
+        if (!(Brdf::can_draw(wo[k], u[k][0], u[k][1]) && u[k][0] < v.share)) continue;
+        const Draw d = draw(wo[k], u[k][0], u[k][1]);
+        out.wi_x[k] = d.sample.wi.x, out.wi_y[k] = d.sample.wi.y, out.wi_z[k] = d.sample.wi.z;
+        out.pdf[k] = d.sample.pdf;
+        out.half[k] = false;
+    }
 }
 
 }  // namespace brdfz

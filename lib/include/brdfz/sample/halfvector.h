@@ -9,6 +9,9 @@
 // small share of cosine-weighted sampling so that the pdf is positive wherever f·cos might be.
 #pragma once
 
+#include <array>
+#include <cstddef>
+#include <cstdint>
 #include <vector>
 
 #include "brdfz/brdf.h"
@@ -46,6 +49,18 @@ public:
         double sin_h = 0, cos_h = 0, sin_p = 0, cos_p = 0, sin_o = 0, cos_o = 0;
     };
     Draw draw(const Vec3& wo, double u1, double u2) const;
+
+    // Up to kBlock draws at once, as arrays (the table kernel's passes read them so), each draw()'s bit
+    // for bit: the same operations per draw, run across draws in vector registers (SSE2, or AVX2
+    // without FMA contraction where the CPU has it: detail/simd.h). Inputs outside sample()'s domain
+    // (Brdf::can_draw) give a failed draw, pdf 0.
+    static constexpr std::size_t kBlock = 64;
+    struct Draws {
+        double wi_x[kBlock], wi_y[kBlock], wi_z[kBlock], pdf[kBlock];  // pdf 0: failed
+        bool half[kBlock];
+        double sin_h[kBlock], cos_h[kBlock], sin_p[kBlock], cos_p[kBlock], sin_o[kBlock], cos_o[kBlock];
+    };
+    void draw_block(const Vec3* wo, const std::array<double, 2>* u, std::size_t n, Draws& out) const;
     // Density of sample() at wi, per unit solid angle, for wo and wi above the horizon.
     double pdf(const Vec3& wo, const Vec3& wi) const;
 
@@ -63,6 +78,12 @@ private:
     HalfVectorSamplerOptions options_;
     std::vector<double> theta_o_;
     std::vector<Piecewise2D> slices_;
+    // Copies of the slices' tables end to end (Piecewise2D's accessors), so that draw_block's CDF
+    // searches across draws gather from one base whichever slice each draw uses.
+    struct Stacked {
+        std::vector<float> marginal, conditional, density;
+        std::vector<std::uint32_t> marginal_guide, conditional_guide;
+    } stacked_;
 };
 
 }  // namespace brdfz

@@ -26,6 +26,16 @@ public:
     // The density of cell (row, col): pdf(x, y) for any (x, y) in it, without locating it.
     double density(int row, int col) const { return density_[static_cast<std::size_t>(row) * cols_ + col]; }
 
+    // The stored tables, for a sampler that searches several distributions at once: the marginal CDF
+    // (rows + 1), the conditional CDFs (rows × (cols + 1)), the cell densities (rows × cols), and the
+    // guide tables (rows; rows × cols): entry j of a CDF of n intervals is the last interval whose start
+    // is <= j/n, where sample()'s search starts.
+    std::span<const float> marginal_cdf() const { return marginal_; }
+    std::span<const float> conditional_cdf() const { return conditional_; }
+    std::span<const float> densities() const { return density_; }
+    std::span<const std::uint32_t> marginal_guide() const { return marginal_guide_; }
+    std::span<const std::uint32_t> conditional_guide() const { return conditional_guide_; }
+
     int rows() const { return rows_; }
     int cols() const { return cols_; }
     std::size_t nbytes() const {
@@ -38,8 +48,7 @@ private:
     std::vector<float> marginal_;     // rows + 1 entries, 0 … 1
     std::vector<float> conditional_;  // rows × (cols + 1), each row 0 … 1
     std::vector<float> density_;      // rows × cols cell densities
-    // Where sample()'s search for u starts: per CDF of n intervals, entry j is the last interval whose
-    // start is <= j/n.
+    // Where sample()'s search for u starts (see marginal_guide()).
     std::vector<std::uint32_t> marginal_guide_, conditional_guide_;
 };
 
