@@ -68,31 +68,39 @@ double to_space(FactorSpace s, double f) {
 }
 
 // The value for a reconstruction y (already at most the ceiling); y < 0 (possible for svd) gives 0.
-// No libm call, so the loop below vectorises.
-template <FactorSpace S>
-inline double from_space(double y) {
-    const double p = y > 0.0 ? y : 0.0;  // NaN cannot occur: factors are finite
-    if constexpr (S == FactorSpace::Log)
-        return detail::expm1_nonneg(p);
-    else if constexpr (S == FactorSpace::Cbrt)
-        return p * p * p;
-    else
+// No libm call, so the loop below vectorises. A float y (eval's blend, ~1e-7 from exact already)
+// takes the float expm1, a double y (reconstruct) the double one; the cube is in double, where the
+// ceiling's cube cannot overflow.
+template <FactorSpace S, typename T>
+inline double from_space(T y) {
+    const T p = y > T(0) ? y : T(0);  // NaN cannot occur: factors are finite
+    if constexpr (S == FactorSpace::Log) {
+        if constexpr (std::is_same_v<T, float>)
+            return detail::expm1_nonneg_f(p);
+        else
+            return detail::expm1_nonneg(p);
+    } else if constexpr (S == FactorSpace::Cbrt) {
+        const double q = p;
+        return q * q * q;
+    } else {
         return p;
+    }
 }
 
-// out[i] = the value of y[i], counting the negatives clamped (in a double: GCC vectorises that sum
+// out[i] = the value of y[i], counting the negatives clamped (in a T: GCC vectorises that sum
 // with the loop, not an integer one).
-template <FactorSpace S>
-void from_space_n(const double* y, double* out, std::size_t n, std::uint64_t& clamped) {
-    double count = 0.0;
+template <FactorSpace S, typename T>
+void from_space_n(const T* y, double* out, std::size_t n, std::uint64_t& clamped) {
+    T count = 0;
     for (std::size_t i = 0; i < n; ++i) {
-        count += y[i] < 0.0 ? 1.0 : 0.0;
+        count += y[i] < T(0) ? T(1) : T(0);
         out[i] = from_space<S>(y[i]);
     }
     clamped += static_cast<std::uint64_t>(count);
 }
 
-void from_space_n(FactorSpace s, const double* y, double* out, std::size_t n, std::uint64_t& clamped) {
+template <typename T>
+void from_space_n(FactorSpace s, const T* y, double* out, std::size_t n, std::uint64_t& clamped) {
     switch (s) {
         case FactorSpace::Log: return from_space_n<FactorSpace::Log>(y, out, n, clamped);
         case FactorSpace::Cbrt: return from_space_n<FactorSpace::Cbrt>(y, out, n, clamped);
@@ -139,7 +147,7 @@ struct FactorView {
     const float* u;
     const float* v;
     const float* mix;       // 3 × width
-    const double* ceiling;  // 3: max_value in the transform space
+    const float* ceiling;   // 3: max_value in the transform space, rounded to float
     bool prefetch;          // the factors exceed the L2 cache
 };
 
@@ -200,7 +208,7 @@ template <FactorLayout L>
 // less than the gathers that would avoid it. The float sums are within ~1e-7 of the factors'
 // magnitude, as the float32 factors themselves.
 template <int W, typename Corners>
-[[gnu::always_inline]] inline void blend(const FactorView& f, const Corners& k, std::size_t i, double y[3]) {
+[[gnu::always_inline]] inline void blend(const FactorView& f, const Corners& k, std::size_t i, float y[3]) {
     using V = FloatV<W>;
     constexpr int NR = Corners::kRows, NC = Corners::kColumns;
     const float* u[NR];
@@ -217,7 +225,7 @@ template <int W, typename Corners>
     }
     const Float4 s = lane_sums(acc);
     // At most the data's largest value: bins without data can reconstruct far beyond it (factor.h).
-    for (int ch = 0; ch < 3; ++ch) y[ch] = std::min(static_cast<double>(s[ch]), f.ceiling[ch]);
+    for (int ch = 0; ch < 3; ++ch) y[ch] = std::min(s[ch], f.ceiling[ch]);
 }
 
 // Blocks of pairs in passes, as the tabular kernel: (1) the coordinates, branch-free so the compiler
@@ -233,7 +241,8 @@ template <int W, FactorLayout L>
     detail::BinCoords coords[kBlock];
     CornersOf<L> corners;
     bool above[kBlock];
-    double y[3 * kBlock], values[3 * kBlock];
+    float y[3 * kBlock];
+    double values[3 * kBlock];
     for (std::size_t start = 0; start < n; start += kBlock) {
         const std::size_t m = std::min(kBlock, n - start);
         const Vec3* a = wi + start;
@@ -259,7 +268,7 @@ template <int W, FactorLayout L>
             if (above[k])
                 blend<W>(f, corners, k, y + 3 * k);
             else
-                y[3 * k] = y[3 * k + 1] = y[3 * k + 2] = 0.0;  // gives the value 0, not counted
+                y[3 * k] = y[3 * k + 1] = y[3 * k + 2] = 0.0f;  // gives the value 0, not counted
         }
         from_space_n(space, y, values, 3 * m, clamped);
         for (std::size_t k = 0; k < m; ++k) out[start + k] = {values[3 * k], values[3 * k + 1], values[3 * k + 2]};
@@ -1077,7 +1086,10 @@ Rgb FactoredBrdf::eval_above(const Vec3& wi, const Vec3& wo) const {
 void FactoredBrdf::eval_batch(const Vec3* wi, const Vec3* wo, Rgb* out, std::size_t n) const {
     std::uint64_t clamped = 0;
     const bool prefetch = storage_.size() * sizeof(float) > kPrefetchBytes;
-    const FactorView view{f_.grid, width_, u_, v_, mix_.data(), ceiling_, prefetch};
+    // The float blend is clamped in float (the ceilings lie within the float range).
+    const float ceiling[3] = {static_cast<float>(ceiling_[0]), static_cast<float>(ceiling_[1]),
+                              static_cast<float>(ceiling_[2])};
+    const FactorView view{f_.grid, width_, u_, v_, mix_.data(), ceiling, prefetch};
     eval_kernel(avx2_ ? detail::Simd::Avx2Fma : detail::Simd::Sse2, f_.layout, view, f_.space, wi, wo, out, n, clamped);
     if (clamped) clamped_.fetch_add(clamped, std::memory_order_relaxed);
 }
