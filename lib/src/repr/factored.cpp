@@ -148,7 +148,7 @@ struct FactorView {
     const float* v;
     const float* mix;       // 3 × width
     const float* ceiling;   // 3: max_value in the transform space, rounded to float
-    bool prefetch;          // the factors exceed the L2 cache
+    bool prefetch_u, prefetch_v;  // prefetch that factor's rows (FactoredBrdf::eval_batch)
 };
 
 constexpr std::size_t kBlock = 64;  // pairs per pass of the kernel
@@ -259,11 +259,12 @@ template <int W, FactorLayout L>
                             detail::periodic_span(c.up - off, g.n_phi_d)},
                            k, corners);
         }
-        if (f.prefetch)
-            for (std::size_t k = 0; k < m; ++k) {
+        if (f.prefetch_u)
+            for (std::size_t k = 0; k < m; ++k)
                 for (const auto& r : corners.r) __builtin_prefetch(f.u + static_cast<std::size_t>(r[k]) * f.width);
+        if (f.prefetch_v)
+            for (std::size_t k = 0; k < m; ++k)
                 for (const auto& c : corners.c) __builtin_prefetch(f.v + static_cast<std::size_t>(c[k]) * f.width);
-            }
         for (std::size_t k = 0; k < m; ++k) {
             if (above[k])
                 blend<W>(f, corners, k, y + 3 * k);
@@ -1074,8 +1075,10 @@ Table FactoredBrdf::reconstruct(std::size_t* clamped) const {
 }
 
 // Above the L2 cache (512 KiB per core on the machines measured), the blends' factor rows miss it
-// and are prefetched a block ahead; below, the prefetches only cost instructions.
-constexpr std::size_t kPrefetchBytes = 512 * 1024;
+// and are prefetched a block ahead; below, the prefetches only cost instructions. So do those of a
+// factor within the L1 data cache (32 KiB), which stays there: the full grid's 90 θh rows (h_dp) or
+// 180 φd rows (hd_p).
+constexpr std::size_t kPrefetchBytes = 512 * 1024, kL1Bytes = 32 * 1024;
 
 Rgb FactoredBrdf::eval_above(const Vec3& wi, const Vec3& wo) const {
     Rgb f;
@@ -1086,10 +1089,13 @@ Rgb FactoredBrdf::eval_above(const Vec3& wi, const Vec3& wo) const {
 void FactoredBrdf::eval_batch(const Vec3* wi, const Vec3* wo, Rgb* out, std::size_t n) const {
     std::uint64_t clamped = 0;
     const bool prefetch = storage_.size() * sizeof(float) > kPrefetchBytes;
+    const std::size_t row_bytes = width_ * sizeof(float);
     // The float blend is clamped in float (the ceilings lie within the float range).
     const float ceiling[3] = {static_cast<float>(ceiling_[0]), static_cast<float>(ceiling_[1]),
                               static_cast<float>(ceiling_[2])};
-    const FactorView view{f_.grid, width_, u_, v_, mix_.data(), ceiling, prefetch};
+    const FactorView view{f_.grid, width_, u_, v_, mix_.data(), ceiling,
+                          prefetch && static_cast<std::size_t>(f_.rows()) * row_bytes > kL1Bytes,
+                          prefetch && static_cast<std::size_t>(f_.columns()) * row_bytes > kL1Bytes};
     eval_kernel(avx2_ ? detail::Simd::Avx2Fma : detail::Simd::Sse2, f_.layout, view, f_.space, wi, wo, out, n, clamped);
     if (clamped) clamped_.fetch_add(clamped, std::memory_order_relaxed);
 }
