@@ -212,7 +212,7 @@ template <FactorLayout L>
 
 // Pair k's transform-space values y_c = Σ_j mix_cj · (Σ_r rw_r U[r][j]) · (Σ_c cw_c V[c][j]), in
 // float, W components at a time. Separate colour's mix is one-hot; multiplying by its zeros costs
-// less than the gathers that would avoid it. The float sums are within ~1e-7 of the factors'
+// less than the gathers that would avoid it, and rank 3 and 4 (Grouped) skip it. The float sums are within ~1e-7 of the factors'
 // magnitude, as the float32 factors themselves.
 template <int W, bool Grouped, typename Corners>
 [[gnu::always_inline]] inline void blend(const FactorView& f, const Corners& k, std::size_t i, float y[3]) {
@@ -1065,7 +1065,7 @@ FactoredBrdf::FactoredBrdf(Factors factors) : f_(std::move(factors)) {
             if (f_.colour == FactorColour::Shared)
                 mix_[c * width_ + j] = f_.colour_weights[c * f_.rank + j];
             else
-                mix_[c * width_ + c * f_.rank + j] = 1.0f;  // by f_'s components: the grouped kernel reads none
+                mix_[c * width_ + c * f_.rank + j] = 1.0f;  // f_'s component order (reconstruct reads it)
         }
 }
 
