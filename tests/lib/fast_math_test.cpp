@@ -21,6 +21,20 @@ TEST_CASE("fast math: expm1_nonneg matches std::expm1 to 2e-16 relative", "[fast
     CHECK(std::isfinite(detail::expm1_nonneg(std::numeric_limits<double>::infinity())));
 }
 
+TEST_CASE("fast math: expm1_nonneg_f matches std::expm1 to float accuracy", "[fast_math]") {
+    double worst = 0.0;
+    for (float x = 1e-38f; x < 709.0f; x *= 1.0001f) {
+        const double e = std::expm1(static_cast<double>(x));
+        worst = std::max(worst, std::fabs(detail::expm1_nonneg_f(x) - e) / e);
+    }
+    CHECK(worst < 3e-7);  // a few float ulp
+    CHECK(detail::expm1_nonneg_f(0.0f) == 0.0);
+    // 88.8 would overflow a float result: the scaling is in double
+    CHECK(detail::expm1_nonneg_f(88.8f) == Approx(std::expm1(static_cast<double>(88.8f))).epsilon(3e-7));
+    CHECK(detail::expm1_nonneg_f(1e6f) == Approx(std::expm1(709.0)).epsilon(3e-7));  // taken as 709: finite
+    CHECK(std::isfinite(detail::expm1_nonneg_f(std::numeric_limits<float>::infinity())));
+}
+
 TEST_CASE("fast math: SinCosTable matches std::sin and std::cos within a few ulp", "[fast_math]") {
     const detail::SinCosTable table(std::numbers::pi, 256);
     double worst = 0.0, worst_small = 0.0;

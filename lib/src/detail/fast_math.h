@@ -46,6 +46,28 @@ inline double expm1_nonneg(double x) {
     return scale * em + (scale - 1.0);
 }
 
+// e^x − 1 for a float x ≥ 0 (above 709 taken as 709), within ~2e-7 relative of std::expm1: for
+// values blended in float (already ~1e-7 from exact), where expm1_nonneg's double polynomial buys no
+// accuracy. The reduction and the 7-term series run in float (twice the SIMD lanes, half the terms);
+// only the final scaling by 2^k is in double, so no x up to 709 overflows.
+inline double expm1_nonneg_f(float x) {
+    x = x < 709.0f ? x : 709.0f;
+    constexpr float kShift = 0x1.8p23f;  // x·log2(e) + kShift rounds to an integer k ≤ 1023 in the low bits
+    const float t = x * std::numbers::log2e_v<float> + kShift;
+    const float k = t - kShift;
+    const std::int64_t ki = std::bit_cast<std::int32_t>(t) - std::bit_cast<std::int32_t>(kShift);
+    const double scale = std::bit_cast<double>((ki + 1023) << 52);  // 2^k
+    // kLn2Hi has 13 significant bits, so k·kLn2Hi is exact for k < 2^11.
+    constexpr float kLn2Hi = 0x1.62ep-1f, kLn2Lo = static_cast<float>(std::numbers::ln2 - 0x1.62ep-1);
+    const float r = (x - k * kLn2Hi) - k * kLn2Lo;
+    // e^r − 1 = r·Σ r^i/(i+1)!, i ≤ 6: the truncation is < 2e-8 relative for |r| ≤ ln2/2.
+    constexpr float c[] = {1.0f, 1.0f / 2, 1.0f / 6, 1.0f / 24, 1.0f / 120, 1.0f / 720, 1.0f / 5040};
+    const float r2 = r * r, r4 = r2 * r2;
+    const float p01 = c[0] + c[1] * r, p23 = c[2] + c[3] * r, p45 = c[4] + c[5] * r;
+    const float em = r * ((p01 + p23 * r2) + (p45 + c[6] * r2) * r4);
+    return scale * em + (scale - 1.0);
+}
+
 // atan(t) for t in [0, 1] as t·P(t²), a least-squares fit of the relative error: |rel err| < 6e-11.
 // Estrin's scheme: a dependency chain of 4 multiply-adds instead of Horner's 11.
 inline double atan01(double t) {

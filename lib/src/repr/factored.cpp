@@ -68,31 +68,39 @@ double to_space(FactorSpace s, double f) {
 }
 
 // The value for a reconstruction y (already at most the ceiling); y < 0 (possible for svd) gives 0.
-// No libm call, so the loop below vectorises.
-template <FactorSpace S>
-inline double from_space(double y) {
-    const double p = y > 0.0 ? y : 0.0;  // NaN cannot occur: factors are finite
-    if constexpr (S == FactorSpace::Log)
-        return detail::expm1_nonneg(p);
-    else if constexpr (S == FactorSpace::Cbrt)
-        return p * p * p;
-    else
+// No libm call, so the loop below vectorises. A float y (eval's blend, ~1e-7 from exact already)
+// takes the float expm1, a double y (reconstruct) the double one; the cube is in double, where the
+// ceiling's cube cannot overflow.
+template <FactorSpace S, typename T>
+inline double from_space(T y) {
+    const T p = y > T(0) ? y : T(0);  // NaN cannot occur: factors are finite
+    if constexpr (S == FactorSpace::Log) {
+        if constexpr (std::is_same_v<T, float>)
+            return detail::expm1_nonneg_f(p);
+        else
+            return detail::expm1_nonneg(p);
+    } else if constexpr (S == FactorSpace::Cbrt) {
+        const double q = p;
+        return q * q * q;
+    } else {
         return p;
+    }
 }
 
-// out[i] = the value of y[i], counting the negatives clamped (in a double: GCC vectorises that sum
+// out[i] = the value of y[i], counting the negatives clamped (in a T: GCC vectorises that sum
 // with the loop, not an integer one).
-template <FactorSpace S>
-void from_space_n(const double* y, double* out, std::size_t n, std::uint64_t& clamped) {
-    double count = 0.0;
+template <FactorSpace S, typename T>
+void from_space_n(const T* y, double* out, std::size_t n, std::uint64_t& clamped) {
+    T count = 0;
     for (std::size_t i = 0; i < n; ++i) {
-        count += y[i] < 0.0 ? 1.0 : 0.0;
+        count += y[i] < T(0) ? T(1) : T(0);
         out[i] = from_space<S>(y[i]);
     }
     clamped += static_cast<std::uint64_t>(count);
 }
 
-void from_space_n(FactorSpace s, const double* y, double* out, std::size_t n, std::uint64_t& clamped) {
+template <typename T>
+void from_space_n(FactorSpace s, const T* y, double* out, std::size_t n, std::uint64_t& clamped) {
     switch (s) {
         case FactorSpace::Log: return from_space_n<FactorSpace::Log>(y, out, n, clamped);
         case FactorSpace::Cbrt: return from_space_n<FactorSpace::Cbrt>(y, out, n, clamped);
@@ -132,6 +140,12 @@ template <typename V>
 // Floats per blend step of each kernel; rows are zero-padded to a multiple of it.
 constexpr std::size_t lanes(detail::Simd s) { return s == detail::Simd::Avx2Fma ? 8 : 4; }
 
+// Separate colour of rank 3 or 4 (the full-grid svd rank 4 and nmf rank 3 among them): the padded
+// rows hold channel c's components from float 4c, so each channel is one group of 4 floats and the
+// blend sums the product's groups directly, without the one-hot colour mix (3 loads and 3
+// multiply-adds per step). The padded width stays what 3·rank rounds up to: 12 (SSE2) or 16 (AVX2).
+bool grouped_channels(const Factors& f) { return f.colour == FactorColour::Separate && (f.rank == 3 || f.rank == 4); }
+
 // The factors as evaluation reads them (FactoredBrdf's padded copies): rows `width` floats apart.
 struct FactorView {
     const GridSpec& grid;
@@ -139,8 +153,9 @@ struct FactorView {
     const float* u;
     const float* v;
     const float* mix;       // 3 × width
-    const double* ceiling;  // 3: max_value in the transform space
-    bool prefetch;          // the factors exceed the L2 cache
+    const float* ceiling;   // 3: max_value in the transform space, rounded to float
+    bool prefetch_u, prefetch_v;  // prefetch that factor's rows (FactoredBrdf::eval_batch)
+    bool grouped;                 // grouped_channels
 };
 
 constexpr std::size_t kBlock = 64;  // pairs per pass of the kernel
@@ -197,27 +212,42 @@ template <FactorLayout L>
 
 // Pair k's transform-space values y_c = Σ_j mix_cj · (Σ_r rw_r U[r][j]) · (Σ_c cw_c V[c][j]), in
 // float, W components at a time. Separate colour's mix is one-hot; multiplying by its zeros costs
-// less than the gathers that would avoid it. The float sums are within ~1e-7 of the factors'
+// less than the gathers that would avoid it, and rank 3 and 4 (Grouped) skip it. The float sums are within ~1e-7 of the factors'
 // magnitude, as the float32 factors themselves.
-template <int W, typename Corners>
-[[gnu::always_inline]] inline void blend(const FactorView& f, const Corners& k, std::size_t i, double y[3]) {
+template <int W, bool Grouped, typename Corners>
+[[gnu::always_inline]] inline void blend(const FactorView& f, const Corners& k, std::size_t i, float y[3]) {
     using V = FloatV<W>;
     constexpr int NR = Corners::kRows, NC = Corners::kColumns;
     const float* u[NR];
     const float* v[NC];
     for (int r = 0; r < NR; ++r) u[r] = f.u + static_cast<std::size_t>(k.r[r][i]) * f.width;
     for (int c = 0; c < NC; ++c) v[c] = f.v + static_cast<std::size_t>(k.c[c][i]) * f.width;
-    V acc[3] = {};
-    for (std::size_t j = 0; j < f.width; j += W) {
+    const auto product = [&](std::size_t j) {
         V a = k.rw[0][i] * load<V>(u[0] + j), b = k.cw[0][i] * load<V>(v[0] + j);
         for (int r = 1; r < NR; ++r) a += k.rw[r][i] * load<V>(u[r] + j);
         for (int c = 1; c < NC; ++c) b += k.cw[c][i] * load<V>(v[c] + j);
-        const V p = a * b;
-        for (std::size_t ch = 0; ch < 3; ++ch) acc[ch] += load<V>(f.mix + ch * f.width + j) * p;
+        return a * b;
+    };
+    Float4 s;
+    if constexpr (Grouped) {
+        constexpr std::size_t kSteps = (12 + W - 1) / W;  // the 3 groups, in whole steps
+        Float4 g[kSteps * W / 4];
+        for (std::size_t step = 0; step < kSteps; ++step) {
+            const V p = product(step * W);
+            std::memcpy(&g[step * W / 4], &p, sizeof p);
+        }
+        const Float4 groups[3] = {g[0], g[1], g[2]};
+        s = lane_sums(groups);
+    } else {
+        V acc[3] = {};
+        for (std::size_t j = 0; j < f.width; j += W) {
+            const V p = product(j);
+            for (std::size_t ch = 0; ch < 3; ++ch) acc[ch] += load<V>(f.mix + ch * f.width + j) * p;
+        }
+        s = lane_sums(acc);
     }
-    const Float4 s = lane_sums(acc);
     // At most the data's largest value: bins without data can reconstruct far beyond it (factor.h).
-    for (int ch = 0; ch < 3; ++ch) y[ch] = std::min(static_cast<double>(s[ch]), f.ceiling[ch]);
+    for (int ch = 0; ch < 3; ++ch) y[ch] = std::min(s[ch], f.ceiling[ch]);
 }
 
 // Blocks of pairs in passes, as the tabular kernel: (1) the coordinates, branch-free so the compiler
@@ -225,7 +255,7 @@ template <int W, typename Corners>
 // corners, branch-free and vectorised too, and the prefetches of the factor rows when they miss the
 // cache; (3) the blends; (4) the inverse transform, vectorised over the block. W: the blend's floats
 // per step.
-template <int W, FactorLayout L>
+template <int W, FactorLayout L, bool Grouped>
 [[gnu::always_inline]] inline void eval_pairs(const FactorView& f, FactorSpace space, const Vec3* wi, const Vec3* wo,
                                               Rgb* out, std::size_t n, std::uint64_t& clamped) {
     const GridSpec& g = f.grid;
@@ -233,7 +263,8 @@ template <int W, FactorLayout L>
     detail::BinCoords coords[kBlock];
     CornersOf<L> corners;
     bool above[kBlock];
-    double y[3 * kBlock], values[3 * kBlock];
+    float y[3 * kBlock];
+    double values[3 * kBlock];
     for (std::size_t start = 0; start < n; start += kBlock) {
         const std::size_t m = std::min(kBlock, n - start);
         const Vec3* a = wi + start;
@@ -250,16 +281,17 @@ template <int W, FactorLayout L>
                             detail::periodic_span(c.up - off, g.n_phi_d)},
                            k, corners);
         }
-        if (f.prefetch)
-            for (std::size_t k = 0; k < m; ++k) {
+        if (f.prefetch_u)
+            for (std::size_t k = 0; k < m; ++k)
                 for (const auto& r : corners.r) __builtin_prefetch(f.u + static_cast<std::size_t>(r[k]) * f.width);
+        if (f.prefetch_v)
+            for (std::size_t k = 0; k < m; ++k)
                 for (const auto& c : corners.c) __builtin_prefetch(f.v + static_cast<std::size_t>(c[k]) * f.width);
-            }
         for (std::size_t k = 0; k < m; ++k) {
             if (above[k])
-                blend<W>(f, corners, k, y + 3 * k);
+                blend<W, Grouped>(f, corners, k, y + 3 * k);
             else
-                y[3 * k] = y[3 * k + 1] = y[3 * k + 2] = 0.0;  // gives the value 0, not counted
+                y[3 * k] = y[3 * k + 1] = y[3 * k + 2] = 0.0f;  // gives the value 0, not counted
         }
         from_space_n(space, y, values, 3 * m, clamped);
         for (std::size_t k = 0; k < m; ++k) out[start + k] = {values[3 * k], values[3 * k + 1], values[3 * k + 2]};
@@ -268,28 +300,28 @@ template <int W, FactorLayout L>
 
 // The kernel's two builds. Single-pair eval runs the same one as the batch (bit for bit: FMA
 // contraction makes the two builds' results differ in the last bits).
-template <FactorLayout L>
+template <FactorLayout L, bool Grouped>
 [[gnu::flatten]] void eval_pairs_sse2(const FactorView& f, FactorSpace space, const Vec3* wi, const Vec3* wo,
                                       Rgb* out, std::size_t n, std::uint64_t& clamped) {
-    eval_pairs<4, L>(f, space, wi, wo, out, n, clamped);
+    eval_pairs<4, L, Grouped>(f, space, wi, wo, out, n, clamped);
 }
 
-template <FactorLayout L>
+template <FactorLayout L, bool Grouped>
 [[gnu::flatten, gnu::target("avx2,fma")]] void eval_pairs_avx2(const FactorView& f, FactorSpace space, const Vec3* wi,
                                                                 const Vec3* wo, Rgb* out, std::size_t n,
                                                                 std::uint64_t& clamped) {
-    eval_pairs<8, L>(f, space, wi, wo, out, n, clamped);
+    eval_pairs<8, L, Grouped>(f, space, wi, wo, out, n, clamped);
 }
 
+template <bool Grouped>
 void eval_kernel(detail::Simd simd, FactorLayout layout, const FactorView& f, FactorSpace space, const Vec3* wi,
-                const Vec3* wo, Rgb* out, std::size_t n, std::uint64_t& clamped) {
-    const bool hxdp = layout == FactorLayout::HxDP;
+                 const Vec3* wo, Rgb* out, std::size_t n, std::uint64_t& clamped) {
+    constexpr FactorLayout kHxDP = FactorLayout::HxDP, kHDxP = FactorLayout::HDxP;
+    const bool hxdp = layout == kHxDP;
     if (simd == detail::Simd::Avx2Fma)
-        (hxdp ? eval_pairs_avx2<FactorLayout::HxDP> : eval_pairs_avx2<FactorLayout::HDxP>)(f, space, wi, wo, out, n,
-                                                                                           clamped);
+        (hxdp ? eval_pairs_avx2<kHxDP, Grouped> : eval_pairs_avx2<kHDxP, Grouped>)(f, space, wi, wo, out, n, clamped);
     else
-        (hxdp ? eval_pairs_sse2<FactorLayout::HxDP> : eval_pairs_sse2<FactorLayout::HDxP>)(f, space, wi, wo, out, n,
-                                                                                           clamped);
+        (hxdp ? eval_pairs_sse2<kHxDP, Grouped> : eval_pairs_sse2<kHDxP, Grouped>)(f, space, wi, wo, out, n, clamped);
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -1015,8 +1047,16 @@ FactoredBrdf::FactoredBrdf(Factors factors) : f_(std::move(factors)) {
     storage_.assign(v_offset + cols * width_ + kLine - 1, 0.0f);
     float* u = storage_.data() + (kLine - reinterpret_cast<std::uintptr_t>(storage_.data()) / sizeof(float) % kLine) % kLine;
     float* v = u + v_offset;
-    for (std::size_t i = 0; i < rows; ++i) std::copy_n(f_.u.data() + i * m, m, u + i * width_);
-    for (std::size_t i = 0; i < cols; ++i) std::copy_n(f_.v.data() + i * m, m, v + i * width_);
+    const bool grouped = grouped_channels(f_);
+    const std::size_t rank = static_cast<std::size_t>(f_.rank);
+    const auto copy_row = [&](const float* from, float* to) {
+        if (grouped)
+            for (std::size_t c = 0; c < 3; ++c) std::copy_n(from + c * rank, rank, to + 4 * c);
+        else
+            std::copy_n(from, m, to);
+    };
+    for (std::size_t i = 0; i < rows; ++i) copy_row(f_.u.data() + i * m, u + i * width_);
+    for (std::size_t i = 0; i < cols; ++i) copy_row(f_.v.data() + i * m, v + i * width_);
     u_ = u;
     v_ = v;
     mix_.assign(3 * width_, 0.0f);
@@ -1025,7 +1065,7 @@ FactoredBrdf::FactoredBrdf(Factors factors) : f_(std::move(factors)) {
             if (f_.colour == FactorColour::Shared)
                 mix_[c * width_ + j] = f_.colour_weights[c * f_.rank + j];
             else
-                mix_[c * width_ + c * f_.rank + j] = 1.0f;
+                mix_[c * width_ + c * f_.rank + j] = 1.0f;  // f_'s component order (reconstruct reads it)
         }
 }
 
@@ -1065,8 +1105,10 @@ Table FactoredBrdf::reconstruct(std::size_t* clamped) const {
 }
 
 // Above the L2 cache (512 KiB per core on the machines measured), the blends' factor rows miss it
-// and are prefetched a block ahead; below, the prefetches only cost instructions.
-constexpr std::size_t kPrefetchBytes = 512 * 1024;
+// and are prefetched a block ahead; below, the prefetches only cost instructions. So do those of a
+// factor within the L1 data cache (32 KiB), which stays there: the full grid's 90 θh rows (h_dp) or
+// 180 φd rows (hd_p).
+constexpr std::size_t kPrefetchBytes = 512 * 1024, kL1Bytes = 32 * 1024;
 
 Rgb FactoredBrdf::eval_above(const Vec3& wi, const Vec3& wo) const {
     Rgb f;
@@ -1077,8 +1119,16 @@ Rgb FactoredBrdf::eval_above(const Vec3& wi, const Vec3& wo) const {
 void FactoredBrdf::eval_batch(const Vec3* wi, const Vec3* wo, Rgb* out, std::size_t n) const {
     std::uint64_t clamped = 0;
     const bool prefetch = storage_.size() * sizeof(float) > kPrefetchBytes;
-    const FactorView view{f_.grid, width_, u_, v_, mix_.data(), ceiling_, prefetch};
-    eval_kernel(avx2_ ? detail::Simd::Avx2Fma : detail::Simd::Sse2, f_.layout, view, f_.space, wi, wo, out, n, clamped);
+    const std::size_t row_bytes = width_ * sizeof(float);
+    // The float blend is clamped in float (the ceilings lie within the float range).
+    const float ceiling[3] = {static_cast<float>(ceiling_[0]), static_cast<float>(ceiling_[1]),
+                              static_cast<float>(ceiling_[2])};
+    const FactorView view{f_.grid, width_, u_, v_, mix_.data(), ceiling,
+                          prefetch && static_cast<std::size_t>(f_.rows()) * row_bytes > kL1Bytes,
+                          prefetch && static_cast<std::size_t>(f_.columns()) * row_bytes > kL1Bytes,
+                          grouped_channels(f_)};
+    (view.grouped ? eval_kernel<true> : eval_kernel<false>)(avx2_ ? detail::Simd::Avx2Fma : detail::Simd::Sse2,
+                                                            f_.layout, view, f_.space, wi, wo, out, n, clamped);
     if (clamped) clamped_.fetch_add(clamped, std::memory_order_relaxed);
 }
 
