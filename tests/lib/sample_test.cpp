@@ -6,6 +6,7 @@
 #include <memory>
 #include <random>
 #include <tuple>
+#include <utility>
 #include <vector>
 
 #include "brdfz/albedo.h"
@@ -30,6 +31,21 @@ TabularBrdf tabulated(double alpha) {
     CoatedDiffuseParams p;
     p.alpha = alpha;
     return TabularBrdf(tabulate(CoatedDiffuse(p)).table);
+}
+
+// count random views above the horizon and u pairs, from one seeded generator.
+std::pair<std::vector<Vec3>, std::vector<std::array<double, 2>>> random_views(std::size_t count, std::uint64_t seed) {
+    std::mt19937_64 rng(seed);
+    std::uniform_real_distribution<double> u(0, 1);
+    std::normal_distribution<double> nd;
+    std::vector<Vec3> wo(count);
+    std::vector<std::array<double, 2>> us(count);
+    for (std::size_t k = 0; k < count; ++k) {
+        wo[k] = normalize({nd(rng), nd(rng), nd(rng)});
+        wo[k].z = std::fabs(wo[k].z);
+        us[k] = {u(rng), u(rng)};
+    }
+    return {wo, us};
 }
 
 // Bonferroni-corrected 1% level over the five view elevations.
@@ -313,17 +329,8 @@ TEST_CASE("table sample_batch: each result is the one-at-a-time sample; bad inpu
     TabularBrdf t = tabulated(0.05);
     const Compressed u8 = compress(t, "tabular:res=45x45x90,dtype=u8log");
     const double nan = std::nan(""), inf = INFINITY;
-    std::mt19937_64 rng(21);
-    std::uniform_real_distribution<double> u(0, 1);
-    std::normal_distribution<double> nd;
-    const std::size_t count = 700;
-    std::vector<Vec3> wo(count);
-    std::vector<std::array<double, 2>> us(count);
-    for (std::size_t k = 0; k < count; ++k) {
-        wo[k] = normalize({nd(rng), nd(rng), nd(rng)});
-        wo[k].z = std::fabs(wo[k].z);
-        us[k] = {u(rng), u(rng)};
-    }
+    auto [wo, us] = random_views(700, 21);
+    const std::size_t count = wo.size();
     wo[3] = {nan, 0.0, 1.0}, wo[4] = {0.0, 0.0, nan}, wo[5] = {inf, 0.0, 1.0}, wo[6] = {0.0, 0.0, -1.0};
     wo[7] = {0.0, 0.0, 1.0}, us[7] = {0.5, 0.3};  // the pole (wo's azimuth undefined), a data draw
     us[8] = {nan, 0.5}, us[9] = {0.5, inf}, us[10] = {1.0, 0.5}, us[11] = {-0.1, 0.5};
@@ -368,17 +375,8 @@ TEST_CASE("table sample_batch: each result is the one-at-a-time sample; bad inpu
 TEST_CASE("HalfVectorSampler::draw_block: each draw is draw()'s, in both builds", "[sample][tabular]") {
     const TabularBrdf t = tabulated(0.02);
     const HalfVectorSampler& sampler = t.sampler();
-    std::mt19937_64 rng(31);
-    std::uniform_real_distribution<double> u(0, 1);
-    std::normal_distribution<double> nd;
-    const std::size_t count = 20000;
-    std::vector<Vec3> wo(count);
-    std::vector<std::array<double, 2>> us(count);
-    for (std::size_t k = 0; k < count; ++k) {
-        wo[k] = normalize({nd(rng), nd(rng), nd(rng)});
-        wo[k].z = std::fabs(wo[k].z);
-        us[k] = {u(rng), u(rng)};
-    }
+    auto [wo, us] = random_views(20000, 31);
+    const std::size_t count = wo.size();
     us[1] = {0.999999999, 0.9999999999};  // u rounding to 1 in float: the scans' last intervals
     us[2] = {0.5, INFINITY}, us[3] = {2.0, 0.5}, wo[4] = {0.0, 0.0, -1.0};
     for (detail::Simd simd : {detail::Simd::Avx2Fma, detail::Simd::Sse2}) {

@@ -453,22 +453,28 @@ struct Solved {
     double objective = 0.0, norm = 0.0;  // Σ w (y − ŷ)², Σ w y²
 };
 
-// Column norms moved between U, V and s so that no factor's scale drifts (the product is unchanged):
-// with colour weights the norms go into s; without, U and V get equal norms.
-void balance(Solved& r, bool shared) {
+// Each component's scale (`scale` of its U and of its V column) moved between U, V and s; the product
+// is unchanged. With colour weights the scales go into s; without, U and V columns get equal scales.
+template <typename Scale>
+void move_column_scales(Solved& r, bool shared, Scale scale) {
     for (Eigen::Index j = 0; j < r.u.cols(); ++j) {
-        const double nu = r.u.col(j).norm(), nv = r.v.col(j).norm();
-        if (!(nu > 0.0 && nv > 0.0)) continue;
+        const double su = scale(r.u.col(j)), sv = scale(r.v.col(j));
+        if (!(su > 0.0 && sv > 0.0)) continue;
         if (shared) {
-            r.u.col(j) /= nu;
-            r.v.col(j) /= nv;
-            r.s.col(j) *= nu * nv;
+            r.u.col(j) /= su;
+            r.v.col(j) /= sv;
+            r.s.col(j) *= su * sv;
         } else {
-            const double g = std::sqrt(nu * nv);
-            r.u.col(j) *= g / nu;
-            r.v.col(j) *= g / nv;
+            const double g = std::sqrt(su * sv);
+            r.u.col(j) *= g / su;
+            r.v.col(j) *= g / sv;
         }
     }
+}
+
+// Column norms balanced so that no factor's scale drifts.
+void balance(Solved& r, bool shared) {
+    move_column_scales(r, shared, [](const auto& c) { return c.norm(); });
 }
 
 // Rewrites U·Vᵀ as its SVD (U' = Q_u A √Σ, V' = Q_v B √Σ): orthogonal columns, so float32 storage
@@ -869,19 +875,7 @@ void update_mix(Mat& mix, const MixSums& sums, bool nonneg) {
 // moved into the (float32) colour weights; for separate colour both to the geometric mean of their
 // largest magnitudes. Either way far from float16's range limits, where its relative precision holds.
 void scale_for_f16(Solved& r, bool shared) {
-    for (Eigen::Index j = 0; j < r.u.cols(); ++j) {
-        const double su = r.u.col(j).cwiseAbs().maxCoeff(), sv = r.v.col(j).cwiseAbs().maxCoeff();
-        if (!(su > 0.0 && sv > 0.0)) continue;
-        if (shared) {
-            r.u.col(j) /= su;
-            r.v.col(j) /= sv;
-            r.s.col(j) *= su * sv;
-        } else {
-            const double g = std::sqrt(su * sv);
-            r.u.col(j) *= g / su;
-            r.v.col(j) *= g / sv;
-        }
-    }
+    move_column_scales(r, shared, [](const auto& c) { return c.cwiseAbs().maxCoeff(); });
 }
 
 double to_f16(double x) { return static_cast<float>(Eigen::half(static_cast<float>(x))); }
