@@ -2,6 +2,11 @@
 
 #include <cstring>
 #include <limits>
+#include <new>
+
+#if defined(__linux__)
+#include <sys/mman.h>
+#endif
 
 #include "brdfz/errors.h"
 
@@ -30,6 +35,31 @@ double axis::u_to_theta_d(double u, int n, double w) {
 
 std::string GridSpec::str() const {
     return std::to_string(n_theta_h) + "x" + std::to_string(n_theta_d) + "x" + std::to_string(n_phi_d);
+}
+
+namespace {
+constexpr std::size_t kHugePage = std::size_t{2} << 20;
+// Below two huge pages a table gains little from them, and the rounding up would waste memory.
+bool huge(std::size_t bytes) { return bytes >= 2 * kHugePage; }
+}  // namespace
+
+void* table_memory_allocate(std::size_t bytes) {
+    const std::size_t total = bytes + kTablePadding;
+    if (total < bytes) throw std::bad_array_new_length();
+    void* p = huge(bytes) ? ::operator new(total, std::align_val_t{kHugePage}) : ::operator new(total);
+#if defined(__linux__) && defined(MADV_HUGEPAGE)
+    // Advice only: where huge pages are off or unavailable the memory stays on small pages.
+    if (huge(bytes)) madvise(p, total, MADV_HUGEPAGE);
+#endif
+    std::memset(static_cast<char*>(p) + bytes, 0, kTablePadding);
+    return p;
+}
+
+void table_memory_free(void* p, std::size_t bytes) {
+    if (huge(bytes))
+        ::operator delete(p, std::align_val_t{kHugePage});
+    else
+        ::operator delete(p);
 }
 
 Table::Table(GridSpec grid) : grid_(grid) {
