@@ -147,6 +147,21 @@ TEST_CASE("linear lookup reproduces samples, interpolates between them, skips in
         const auto [wi, wo] = pair_at(3.5, 3.0, 5.5);
         CHECK(b.eval(wi, wo)[0] == Approx(at(3, 2, 5, 0)).epsilon(1e-9));
     }
+    SECTION("the last bin, whose three floats are read as four (the sanitizer run checks the bounds)") {
+        const GridSpec one{1, 1, 16};  // the last bin of a finer grid is below the horizon
+        const Table last = ramp_table(one);
+        const TabularBrdf b(last, Lookup::Linear);
+        const auto [wi, wo] = from_half_diff({axis::u_to_theta_h(0.5, 1), 0.3, axis::u_to_theta_d(0.5, 1),
+                                              axis::u_to_phi_d(15.5, 16)});
+        const std::vector<Vec3> wis{wi}, wos{wo};
+        std::vector<Rgb> f(1);
+        b.eval(wis, wos, f);
+        for (int c = 0; c < 3; ++c) {
+            const double expected = last.at(one.index(0, 0, 15), c);
+            CHECK(b.eval(wi, wo)[c] == Approx(expected).epsilon(1e-9));
+            CHECK(f[0][c] == Approx(expected).epsilon(1e-9));
+        }
+    }
     SECTION("bin start moves the samples") {
         Table start(GridSpec{8, 8, 16, BinPosition::Start});
         std::copy(t.data(), t.data() + 3 * t.bins(), start.data());

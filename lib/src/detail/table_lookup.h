@@ -8,9 +8,11 @@
 
 #include <algorithm>
 #include <cmath>
+#include <concepts>
 #include <cstddef>
 #include <cstdint>
 #include <cstdio>
+#include <cstring>
 #include <initializer_list>
 #include <numbers>
 #include <string>
@@ -167,6 +169,39 @@ typedef double Doubles2 __attribute__((vector_size(16)));
 typedef std::int64_t Mask2 __attribute__((vector_size(16)));
 typedef double Doubles4 __attribute__((vector_size(32)));
 typedef std::int64_t Mask4 __attribute__((vector_size(32)));
+typedef float Floats4 __attribute__((vector_size(16)));
+
+// A Values policy whose bins are three floats in memory, readable as four (Table pads its storage):
+// read_linear then loads each corner as one vector instead of assembling it lane by lane.
+template <typename Values>
+concept FloatBins = requires(const Values& v) {
+    { v.floats(std::size_t{}) } -> std::same_as<const float*>;
+};
+
+// A bin's values as kParts vectors (the last lane spare, its content unused).
+template <bool Wide, typename Values, typename V>
+[[gnu::always_inline]] inline void load_bin(const Values& values, std::size_t bin, V* x) {
+    if constexpr (FloatBins<Values>) {
+        const float* p = values.floats(bin);
+        if constexpr (Wide) {
+            Floats4 v;
+            std::memcpy(&v, p, sizeof v);
+            x[0] = __builtin_convertvector(v, Doubles4);
+        } else {
+            Floats4 v;
+            std::memcpy(&v, p, sizeof v);
+            const Doubles4 d = __builtin_convertvector(v, Doubles4);
+            x[0] = Doubles2{d[0], d[1]}, x[1] = Doubles2{d[2], d[3]};
+        }
+    } else {
+        float v[3];
+        values.load(bin, v);
+        if constexpr (Wide)
+            x[0] = V{v[0], v[1], v[2], 0.0};
+        else
+            x[0] = V{v[0], v[1]}, x[1] = V{v[2], 0.0};
+    }
+}
 
 template <bool Wide, typename Values>
 [[gnu::always_inline]] inline Rgb read_linear(const GridSpec& g, const Values& values, const Corners& k) {
@@ -183,26 +218,25 @@ template <bool Wide, typename Values>
         for (int b = 0; b < 2; ++b) {
             const int id = b ? k.d.i1 : k.d.i0;
             const double wb = wa * (b ? k.d.t : 1.0 - k.d.t);
+            const std::size_t row = g.index(ih, id, 0);  // the index is linear in φd's
             for (int p = 0; p < 2; ++p) {
                 const double w = wb * (p ? k.p.t : 1.0 - k.p.t);
-                float v[4];
-                values.load(g.index(ih, id, p ? k.p.i1 : k.p.i0), v);
-                v[3] = 0.0f;
+                V wv, x[kParts];
+                for (int j = 0; j < kLanes; ++j) wv[j] = w;
+                load_bin<Wide>(values, row + (p ? k.p.i1 : k.p.i0), x);
                 for (int i = 0; i < kParts; ++i) {
-                    V x, wv;
-                    for (int j = 0; j < kLanes; ++j) x[j] = v[i * kLanes + j], wv[j] = w;
                     // Invalid samples are NaN: they contribute neither value nor weight.
-                    const M ok = x == x;
-                    sum[i] += ok ? wv * x : zero;
+                    const M ok = x[i] == x[i];
+                    sum[i] += ok ? wv * x[i] : zero;
                     wsum[i] += ok ? wv : zero;
                 }
             }
         }
     }
     Rgb f;
-    for (int ch = 0; ch < 3; ++ch) {
-        const double s = sum[ch / kLanes][ch % kLanes], ws = wsum[ch / kLanes][ch % kLanes];
-        f[ch] = ws > 0.0 ? s / ws : 0.0;
+    for (int i = 0; i < kParts; ++i) {
+        const V q = wsum[i] > zero ? sum[i] / wsum[i] : zero;
+        for (int j = 0; j < kLanes && i * kLanes + j < 3; ++j) f[i * kLanes + j] = q[j];
     }
     return f;
 }
@@ -210,6 +244,19 @@ template <bool Wide, typename Values>
 template <typename Values>
 inline Rgb read_linear(const GridSpec& g, const Values& values, const Corners& k) {
     return read_linear<false>(g, values, k);
+}
+
+// Prefetches the lines of a linear lookup's corners: per (θh, θd) pair, both φd neighbours, which
+// share a line unless they straddle a line boundary (for float32 bins, a third of the time).
+template <typename Values>
+[[gnu::always_inline]] inline void prefetch_corners(const GridSpec& g, const Values& values, int h0, int h1, int d0,
+                                                    int d1, int p0, int p1) {
+    for (int ih : {h0, h1})
+        for (int id : {d0, d1}) {
+            const std::size_t row = g.index(ih, id, 0);
+            __builtin_prefetch(values.address(row + p0));
+            __builtin_prefetch(values.address(row + p1));
+        }
 }
 
 // f_r for one pair above the horizon.
@@ -248,8 +295,7 @@ void eval_table_batch(const GridSpec& g, const Values& values, Lookup lookup, co
             for (std::size_t k = 0; k < m; ++k) {
                 if (!above[k]) continue;
                 const Corners& c = corners[k] = linear_corners(g, coords[k], a[k], b[k]);
-                for (int ih : {c.h.i0, c.h.i1})
-                    for (int id : {c.d.i0, c.d.i1}) __builtin_prefetch(values.address(g.index(ih, id, c.p.i0)));
+                prefetch_corners(g, values, c.h.i0, c.h.i1, c.d.i0, c.d.i1, c.p.i0, c.p.i1);
             }
             for (std::size_t k = 0; k < m; ++k)
                 out[start + k] = above[k] ? read_linear(g, values, corners[k]) : Rgb{};

@@ -130,11 +130,8 @@ template <bool Wide, typename Values>
                 h0[k] = c.h.i0, h1[k] = c.h.i1, ht[k] = c.h.t, d0[k] = c.d.i0, d1[k] = c.d.i1, dt[k] = c.d.t;
                 p0[k] = c.p.i0, p1[k] = c.p.i1, pt[k] = c.p.t;
             }
-        for (std::size_t k = 0; k < m; ++k) {
-            if (!ok[k]) continue;
-            for (int ih : {h0[k], h1[k]})
-                for (int id : {d0[k], d1[k]}) __builtin_prefetch(values.address(g.index(ih, id, p0[k])));
-        }
+        for (std::size_t k = 0; k < m; ++k)
+            if (ok[k]) prefetch_corners(g, values, h0[k], h1[k], d0[k], d1[k], p0[k], p1[k]);
         for (std::size_t k = 0; k < m; ++k) {
             if (!ok[k]) continue;
             const Corners c{{h0[k], h1[k], ht[k]}, {d0[k], d1[k], dt[k]}, {p0[k], p1[k], pt[k]}};

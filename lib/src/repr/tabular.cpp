@@ -16,6 +16,7 @@ struct Float32Values {
         const float* p = data + 3 * bin;
         v[0] = p[0], v[1] = p[1], v[2] = p[2];
     }
+    const float* floats(std::size_t bin) const { return data + 3 * bin; }  // readable as four (Table)
     const void* address(std::size_t bin) const { return data + 3 * bin; }
 };
 
