@@ -1,4 +1,5 @@
-// Helpers shared by the benchmark programs: timing, medians, arguments, a synthetic table.
+// Helpers shared by the benchmark programs: timing, medians, arguments, a synthetic table, a temporary
+// directory, the eval benchmarks' direction pairs.
 #pragma once
 
 #include <algorithm>
@@ -6,11 +7,14 @@
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
-#include <numbers>
 #include <filesystem>
+#include <numbers>
+#include <random>
+#include <span>
 #include <string>
 #include <vector>
 
+#include "brdfz/errors.h"
 #include "brdfz/frame.h"
 #include "brdfz/table.h"
 
@@ -61,6 +65,50 @@ inline brdfz::Vec3 uniform_hemisphere(double u1, double u2) {
     const double r = std::sqrt(std::fmax(0.0, 1.0 - z * z));
     const double phi = 2.0 * std::numbers::pi * u2;
     return {r * std::cos(phi), r * std::sin(phi), z};
+}
+
+// A fresh directory under the system temp dir, removed with everything in it on scope exit.
+class TempDir {
+public:
+    TempDir() {
+        std::string name = (std::filesystem::temp_directory_path() / "brdfz-bench-XXXXXX").string();
+        if (!mkdtemp(name.data())) throw brdfz::IoError(name, "cannot create a temporary directory");
+        path_ = name;
+    }
+    ~TempDir() {
+        std::error_code ec;
+        std::filesystem::remove_all(path_, ec);
+    }
+    TempDir(const TempDir&) = delete;
+    TempDir& operator=(const TempDir&) = delete;
+    const std::filesystem::path& path() const { return path_; }
+
+private:
+    std::filesystem::path path_;
+};
+
+// The eval benchmarks' direction pairs: wi and wo both uniform on the upper hemisphere, the same
+// pairs (one seed) in every program, so that their figures compare.
+constexpr std::size_t kPairs = std::size_t{1} << 20;
+struct Pairs {
+    std::vector<brdfz::Vec3> wi, wo;
+};
+inline Pairs uniform_pairs(std::size_t n = kPairs) {
+    Pairs p{std::vector<brdfz::Vec3>(n), std::vector<brdfz::Vec3>(n)};
+    std::mt19937_64 rng(20261122);
+    std::uniform_real_distribution<double> u01(0.0, 1.0);
+    for (std::size_t k = 0; k < n; ++k) {
+        p.wi[k] = uniform_hemisphere(u01(rng), u01(rng));
+        p.wo[k] = uniform_hemisphere(u01(rng), u01(rng));
+    }
+    return p;
+}
+
+// Every channel summed: printed as a checksum, so that no evaluation can be dropped as unused.
+inline double sum_of(std::span<const brdfz::Rgb> out) {
+    double s = 0.0;
+    for (const brdfz::Rgb& f : out) s += f[0] + f[1] + f[2];
+    return s;
 }
 
 // "[--out FILE.csv] [--spec SPEC]... [FILE...]", the command line of the sweeps over representations

@@ -9,7 +9,6 @@
 #include <functional>
 #include <memory>
 #include <numbers>
-#include <random>
 #include <span>
 #include <string>
 #include <vector>
@@ -21,9 +20,6 @@
 #include "common.h"
 
 namespace {
-
-constexpr std::size_t kPairs = std::size_t{1} << 20;
-
 
 struct Case {
     std::string name;
@@ -58,14 +54,10 @@ int main(int argc, char** argv) try {
     }
     for (Case& c : cases) c.name = c.brdf->describe();
 
-    std::vector<brdfz::Vec3> wi(kPairs), wo(kPairs);
-    std::mt19937_64 rng(20261122);
-    std::uniform_real_distribution<double> u01(0.0, 1.0);
-    for (std::size_t k = 0; k < kPairs; ++k) {
-        wi[k] = bench::uniform_hemisphere(u01(rng), u01(rng));
-        wo[k] = bench::uniform_hemisphere(u01(rng), u01(rng));
-    }
-    std::vector<brdfz::Rgb> out(kPairs);
+    const bench::Pairs pairs = bench::uniform_pairs();
+    const std::vector<brdfz::Vec3>& wi = pairs.wi;
+    const std::vector<brdfz::Vec3>& wo = pairs.wo;
+    std::vector<brdfz::Rgb> out(bench::kPairs);
     const auto run = [&](const Case& c) {
         c.brdf->eval(std::span<const brdfz::Vec3>(wi), std::span<const brdfz::Vec3>(wo), std::span<brdfz::Rgb>(out));
     };
@@ -77,16 +69,16 @@ int main(int argc, char** argv) try {
             const auto t0 = bench::Clock::now();
             run(c);
             c.ms.push_back(bench::ms_between(t0, bench::Clock::now()));
-            for (const brdfz::Rgb& f : out) checksum += f[0] + f[1] + f[2];
+            checksum += bench::sum_of(out);
         }
 
     std::printf("source: %s\n", args.path.empty() ? "synthetic 90x90x180" : args.path.c_str());
-    std::printf("pairs: %zu uniform on the upper hemisphere, reps: %d (interleaved), checksum %.10g\n", kPairs,
+    std::printf("pairs: %zu uniform on the upper hemisphere, reps: %d (interleaved), checksum %.10g\n", bench::kPairs,
                 args.reps, checksum);
     for (const Case& c : cases) {
         const double ms = bench::median(c.ms);
         std::printf("%-58s %8zu B  median %8.2f ms  %6.2f M pairs/s  %5.2f x float32 time\n", c.name.c_str(),
-                    c.brdf->nbytes(), ms, kPairs / ms * 1e-3, ms / bench::median(cases[c.baseline].ms));
+                    c.brdf->nbytes(), ms, bench::kPairs / ms * 1e-3, ms / bench::median(cases[c.baseline].ms));
     }
     return 0;
 } catch (const std::exception& e) {

@@ -34,25 +34,6 @@ namespace {
 
 namespace fs = std::filesystem;
 
-class TempDir {
-public:
-    TempDir() {
-        std::string name = (fs::temp_directory_path() / "brdfz-bench-XXXXXX").string();
-        if (!mkdtemp(name.data())) throw brdfz::IoError(name, "cannot create a temporary directory");
-        path_ = name;
-    }
-    ~TempDir() {
-        std::error_code ec;
-        fs::remove_all(path_, ec);
-    }
-    TempDir(const TempDir&) = delete;
-    TempDir& operator=(const TempDir&) = delete;
-    const fs::path& path() const { return path_; }
-
-private:
-    fs::path path_;
-};
-
 std::FILE* open_or_throw(const std::string& path) {
     std::FILE* f = std::fopen(path.c_str(), "rb");
     if (!f) throw brdfz::IoError(path, "cannot open");
@@ -83,7 +64,7 @@ int main(int argc, char** argv) try {
     const brdfz::Table table = args.path.empty() ? bench::synthetic_table(brdfz::GridSpec{}) : brdfz::merl::read(args.path).table;
     const std::size_t bytes = table.bins() * 3 * sizeof(float);
 
-    TempDir tmp;
+    bench::TempDir tmp;
     const std::string container = (tmp.path() / "table.brdfz").string(), raw = (tmp.path() / "table.f32").string();
     brdfz::container::write(container, brdfz::TabularBrdf(table));
     {

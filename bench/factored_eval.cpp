@@ -12,7 +12,6 @@
 #include <functional>
 #include <memory>
 #include <numbers>
-#include <random>
 #include <span>
 #include <string>
 #include <vector>
@@ -23,15 +22,6 @@
 #include "common.h"
 
 namespace {
-
-constexpr std::size_t kPairs = std::size_t{1} << 20;
-
-
-double sum_of(std::span<const brdfz::Rgb> out) {
-    double s = 0.0;
-    for (const brdfz::Rgb& f : out) s += f[0] + f[1] + f[2];
-    return s;
-}
 
 struct Case {
     std::string name;
@@ -77,14 +67,10 @@ int main(int argc, char** argv) try {
         cases.push_back(std::move(k));
     }
 
-    std::vector<brdfz::Vec3> wi(kPairs), wo(kPairs);
-    std::mt19937_64 rng(20261122);
-    std::uniform_real_distribution<double> u01(0.0, 1.0);
-    for (std::size_t k = 0; k < kPairs; ++k) {
-        wi[k] = bench::uniform_hemisphere(u01(rng), u01(rng));
-        wo[k] = bench::uniform_hemisphere(u01(rng), u01(rng));
-    }
-    std::vector<brdfz::Rgb> out(kPairs);
+    const bench::Pairs pairs = bench::uniform_pairs();
+    const std::vector<brdfz::Vec3>& wi = pairs.wi;
+    const std::vector<brdfz::Vec3>& wo = pairs.wo;
+    std::vector<brdfz::Rgb> out(bench::kPairs);
     const auto run = [&](const Case& c) {
         c.use->eval(std::span<const brdfz::Vec3>(wi), std::span<const brdfz::Vec3>(wo), std::span<brdfz::Rgb>(out));
     };
@@ -98,18 +84,18 @@ int main(int argc, char** argv) try {
             run(c);
             c.cpu_ms.push_back(thread_cpu_ms() - c0);
             c.ms.push_back(bench::ms_between(t0, bench::Clock::now()));
-            checksum += sum_of(out);
+            checksum += bench::sum_of(out);
         }
 
     std::printf("table: %s; pairs: %zu uniform on the upper hemisphere, reps: %d (interleaved), checksum %.10g\n",
-                args.path.empty() ? "synthetic" : args.path.c_str(), kPairs, args.reps, checksum);
+                args.path.empty() ? "synthetic" : args.path.c_str(), bench::kPairs, args.reps, checksum);
     const double base_ms = bench::median(cases[0].ms), base_cpu = bench::median(cases[0].cpu_ms);
     std::printf("%-62s %9s %9s %7s | %9s %9s %7s | %9s %8s\n", "case", "wall ms", "M pairs/s", "x base", "CPU ms",
                 "M pairs/s", "x base", "bytes", "build s");
     for (const Case& c : cases) {
         const double ms = bench::median(c.ms), cpu = bench::median(c.cpu_ms);
-        std::printf("%-62s %9.2f %9.2f %7.2f | %9.2f %9.2f %7.2f | %9zu %8.2f\n", c.name.c_str(), ms, kPairs / ms * 1e-3,
-                    base_ms / ms, cpu, kPairs / cpu * 1e-3, base_cpu / cpu, c.use->nbytes(), c.build_s);
+        std::printf("%-62s %9.2f %9.2f %7.2f | %9.2f %9.2f %7.2f | %9zu %8.2f\n", c.name.c_str(), ms, bench::kPairs / ms * 1e-3,
+                    base_ms / ms, cpu, bench::kPairs / cpu * 1e-3, base_cpu / cpu, c.use->nbytes(), c.build_s);
     }
     return 0;
 } catch (const std::exception& e) {

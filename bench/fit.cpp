@@ -14,7 +14,6 @@
 #include <cstdio>
 #include <functional>
 #include <numbers>
-#include <random>
 #include <span>
 #include <string>
 #include <vector>
@@ -26,9 +25,6 @@
 #include "common.h"
 
 namespace {
-
-constexpr std::size_t kPairs = std::size_t{1} << 20;
-
 
 struct Case {
     const char* name;
@@ -54,38 +50,34 @@ int main(int argc, char** argv) try {
 
     // Evaluation, one core.
     const brdfz::AnalyticBrdf model("lambert+ggx", {0.2, 0.3, 0.4, 0.8, 0.7, 0.6, 0.15, 0.05});
-    std::vector<brdfz::Vec3> wi(kPairs), wo(kPairs);
-    std::mt19937_64 rng(20261122);
-    std::uniform_real_distribution<double> u01(0.0, 1.0);
-    for (std::size_t k = 0; k < kPairs; ++k) {
-        wi[k] = bench::uniform_hemisphere(u01(rng), u01(rng));
-        wo[k] = bench::uniform_hemisphere(u01(rng), u01(rng));
-    }
-    std::vector<brdfz::Rgb> out(kPairs);
+    const bench::Pairs pairs = bench::uniform_pairs();
+    const std::vector<brdfz::Vec3>& wi = pairs.wi;
+    const std::vector<brdfz::Vec3>& wo = pairs.wo;
+    std::vector<brdfz::Rgb> out(bench::kPairs);
     double checksum = 0.0;  // outputs are summed (untimed) and printed, so no work can be dropped
     Case eval_cases[] = {
         {"stream baseline", [&] {
-             for (std::size_t k = 0; k < kPairs; ++k)
+             for (std::size_t k = 0; k < bench::kPairs; ++k)
                  out[k] = {wi[k].x + wo[k].x, wi[k].y + wo[k].y, wi[k].z + wo[k].z};
          }, {}},
         {"per-pair eval", [&] {
-             for (std::size_t k = 0; k < kPairs; ++k) out[k] = model.eval(wi[k], wo[k]);
+             for (std::size_t k = 0; k < bench::kPairs; ++k) out[k] = model.eval(wi[k], wo[k]);
          }, {}},
         {"batch eval", [&] {
              model.eval(std::span<const brdfz::Vec3>(wi), std::span<const brdfz::Vec3>(wo), std::span<brdfz::Rgb>(out));
          }, {}},
     };
     time_cases(eval_cases, args.reps, [&] {
-        for (const brdfz::Rgb& f : out) checksum += f[0] + f[1] + f[2];
+        checksum += bench::sum_of(out);
     });
     std::printf("evaluation of %s\n", model.describe().c_str());
-    std::printf("pairs: %zu uniform on the upper hemisphere, reps: %d (interleaved), checksum %.10g\n", kPairs,
+    std::printf("pairs: %zu uniform on the upper hemisphere, reps: %d (interleaved), checksum %.10g\n", bench::kPairs,
                 args.reps, checksum);
     for (const Case& c : eval_cases) {
         const double ms = bench::median(c.ms);
-        std::printf("  %-16s median %8.2f ms  %7.2f M pairs/s\n", c.name, ms, kPairs / ms * 1e-3);
+        std::printf("  %-16s median %8.2f ms  %7.2f M pairs/s\n", c.name, ms, bench::kPairs / ms * 1e-3);
     }
-    const double rate = kPairs / bench::median(eval_cases[2].ms) * 1e-3;
+    const double rate = bench::kPairs / bench::median(eval_cases[2].ms) * 1e-3;
     std::printf("target batch eval >= 50 M pairs/s on one core: %s\n\n", rate >= 50 ? "met" : "NOT met");
 
     // Fitting, default options (all cores).

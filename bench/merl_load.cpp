@@ -31,26 +31,6 @@ namespace fs = std::filesystem;
 constexpr std::size_t kChunkBytes = std::size_t{1} << 19;  // brdfz::merl::read's chunk (65536 doubles)
 constexpr std::size_t kPage = 4096;
 
-// A fresh directory under the system temp dir, removed with everything in it on scope exit.
-class TempDir {
-public:
-    TempDir() {
-        std::string name = (fs::temp_directory_path() / "brdfz-bench-XXXXXX").string();
-        if (!mkdtemp(name.data())) throw brdfz::IoError(name, "cannot create a temporary directory");
-        path_ = name;
-    }
-    ~TempDir() {
-        std::error_code ec;
-        fs::remove_all(path_, ec);
-    }
-    TempDir(const TempDir&) = delete;
-    TempDir& operator=(const TempDir&) = delete;
-    const fs::path& path() const { return path_; }
-
-private:
-    fs::path path_;
-};
-
 // A page-aligned buffer, touched once so no timed run pays its page faults. Page-aligned because the
 // kernel copies from page-aligned page-cache pages, and on this machine's CPU that copy runs ~5x
 // slower when the destination sits 8 or 16 bytes past a page boundary — exactly where malloc puts
@@ -96,9 +76,9 @@ int main(int argc, char** argv) try {
     const bench::Args args = bench::parse_args(argc, argv, 15);
 
     std::string path = args.path;
-    std::unique_ptr<TempDir> tmp;
+    std::unique_ptr<bench::TempDir> tmp;
     if (path.empty()) {
-        tmp = std::make_unique<TempDir>();
+        tmp = std::make_unique<bench::TempDir>();
         path = (tmp->path() / "synthetic.binary").string();
         brdfz::merl::write(path, bench::synthetic_table(brdfz::GridSpec{}));
     }

@@ -13,7 +13,6 @@
 #include <cstdio>
 #include <functional>
 #include <numbers>
-#include <random>
 #include <span>
 #include <string>
 #include <vector>
@@ -24,15 +23,6 @@
 #include "common.h"
 
 namespace {
-
-constexpr std::size_t kPairs = std::size_t{1} << 20;
-
-
-double sum_of(std::span<const brdfz::Rgb> out) {
-    double s = 0.0;
-    for (const brdfz::Rgb& f : out) s += f[0] + f[1] + f[2];
-    return s;
-}
 
 struct Case {
     const char* name;
@@ -48,19 +38,15 @@ int main(int argc, char** argv) try {
     brdfz::Table table = args.path.empty() ? bench::synthetic_table(brdfz::GridSpec{}) : brdfz::merl::read(args.path).table;
     brdfz::TabularBrdf brdf(std::move(table));
 
-    std::vector<brdfz::Vec3> wi(kPairs), wo(kPairs);
-    std::mt19937_64 rng(20261122);
-    std::uniform_real_distribution<double> u01(0.0, 1.0);
-    for (std::size_t k = 0; k < kPairs; ++k) {
-        wi[k] = bench::uniform_hemisphere(u01(rng), u01(rng));
-        wo[k] = bench::uniform_hemisphere(u01(rng), u01(rng));
-    }
-    std::vector<brdfz::Rgb> out(kPairs);
+    const bench::Pairs pairs = bench::uniform_pairs();
+    const std::vector<brdfz::Vec3>& wi = pairs.wi;
+    const std::vector<brdfz::Vec3>& wo = pairs.wo;
+    std::vector<brdfz::Rgb> out(bench::kPairs);
 
     // The nearest bin of each pair by MERL's arithmetic (table.h's axis maps), for the gather baseline.
     const brdfz::GridSpec& g = brdf.table().grid();
-    std::vector<std::uint32_t> bins(kPairs);
-    for (std::size_t k = 0; k < kPairs; ++k) {
+    std::vector<std::uint32_t> bins(bench::kPairs);
+    for (std::size_t k = 0; k < bench::kPairs; ++k) {
         const brdfz::HalfDiff hd = brdfz::to_half_diff(wi[k], wo[k]);
         bins[k] = static_cast<std::uint32_t>(g.index(brdfz::axis::bin_of(brdfz::axis::theta_h_to_u(hd.theta_h, g.n_theta_h), g.n_theta_h),
                                                       brdfz::axis::bin_of(brdfz::axis::theta_d_to_u(hd.theta_d, g.n_theta_d), g.n_theta_d),
@@ -70,17 +56,17 @@ int main(int argc, char** argv) try {
 
     Case cases[] = {
         {"stream baseline", [&] {
-             for (std::size_t k = 0; k < kPairs; ++k)
+             for (std::size_t k = 0; k < bench::kPairs; ++k)
                  out[k] = {wi[k].x + wo[k].x, wi[k].y + wo[k].y, wi[k].z + wo[k].z};
          }, {}},
         {"coords baseline", [&] {
-             for (std::size_t k = 0; k < kPairs; ++k) {
+             for (std::size_t k = 0; k < bench::kPairs; ++k) {
                  const brdfz::HalfDiff hd = brdfz::to_half_diff(wi[k], wo[k]);
                  out[k] = {hd.theta_h, hd.theta_d, hd.phi_d};
              }
          }, {}},
         {"gather baseline", [&] {
-             for (std::size_t k = 0; k < kPairs; ++k) {
+             for (std::size_t k = 0; k < bench::kPairs; ++k) {
                  const float* v = data + 3 * static_cast<std::size_t>(bins[k]);
                  out[k] = {v[0], v[1], v[2]};
              }
@@ -102,21 +88,21 @@ int main(int argc, char** argv) try {
             const auto t0 = bench::Clock::now();
             c.run();
             c.ms.push_back(bench::ms_between(t0, bench::Clock::now()));
-            checksum += sum_of(out);
+            checksum += bench::sum_of(out);
         }
     }
 
     std::printf("table: %s, %s\n", args.path.empty() ? "synthetic" : args.path.c_str(), brdf.describe().c_str());
-    std::printf("pairs: %zu uniform on the upper hemisphere, reps: %d (interleaved), checksum %.10g\n", kPairs,
+    std::printf("pairs: %zu uniform on the upper hemisphere, reps: %d (interleaved), checksum %.10g\n", bench::kPairs,
                 args.reps, checksum);
     const double coords_ms = bench::median(cases[1].ms);
     for (const Case& c : cases) {
         const double ms = bench::median(c.ms);
         std::printf("%-16s median %8.2f ms  %7.2f M pairs/s  %5.2f x coords time\n", c.name, ms,
-                    kPairs / ms * 1e-3, ms / coords_ms);
+                    bench::kPairs / ms * 1e-3, ms / coords_ms);
     }
-    const double nearest = kPairs / bench::median(cases[3].ms) * 1e-3;
-    const double linear = kPairs / bench::median(cases[4].ms) * 1e-3;
+    const double nearest = bench::kPairs / bench::median(cases[3].ms) * 1e-3;
+    const double linear = bench::kPairs / bench::median(cases[4].ms) * 1e-3;
     std::printf("target nearest >= 20 M pairs/s: %s; linear >= 10 M pairs/s: %s\n", nearest >= 20 ? "met" : "NOT met",
                 linear >= 10 ? "met" : "NOT met");
     return 0;
