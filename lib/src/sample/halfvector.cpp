@@ -54,17 +54,13 @@ struct SliceSpan {
 // What a data draw needs before its cell search, and what it needs after: draw() and the block kernel
 // run these same functions, one draw at a time or across a block, so their results agree bit for bit.
 struct SamplerView {
-    const Piecewise2D* slices;
     double share, theta_max;
     int K;
 };
 
-// The slices' stacked tables (HalfVectorSampler::stacked_), each slice rows × cols cells.
-struct StackView {
-    int rows, cols;
-    const float *marginal, *conditional, *density;
-    const std::uint32_t *marginal_guide, *conditional_guide;
-};
+// The slices' tables end to end (HalfVectorSampler::stacked_), each slice rows × cols cells, as a
+// view of slice 0: the block kernel indexes the stack from there across draws.
+using StackView = Piecewise2D::View;
 
 struct Placement {
     double sin_o, t, v1, v2, sign;  // v1, v2: the slice's u, v1 below 1
@@ -186,8 +182,8 @@ struct Cell {
     // The few whose scans are longer, or whose cell coordinates need a nudge: Piecewise2D itself.
     for (std::size_t k = 0; k < n; ++k) {
         if (!redo[k]) continue;
-        const Piecewise2D::Point p = v.slices[slice[k]].sample(v1[k], v2[k]);
-        x[k] = p.x, y[k] = p.y, p_cell[k] = p.pdf, p_other[k] = v.slices[other[k]].density(p.row, p.col);
+        const Piecewise2D::Point p = st.stacked(slice[k]).sample(v1[k], v2[k]);
+        x[k] = p.x, y[k] = p.y, p_cell[k] = p.pdf, p_other[k] = st.stacked(other[k]).density_at(p.row, p.col);
     }
     // The results into local arrays first: the compiler cannot rule out that `out` overlaps the sine
     // table it gathers from, and then does not vectorise.
@@ -237,7 +233,7 @@ HalfVectorSampler::HalfVectorSampler(const Brdf& brdf, const HalfVectorSamplerOp
     const int K = o.n_theta_o, R = o.n_theta_h, C = o.n_phi;
     theta_o_.resize(K);
     for (int k = 0; k < K; ++k) theta_o_[k] = kMaxThetaODeg * kPi / 180.0 * k / (K - 1);
-    slices_.resize(K);
+    std::vector<Piecewise2D> slices(K);
 
     // Each slice: the integrand f·cosθi·(dωi/dx dy) averaged over 2×2 points per cell.
     detail::parallel_for(K, o.threads, [&](int, int k) {
@@ -267,22 +263,30 @@ HalfVectorSampler::HalfVectorSampler(const Brdf& brdf, const HalfVectorSamplerOp
             }
             weights[cell] = std::isfinite(sum) ? static_cast<float>(sum) : 0.0f;
         }
-        slices_[k] = Piecewise2D(weights, R, C);
+        slices[k] = Piecewise2D(weights, R, C);
     });
     const auto append = [](auto& to, auto from) { to.insert(to.end(), from.begin(), from.end()); };
-    for (const Piecewise2D& s : slices_) {
+    for (const Piecewise2D& s : slices) {
         append(stacked_.marginal, s.marginal_cdf());
         append(stacked_.conditional, s.conditional_cdf());
         append(stacked_.density, s.densities());
         append(stacked_.marginal_guide, s.marginal_guide());
         append(stacked_.conditional_guide, s.conditional_guide());
     }
+    first_ = {R,
+              C,
+              stacked_.marginal.data(),
+              stacked_.conditional.data(),
+              stacked_.density.data(),
+              stacked_.marginal_guide.data(),
+              stacked_.conditional_guide.data()};
 }
 
 std::size_t HalfVectorSampler::nbytes() const {
-    std::size_t n = theta_o_.size() * sizeof(double);
-    for (const Piecewise2D& s : slices_) n += 2 * s.nbytes();  // and stacked_'s copies
-    return n;
+    const Stacked& s = stacked_;
+    return theta_o_.size() * sizeof(double) +
+           (s.marginal.size() + s.conditional.size() + s.density.size()) * sizeof(float) +
+           (s.marginal_guide.size() + s.conditional_guide.size()) * sizeof(std::uint32_t);
 }
 
 HalfVectorSampler::SlicePair HalfVectorSampler::slices_for(double theta_o) const {
@@ -300,7 +304,7 @@ double HalfVectorSampler::data_pdf(const Vec3& wo, const Vec3& wi) const {
     const double x = std::fabs(std::atan2(h.y, h.x)) / kPi;
     const SlicePair sp = slices_for(view_elevation(std::sqrt(wo.x * wo.x + wo.y * wo.y), wo));
     const double xc = x < kBelowOne ? x : kBelowOne;
-    const double p_xy = (1.0 - sp.t) * slices_[sp.k0].pdf(xc, y) + sp.t * slices_[sp.k1].pdf(xc, y);
+    const double p_xy = (1.0 - sp.t) * slice(sp.k0).pdf(xc, y) + sp.t * slice(sp.k1).pdf(xc, y);
     const double jac = 4.0 * dot(wo, hw) * 2.0 * kPi * kPi * y * std::sin(theta_h);
     const double p = p_xy / jac;
     return std::isfinite(p) && p > 0.0 ? p : 0.0;
@@ -318,20 +322,17 @@ HalfVectorSampler::Draw HalfVectorSampler::draw(const Vec3& wo, double u1, doubl
         const Vec3 wi{r * std::cos(phi), r * std::sin(phi), std::sqrt(std::fmax(0.0, 1.0 - v))};
         return wi.z > 0.0 ? Draw{{wi, pdf(wo, wi), {}}} : Draw{};
     }
-    const SamplerView v{slices_.data(), share, theta_o_.back(), static_cast<int>(theta_o_.size())};
+    const SamplerView v{share, theta_o_.back(), static_cast<int>(theta_o_.size())};
     const Placement pl = place(v, wo, u1, u2);
-    const Piecewise2D::Point p = slices_[pl.slice].sample(pl.v1, pl.v2);
-    const Finish f = finish(v, half_turn(), wo, pl, p.x, p.y, p.pdf, slices_[pl.other].density(p.row, p.col));
+    const Piecewise2D::Point p = slice(pl.slice).sample(pl.v1, pl.v2);
+    const Finish f = finish(v, half_turn(), wo, pl, p.x, p.y, p.pdf, slice(pl.other).density_at(p.row, p.col));
     if (!f.ok) return {};
     return {{f.wi, f.pdf, {}}, true, f.sin_h, f.cos_h, f.sin_p, f.cos_p, pl.sin_o, wo.z};
 }
 
 void HalfVectorSampler::draw_block(const Vec3* wo, const std::array<double, 2>* u, std::size_t n, Draws& out) const {
-    const SamplerView v{slices_.data(), options_.cosine_share, theta_o_.back(), static_cast<int>(theta_o_.size())};
-    const StackView st{options_.n_theta_h,          options_.n_phi,          stacked_.marginal.data(),
-                       stacked_.conditional.data(), stacked_.density.data(), stacked_.marginal_guide.data(),
-                       stacked_.conditional_guide.data()};
-    (detail::simd_level() == detail::Simd::Avx2Fma ? draw_lanes_avx2 : draw_lanes_sse2)(v, st, half_turn(), wo, u, n,
+    const SamplerView v{options_.cosine_share, theta_o_.back(), static_cast<int>(theta_o_.size())};
+    (detail::simd_level() == detail::Simd::Avx2Fma ? draw_lanes_avx2 : draw_lanes_sse2)(v, first_, half_turn(), wo, u, n,
                                                                                         out);
     // The cosine share's draws one at a time: a twentieth of them, each with the full pdf() (libm's
     // sin and cos, atan2), which would not vectorise.

@@ -89,21 +89,21 @@ Piecewise2D::Piecewise2D(std::span<const float> weights, int rows, int cols) : r
     }
 }
 
-Piecewise2D::Point Piecewise2D::sample(double u1, double u2) const {
-    const int r = find_interval(marginal_.data(), marginal_guide_.data(), rows_, u1);
-    const double w_r = marginal_[r + 1] - marginal_[r];
-    const double fy = std::clamp((u1 - marginal_[r]) / w_r, 0.0, 1.0);
-    const float* cdf = &conditional_[static_cast<std::size_t>(r) * (cols_ + 1)];
-    const int c = find_interval(cdf, &conditional_guide_[static_cast<std::size_t>(r) * cols_], cols_, u2);
+Piecewise2D::Point Piecewise2D::View::sample(double u1, double u2) const {
+    const int r = find_interval(marginal, marginal_guide, rows, u1);
+    const double w_r = marginal[r + 1] - marginal[r];
+    const double fy = std::clamp((u1 - marginal[r]) / w_r, 0.0, 1.0);
+    const float* cdf = conditional + static_cast<std::size_t>(r) * (cols + 1);
+    const int c = find_interval(cdf, conditional_guide + static_cast<std::size_t>(r) * cols, cols, u2);
     const double fx = std::clamp((u2 - cdf[c]) / (cdf[c + 1] - cdf[c]), 0.0, 1.0);
-    return {cell_coord(c, cols_, fx), cell_coord(r, rows_, fy), density(r, c), r, c};
+    return {cell_coord(c, cols, fx), cell_coord(r, rows, fy), density_at(r, c), r, c};
 }
 
-double Piecewise2D::pdf(double x, double y) const {
+double Piecewise2D::View::pdf(double x, double y) const {
     if (!(x >= 0.0 && x < 1.0 && y >= 0.0 && y < 1.0)) return 0.0;
-    const int r = std::min(static_cast<int>(y * rows_), rows_ - 1);  // the cell_coord() convention
-    const int c = std::min(static_cast<int>(x * cols_), cols_ - 1);
-    return density_[static_cast<std::size_t>(r) * cols_ + c];
+    const int r = std::min(static_cast<int>(y * rows), rows - 1);  // the cell_coord() convention
+    const int c = std::min(static_cast<int>(x * cols), cols - 1);
+    return density_at(r, c);
 }
 
 }  // namespace brdfz

@@ -35,6 +35,11 @@ public:
     static constexpr double kMaxThetaODeg = 89.5;
 
     HalfVectorSampler(const Brdf& brdf, const HalfVectorSamplerOptions& options = {});
+    // Movable, not copyable: the slices' views point into the sampler's own tables.
+    HalfVectorSampler(HalfVectorSampler&&) = default;
+    HalfVectorSampler& operator=(HalfVectorSampler&&) = default;
+    HalfVectorSampler(const HalfVectorSampler&) = delete;
+    HalfVectorSampler& operator=(const HalfVectorSampler&) = delete;
 
     // For wo above the horizon and u in [0, 1)²: wi and its pdf (pdf 0 when wi falls below the horizon).
     BrdfSample sample(const Vec3& wo, double u1, double u2) const { return draw(wo, u1, u2).sample; }
@@ -75,15 +80,17 @@ private:
     SlicePair slices_for(double theta_o) const;
     double data_pdf(const Vec3& wo, const Vec3& wi) const;
 
+    Piecewise2D::View slice(int k) const { return first_.stacked(k); }
+
     HalfVectorSamplerOptions options_;
     std::vector<double> theta_o_;
-    std::vector<Piecewise2D> slices_;
-    // Copies of the slices' tables end to end (Piecewise2D's accessors), so that draw_block's CDF
-    // searches across draws gather from one base whichever slice each draw uses.
+    // The slices' distributions, their tables end to end (Piecewise2D::View), so that draw_block's CDF
+    // searches across draws gather from one base whichever slice each draw uses; first_ views slice 0.
     struct Stacked {
         std::vector<float> marginal, conditional, density;
         std::vector<std::uint32_t> marginal_guide, conditional_guide;
     } stacked_;
+    Piecewise2D::View first_{};
 };
 
 }  // namespace brdfz
