@@ -246,7 +246,9 @@ TEST_CASE("compact tables evaluate exactly as float32 tables of their decoded va
         }
 }
 
-TEST_CASE("compact tables give finite, non-negative values on 10^6 random pairs", "[compact]") {
+namespace {
+
+void check_compact_random_pairs(std::size_t n) {
     // A source with negative values: tabulation clamps them and counts every one.
     const NegativeSpots source;
     for (const char* spec : {"tabular:res=16x16x32,dtype=f16", "tabular:res=32x32x64,dtype=u8log,lookup=nearest",
@@ -256,7 +258,7 @@ TEST_CASE("compact tables give finite, non-negative values on 10^6 random pairs"
         const Compressed c = compress(source, spec);
         REQUIRE(c.notes.size() == 1);
         CHECK_THAT(c.notes[0], Catch::Contains("negative values clamped to 0"));
-        const Pairs p = random_pairs(1000000, 8);
+        const Pairs p = random_pairs(n, 8);
         std::vector<Rgb> out(p.wi.size());
         c.brdf->eval(p.wi, p.wo, out);
         std::size_t bad = 0, positive = 0;
@@ -272,6 +274,17 @@ TEST_CASE("compact tables give finite, non-negative values on 10^6 random pairs"
         const Vec3 nan{std::nan(""), 0.0, 0.5};
         for (double v : c.brdf->eval(nan, Vec3{0, 0, 1})) CHECK((std::isfinite(v) && v >= 0.0));
     }
+}
+
+}  // namespace
+
+// The test below evaluates the first 10^5 of the same pairs, every spec.
+TEST_CASE("compact tables give finite, non-negative values on 10^6 random pairs", "[compact][heavy]") {
+    check_compact_random_pairs(1000000);
+}
+
+TEST_CASE("compact tables give finite, non-negative values on 10^5 random pairs", "[compact]") {
+    check_compact_random_pairs(100000);
 }
 
 TEST_CASE("bivariate tables: exact for a φd-independent table, the φd mean otherwise", "[compact][bivariate]") {
@@ -473,15 +486,21 @@ TEST_CASE("stored codes are validated when a compact table is built from them", 
     CHECK_THROWS_WITH(CompactTable::encode(negative, TableDtype::U8Log), Catch::Contains("only finite values >= 0"));
 }
 
-TEST_CASE("the half-vector sampler works on compact tables", "[compact][sample]") {
+namespace {
+
+// Each spec sampled at 20 and 70 degrees (`both_views`), or at one of them, the specs taking them in turn.
+void check_compact_samplers(bool both_views) {
     CoatedDiffuseParams params;
     params.alpha = 0.15;
     const CoatedDiffuse source(params);
+    bool grazing_turn = true;
     for (const char* spec : {"tabular:res=45x45x90,dtype=u8log", "bivariate:res=64x64,dtype=f16",
                              "tabular:res=24x48x16,dtype=u8log,dwarp=0.8"}) {
         INFO(spec);
         const Compressed c = compress(source, spec);
+        grazing_turn = !grazing_turn;
         for (double deg : {20.0, 70.0}) {
+            if (!both_views && (deg == 70.0) != grazing_turn) continue;
             const Vec3 wo = spherical_direction(deg * M_PI / 180, 0.4);
             const test::Chi2Result r = test::chi2_test(*c.brdf, wo, 300000);
             CHECK(r.p_value > 0.01 / 4);
@@ -497,6 +516,17 @@ TEST_CASE("the half-vector sampler works on compact tables", "[compact][sample]"
             }
         }
     }
+}
+
+}  // namespace
+
+// The test below samples each spec at one of the two views.
+TEST_CASE("the half-vector sampler works on compact tables", "[compact][sample][heavy]") {
+    check_compact_samplers(true);
+}
+
+TEST_CASE("the half-vector sampler works on compact tables, one view each", "[compact][sample]") {
+    check_compact_samplers(false);
 }
 
 namespace {

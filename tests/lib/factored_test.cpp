@@ -127,10 +127,16 @@ TEST_CASE("factored: error falls monotonically with rank", "[factored][heavy]") 
         }
 }
 
-TEST_CASE("factored: nmf factors and reconstructions are non-negative", "[factored][nmf]") {
+namespace {
+
+// Every space with both colour modes (`all`), or with one each, the spaces taking them in turn.
+void check_nmf_non_negative(bool all) {
     const Table t = coated({16, 16, 32}, 0.05);
-    for (FactorSpace space : {FactorSpace::Linear, FactorSpace::Cos, FactorSpace::Log, FactorSpace::Cbrt})
+    bool shared_turn = false;
+    for (FactorSpace space : {FactorSpace::Linear, FactorSpace::Cos, FactorSpace::Log, FactorSpace::Cbrt}) {
+        shared_turn = !shared_turn;
         for (FactorColour colour : {FactorColour::Separate, FactorColour::Shared}) {
+            if (!all && (colour == FactorColour::Shared) != shared_turn) continue;
             INFO(factor_space_name(space) << " " << factor_colour_name(colour));
             const Factored f = factor(t, options(FactorMethod::Nmf, 3, space, FactorLayout::HxDP, colour));
             const Factors& x = f.brdf->factors();
@@ -139,9 +145,24 @@ TEST_CASE("factored: nmf factors and reconstructions are non-negative", "[factor
             CHECK(f.report.clamped == 0);
             CHECK(f.report.residual < 0.5);
         }
+    }
 }
 
-TEST_CASE("factored: masked factorisation is unaffected by the values in invalid bins", "[factored][mask]") {
+}  // namespace
+
+// The test below factors each space once, in one colour mode.
+TEST_CASE("factored: nmf factors and reconstructions are non-negative", "[factored][nmf][heavy]") {
+    check_nmf_non_negative(true);
+}
+
+TEST_CASE("factored: nmf factors and reconstructions are non-negative, one colour mode per space", "[factored][nmf]") {
+    check_nmf_non_negative(false);
+}
+
+namespace {
+
+// Both methods with both colour modes (`all`), or svd separate and nmf shared.
+void check_mask_ignores_fills(bool all) {
     const GridSpec g{12, 12, 24};
     Table t = coated(g);
     std::mt19937_64 rng(5);
@@ -157,6 +178,7 @@ TEST_CASE("factored: masked factorisation is unaffected by the values in invalid
     const Rgb fills[] = {{-1.0, -2.0, -3.0}, {inf, inf, inf}, {0.5, -1e30, 0.5}, {inf, 0.2, -0.0001}};
     for (FactorMethod method : {FactorMethod::Svd, FactorMethod::Nmf})
         for (FactorColour colour : {FactorColour::Separate, FactorColour::Shared}) {
+            if (!all && (method == FactorMethod::Nmf) != (colour == FactorColour::Shared)) continue;
             INFO(factor_method_name(method) << " " << factor_colour_name(colour));
             const FactorOptions o = options(method, 3, FactorSpace::Cbrt, FactorLayout::HDxP, colour);
             const Factored ref = factor(t, o);
@@ -169,6 +191,17 @@ TEST_CASE("factored: masked factorisation is unaffected by the values in invalid
                 CHECK(f.brdf->factors().colour_weights == ref.brdf->factors().colour_weights);
             }
         }
+}
+
+}  // namespace
+
+// The test below runs svd separate and nmf shared: both methods, both colour modes, every fill.
+TEST_CASE("factored: masked factorisation is unaffected by the values in invalid bins", "[factored][mask][heavy]") {
+    check_mask_ignores_fills(true);
+}
+
+TEST_CASE("factored: masked factorisation is unaffected by the values in invalid bins (two of the four cases)", "[factored][mask]") {
+    check_mask_ignores_fills(false);
 }
 
 TEST_CASE("factored: a masked low-rank table is completed, not pulled towards zero", "[factored][mask]") {
@@ -225,7 +258,10 @@ void check_bounded(const FactoredBrdf& f, const Table& t) {
 
 }  // namespace
 
-TEST_CASE("factored: bins without data do not extrapolate beyond the data (log and cbrt spaces)", "[factored][mask]") {
+namespace {
+
+// Both methods in both spaces (`all`), or svd in log and nmf in cbrt.
+void check_no_extrapolation(bool all) {
     // A sharp coat's grazing bins are below the horizon (invalid); with one θh row entirely invalid
     // as well. Unregularised, rank 4 reconstructed log-space values of 490–630 there (expm1: beyond
     // any float) and cbrt values up to 1,200, against data at most 8.9 and 19.
@@ -235,6 +271,7 @@ TEST_CASE("factored: bins without data do not extrapolate beyond the data (log a
         for (int ip = 0; ip < g.n_phi_d; ++ip) t.invalidate(g.index(15, id, ip));
     for (FactorMethod method : {FactorMethod::Svd, FactorMethod::Nmf})
         for (FactorSpace space : {FactorSpace::Log, FactorSpace::Cbrt}) {
+            if (!all && (method == FactorMethod::Nmf) != (space == FactorSpace::Cbrt)) continue;
             INFO(factor_method_name(method) << " " << factor_space_name(space));
             FactorOptions o = options(method, 4, space);
             o.max_iterations = 100;
@@ -244,6 +281,17 @@ TEST_CASE("factored: bins without data do not extrapolate beyond the data (log a
             // (svd, log), 0.0066 (nmf, log), 0.0011 (svd, cbrt), 0.0032 (nmf, cbrt).
             CHECK(f.report.residual < (space == FactorSpace::Log ? 0.01 : 0.005));
         }
+}
+
+}  // namespace
+
+// The test below runs svd in log and nmf in cbrt: both methods, both spaces.
+TEST_CASE("factored: bins without data do not extrapolate beyond the data (log and cbrt spaces)", "[factored][mask][heavy]") {
+    check_no_extrapolation(true);
+}
+
+TEST_CASE("factored: bins without data do not extrapolate beyond the data (svd log, nmf cbrt)", "[factored][mask]") {
+    check_no_extrapolation(false);
 }
 
 TEST_CASE("factored: RGL cc_ibiza_sunset factors to a finite sampler (nmf and svd)", "[factored][data][heavy]") {
@@ -287,10 +335,11 @@ TEST_CASE("factored: a warped θd axis lowers the error on RGL satin_rosaline", 
     CHECK(e_warped < 0.03);
 }
 
-TEST_CASE("factored: outputs are finite and non-negative on 10^6 random pairs, clamping counted", "[factored]") {
+namespace {
+
+void check_random_pairs(std::size_t n) {
     const Table t = coated({16, 16, 32}, 0.03);
     std::mt19937_64 rng(11);
-    const std::size_t n = 1000000;
     std::vector<Vec3> wi(n), wo(n);
     for (std::size_t k = 0; k < n; ++k) {
         wi[k] = random_direction(rng);  // half of them below the horizon
@@ -331,6 +380,17 @@ TEST_CASE("factored: outputs are finite and non-negative on 10^6 random pairs, c
             }
 }
 
+}  // namespace
+
+// The test below evaluates the first 10^5 of the same pairs, every case.
+TEST_CASE("factored: outputs are finite and non-negative on 10^6 random pairs, clamping counted", "[factored][heavy]") {
+    check_random_pairs(1000000);
+}
+
+TEST_CASE("factored: outputs are finite and non-negative on 10^5 random pairs, clamping counted", "[factored]") {
+    check_random_pairs(100000);
+}
+
 TEST_CASE("factored: eval interpolates the factors (bin samples give the reconstruction)", "[factored]") {
     const GridSpec g{10, 10, 20};
     const Factored f = factor(coated(g), options(FactorMethod::Svd, 3, FactorSpace::Log));
@@ -349,7 +409,11 @@ TEST_CASE("factored: eval interpolates the factors (bin samples give the reconst
 // the tabular linear lookup (double arithmetic) of the transform-space reconstruction, mapped back
 // with std: interpolating the factors is interpolating their product, as the lookup interpolates bins.
 // nmf, so that no value is clamped (clamping happens after the interpolation, not before).
-TEST_CASE("factored: eval is the interpolated reconstruction, within 1e-5, at random pairs", "[factored]") {
+namespace {
+
+// Every space, layout and colour mode (`all`), or the half of the combinations with an even count of
+// (non-linear space, HDxP, shared colour): each space, layout and colour mode is still among them.
+void check_eval_interpolates(bool all) {
     const GridSpec g{12, 10, 16};
     const Table t = coated(g);
     std::mt19937_64 rng(12);
@@ -363,6 +427,8 @@ TEST_CASE("factored: eval is the interpolated reconstruction, within 1e-5, at ra
     for (FactorSpace space : {FactorSpace::Linear, FactorSpace::Log, FactorSpace::Cbrt})
         for (FactorLayout layout : {FactorLayout::HxDP, FactorLayout::HDxP})
             for (FactorColour colour : {FactorColour::Separate, FactorColour::Shared}) {
+                const int odd = (space != FactorSpace::Linear) + (layout == FactorLayout::HDxP) + (colour == FactorColour::Shared);
+                if (!all && odd % 2 != 0) continue;
                 INFO(factor_space_name(space) << " " << factor_layout_name(layout) << " " << factor_colour_name(colour));
                 // Without the ceiling at the data's maximum (tested on its own), which clamps after
                 // the interpolation here but before it in the reference.
@@ -392,11 +458,26 @@ TEST_CASE("factored: eval is the interpolated reconstruction, within 1e-5, at ra
             }
 }
 
+}  // namespace
+
+// The test below runs half of the combinations, each space, layout and colour mode among them.
+TEST_CASE("factored: eval is the interpolated reconstruction, within 1e-5, at random pairs", "[factored][heavy]") {
+    check_eval_interpolates(true);
+}
+
+TEST_CASE("factored: eval is the interpolated reconstruction, within 1e-5, at random pairs (half the cases)", "[factored]") {
+    check_eval_interpolates(false);
+}
+
 // The kernel is built twice (detail/simd.h): for AVX2 + FMA, chosen where the CPU has them, and for
 // the SSE2 baseline. Both blend in float, so they agree to float rounding, not bit for bit (FMA
 // contracts, lanes sum in another order); single-pair eval runs the batch's build, bit for bit, in
 // each. nmf: without cancelling components, float rounding stays relative to each value.
-TEST_CASE("factored: the SSE2 and AVX2 kernels agree", "[factored]") {
+namespace {
+
+// Every space, layout and colour mode (`all`), or the half of them as in check_eval_interpolates:
+// each space, and each layout with each colour mode (the kernel's builds), still among them.
+void check_kernels_agree(bool all) {
     if (detail::simd_level() != detail::Simd::Avx2Fma) WARN("no AVX2 + FMA on this CPU: both runs use the SSE2 kernel");
     const Table t = coated({12, 10, 16});
     std::mt19937_64 rng(13);
@@ -407,6 +488,8 @@ TEST_CASE("factored: the SSE2 and AVX2 kernels agree", "[factored]") {
     for (FactorSpace space : {FactorSpace::Linear, FactorSpace::Log, FactorSpace::Cbrt})
         for (FactorLayout layout : {FactorLayout::HxDP, FactorLayout::HDxP})
             for (FactorColour colour : {FactorColour::Separate, FactorColour::Shared}) {
+                const int odd = (space != FactorSpace::Linear) + (layout == FactorLayout::HDxP) + (colour == FactorColour::Shared);
+                if (!all && odd % 2 != 0) continue;
                 INFO(factor_space_name(space) << " " << factor_layout_name(layout) << " " << factor_colour_name(colour));
                 const Factored f = factor(t, options(FactorMethod::Nmf, 3, space, layout, colour));
                 detail::simd_cap = detail::Simd::Sse2;
@@ -428,6 +511,17 @@ TEST_CASE("factored: the SSE2 and AVX2 kernels agree", "[factored]") {
                 CHECK(worst < 2e-6);
                 CHECK(differ == 0);
             }
+}
+
+}  // namespace
+
+// The test below compares the kernels on half of the combinations.
+TEST_CASE("factored: the SSE2 and AVX2 kernels agree", "[factored][heavy]") {
+    check_kernels_agree(true);
+}
+
+TEST_CASE("factored: the SSE2 and AVX2 kernels agree (half the cases)", "[factored]") {
+    check_kernels_agree(false);
 }
 
 // Separate colour of rank 3 and 4 runs a kernel of its own (channels in groups of 4 floats, no colour

@@ -22,8 +22,10 @@ namespace {
 
 // A model tabulated on MERL's grid, each value multiplied by (1 + 2% Gaussian noise), 10% of the
 // bins dropped at random.
-TabularBrdf noisy_table(const Brdf& truth, std::uint64_t seed, double noise = 0.02, double drop = 0.10) {
+TabularBrdf noisy_table(const Brdf& truth, std::uint64_t seed, double noise = 0.02, double drop = 0.10,
+                        const GridSpec& grid = GridSpec{}) {
     TabulateOptions t;
+    t.grid = grid;
     Table table = tabulate(truth, t).table;
     std::mt19937_64 rng(seed);
     std::normal_distribution<double> n(0.0, noise);
@@ -67,7 +69,9 @@ MeasurementSet grazing_only() {
 
 }  // namespace
 
-TEST_CASE("fitting recovers every parameter within 5% from noisy, incomplete tables", "[fit]") {
+namespace {
+
+void check_recovery(const GridSpec& grid) {
     struct Case {
         const char* model;
         std::vector<double> params;
@@ -79,7 +83,7 @@ TEST_CASE("fitting recovers every parameter within 5% from noisy, incomplete tab
     };
     for (const Case& c : cases) {
         const AnalyticBrdf truth(c.model, c.params);
-        const TabularBrdf data = noisy_table(truth, 42);
+        const TabularBrdf data = noisy_table(truth, 42, 0.02, 0.10, grid);
         FitOptions o;
         const FitResult r = fit(data, c.model, o);
         INFO(report(r));
@@ -95,6 +99,17 @@ TEST_CASE("fitting recovers every parameter within 5% from noisy, incomplete tab
         CHECK(r.report.samples > 10000);
         CHECK_FALSE(r.report.poor_fit);
     }
+}
+
+}  // namespace
+
+// MERL's grid; the test below runs the same fits on a grid with 27 times fewer bins.
+TEST_CASE("fitting recovers every parameter within 5% from noisy, incomplete tables", "[fit][heavy]") {
+    check_recovery(GridSpec{});
+}
+
+TEST_CASE("fitting recovers every parameter within 5% from noisy, incomplete tables on a coarser grid", "[fit]") {
+    check_recovery(GridSpec{30, 30, 60});
 }
 
 TEST_CASE("a fit that converges to a model missing the data is flagged poor, its status kept", "[fit]") {
@@ -118,9 +133,12 @@ TEST_CASE("a fit that converges to a model missing the data is flagged poor, its
     CHECK_FALSE(good.report.poor_fit);
 }
 
-TEST_CASE("every loss and the robust losses fit, and fits are deterministic", "[fit]") {
+namespace {
+
+// Every loss fitted twice and the Cauchy loss on outliers, on a noisy table of `grid`.
+void check_losses(const GridSpec& grid) {
     const AnalyticBrdf truth("lambert+ggx", {0.3, 0.2, 0.1, 0.6, 0.5, 0.4, 0.2, 0.1});
-    const TabularBrdf data = noisy_table(truth, 7);
+    const TabularBrdf data = noisy_table(truth, 7, 0.02, 0.10, grid);
     for (const char* loss : {"cos", "log", "cbrt"}) {
         FitOptions o;
         o.loss = parse_fit_loss(loss);
@@ -147,6 +165,17 @@ TEST_CASE("every loss and the robust losses fit, and fits are deterministic", "[
     CHECK(robust.model.params()[6] == Approx(0.2).epsilon(0.1));
     CHECK_THROWS_AS(parse_fit_loss("l2"), ValueError);
     CHECK_THROWS_AS(fit(set, "lambert+nope"), ValueError);
+}
+
+}  // namespace
+
+// MERL's grid; the test below runs the same fits on a grid with 27 times fewer bins.
+TEST_CASE("every loss and the robust losses fit, and fits are deterministic", "[fit][heavy]") {
+    check_losses(GridSpec{});
+}
+
+TEST_CASE("every loss and the robust losses fit, and fits are deterministic, on a coarser grid", "[fit]") {
+    check_losses(GridSpec{30, 30, 60});
 }
 
 TEST_CASE("autodiff Jacobians of every lobe agree with finite differences", "[fit][lobes]") {
