@@ -341,7 +341,7 @@ TEST_CASE("tabular sample: the weight from the draw's angles is eval's", "[sampl
 }
 
 // The fused batch kernels of both table classes against their one-at-a-time path, with bad input mixed in.
-TEST_CASE("table sample_batch: each result is the one-at-a-time sample; bad input gives failed samples",
+TEST_CASE("table sample_batch: each result is the one-at-a-time sample, and bad input gives failed samples",
           "[sample][tabular][compact]") {
     TabularBrdf t = tabulated(0.05);
     const Compressed u8 = compress(t, "tabular:res=45x45x90,dtype=u8log");
