@@ -39,7 +39,7 @@ std::string GridSpec::str() const {
 
 namespace {
 constexpr std::size_t kHugePage = std::size_t{2} << 20;
-// Below two huge pages a table gains little from them, and the rounding up would waste memory.
+// Below two huge pages a table gains little from them, and the 2 MiB alignment could waste as much again.
 bool huge(std::size_t bytes) { return bytes >= 2 * kHugePage; }
 }  // namespace
 
