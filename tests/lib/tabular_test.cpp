@@ -2,11 +2,14 @@
 
 #include <cmath>
 #include <random>
+#include <tuple>
 #include <vector>
 
+#include "brdfz/compress.h"
 #include "brdfz/coords.h"
 #include "brdfz/errors.h"
 #include "brdfz/repr/tabular.h"
+#include "detail/simd.h"
 
 using namespace brdfz;
 
@@ -269,3 +272,63 @@ TEST_CASE("lookups on a warped θd axis read the samples where the axis puts the
     }
     CHECK_THAT(linear.describe(), Catch::Contains("theta_d warp 0.7"));
 }
+
+// The batch kernel (detail/table_lookup.h) is built twice, for SSE2 and for AVX2 without FMA: both must
+// give the one-pair eval's values, bit for bit, for float32 tables (both lookups) and compact tables, on
+// a table with invalid bins, for pairs that take the kernel's fallbacks (φd ill-conditioned: wi = wo, the
+// normal) and for bad input.
+TEST_CASE("table eval batches: each value is the one-pair eval's, in both builds", "[tabular][compact]") {
+    Table t(GridSpec{});
+    for (std::size_t b = 0; b < t.bins(); ++b) {
+        const double v = 1.0 + std::sin(0.001 * static_cast<double>(b));
+        if (b % 7 == 3 || b / 180 % 90 > 80) continue;  // invalid: scattered bins and grazing θd
+        t.set(b, {v, 2.0 * v, 0.5 + 0.25 * v});
+    }
+    TabularBrdf linear(std::move(t));
+    TabularBrdf nearest(Table(linear.table()), Lookup::Nearest);
+    const Compressed f16 = compress(linear, "tabular:res=45x45x90,dtype=f16");
+    const Compressed u8 = compress(linear, "tabular:res=45x45x90,dtype=u8log");
+
+    std::mt19937_64 rng(11);
+    std::normal_distribution<double> n;
+    std::vector<Vec3> wi(1000), wo(1000);  // not a multiple of the 64-pair block
+    for (std::size_t k = 0; k < wi.size(); ++k) {
+        wi[k] = normalize({n(rng), n(rng), n(rng)});
+        wo[k] = normalize({n(rng), n(rng), std::fabs(n(rng))});
+    }
+    const double nan = std::nan("");
+    const Vec3 up{0, 0, 1}, tilted = normalize({0.3, -0.2, 0.9});
+    wi[1] = wo[1] = tilted;                        // θd = 0
+    wi[2] = wo[2] = up;                            // θh = θd = 0
+    wi[3] = normalize({-0.3, 0.2, 0.9}), wo[3] = tilted;  // θh = 0
+    wi[4] = {nan, 0, 1}, wo[5] = {0, 0, nan}, wi[6] = {INFINITY, 0, 1}, wi[7] = {0, 0, 0}, wi[8] = {0, 0, -1};
+    if (detail::simd_level() != detail::Simd::Avx2Fma) WARN("no AVX2 on this CPU: both runs use the SSE2 kernel");
+    for (const auto& [b, simd] : {std::tuple{static_cast<const Brdf*>(&linear), detail::Simd::Avx2Fma},
+                                  std::tuple{static_cast<const Brdf*>(&linear), detail::Simd::Sse2},
+                                  std::tuple{static_cast<const Brdf*>(&nearest), detail::Simd::Avx2Fma},
+                                  std::tuple{static_cast<const Brdf*>(&nearest), detail::Simd::Sse2},
+                                  std::tuple{static_cast<const Brdf*>(f16.brdf.get()), detail::Simd::Avx2Fma},
+                                  std::tuple{static_cast<const Brdf*>(f16.brdf.get()), detail::Simd::Sse2},
+                                  std::tuple{static_cast<const Brdf*>(u8.brdf.get()), detail::Simd::Avx2Fma},
+                                  std::tuple{static_cast<const Brdf*>(u8.brdf.get()), detail::Simd::Sse2}}) {
+        INFO(b->describe() << (simd == detail::Simd::Sse2 ? ", SSE2 kernel" : ", AVX2 kernel"));
+        std::vector<Rgb> out(wi.size());
+        detail::simd_cap = simd;
+        b->eval(wi, wo, out);
+        detail::simd_cap = detail::Simd::Avx2Fma;
+        std::size_t positive = 0;
+        for (std::size_t k = 0; k < wi.size(); ++k) {
+            INFO(k);
+            const Rgb f = b->eval(wi[k], wo[k]);
+            for (int c = 0; c < 3; ++c) {
+                REQUIRE(std::isfinite(out[k][c]));
+                REQUIRE(out[k][c] == f[c]);
+            }
+            positive += f[0] > 0.0;
+        }
+        CHECK(positive > wi.size() / 3);  // the pairs above the horizon, less those on invalid bins only
+        if (b != &nearest)  // a nearest bin may be an invalid one; a linear lookup has valid neighbours
+            for (std::size_t k = 1; k <= 3; ++k) CHECK(out[k][0] > 0.0);
+    }
+}
+

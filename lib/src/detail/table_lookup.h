@@ -22,6 +22,7 @@
 #include "brdfz/repr/tabular.h"
 #include "brdfz/table.h"
 #include "detail/fast_math.h"
+#include "detail/simd.h"
 
 namespace brdfz::detail {
 
@@ -267,40 +268,99 @@ Rgb eval_table(const GridSpec& g, const Values& values, Lookup lookup, const Vec
     return read_linear(g, values, linear_corners(g, c, wi, wo));
 }
 
-// Blocks of pairs in three passes: (1) the coordinates, branch-free and vectorised; (2) bins or
-// corners, prefetching the table lines; (3) the table reads. In one pass a lookup's arithmetic is too
-// long for the core to run ahead to the next pair's table read, so every cache miss stalled in turn.
+// Batch kernels (eval_table_batch, and sample_table_batch's weights) work in blocks of pairs, in passes
+// over arrays of numbers, not of structs, so that the branch-free passes vectorise.
+constexpr std::size_t kLookupBlock = 64;
+
+// A block's bin coordinates (BinCoords).
+struct BlockCoords {
+    double uh[kLookupBlock], ud[kLookupBlock], up[kLookupBlock];
+    void set(std::size_t k, const BinCoords& c) { uh[k] = c.uh, ud[k] = c.ud, up[k] = c.up; }
+};
+
+// The table reads of a block of m pairs from their coordinates, in passes: (1) bins, or corners
+// (branch-free, then linear_corners' fallback where φd was flagged); (2) prefetching the table lines;
+// (3) the reads, each handed to emit(k, f). In one pass a lookup's arithmetic is too long for the core to
+// run ahead to the next pair's table read, so every cache miss stalled in turn. Pairs without use[k] are
+// skipped; wi(k) and wo[k] are the pair, for the fallbacks. Each f is eval_table's, bit for bit.
+template <bool Wide, typename Values, typename Wi, typename Emit>
+[[gnu::always_inline]] inline void lookup_block(const GridSpec& g, const Values& values, Lookup lookup,
+                                                const BlockCoords& c, const bool* use, std::size_t m, Wi wi,
+                                                const Vec3* wo, Emit emit) {
+    if (lookup == Lookup::Nearest) {
+        std::size_t bins[kLookupBlock];
+        for (std::size_t k = 0; k < m; ++k) {
+            if (!use[k]) continue;
+            bins[k] = nearest_bin(g, {c.uh[k], c.ud[k], c.up[k]}, wi(k), wo[k]);
+            __builtin_prefetch(values.address(bins[k]));
+        }
+        for (std::size_t k = 0; k < m; ++k)
+            if (use[k]) emit(k, read_nearest(values, bins[k]));
+        return;
+    }
+    // Corners as arrays.
+    int h0[kLookupBlock], h1[kLookupBlock], d0[kLookupBlock], d1[kLookupBlock], p0[kLookupBlock], p1[kLookupBlock];
+    double ht[kLookupBlock], dt[kLookupBlock], pt[kLookupBlock];
+    const double off = g.sample_offset();
+    for (std::size_t k = 0; k < m; ++k) {
+        const Span h = clamped_span(c.uh[k] - off, g.n_theta_h), d = clamped_span(c.ud[k] - off, g.n_theta_d),
+                   p = periodic_span(c.up[k] - off, g.n_phi_d);
+        h0[k] = h.i0, h1[k] = h.i1, ht[k] = h.t, d0[k] = d.i0, d1[k] = d.i1, dt[k] = d.t;
+        p0[k] = p.i0, p1[k] = p.i1, pt[k] = p.t;
+    }
+    for (std::size_t k = 0; k < m; ++k)
+        if (use[k] && !(c.up[k] <= g.n_phi_d)) [[unlikely]] {  // kIllConditioned or NaN
+            const Corners x = linear_corners(g, {c.uh[k], c.ud[k], c.up[k]}, wi(k), wo[k]);
+            h0[k] = x.h.i0, h1[k] = x.h.i1, ht[k] = x.h.t, d0[k] = x.d.i0, d1[k] = x.d.i1, dt[k] = x.d.t;
+            p0[k] = x.p.i0, p1[k] = x.p.i1, pt[k] = x.p.t;
+        }
+    for (std::size_t k = 0; k < m; ++k)
+        if (use[k]) prefetch_corners(g, values, h0[k], h1[k], d0[k], d1[k], p0[k], p1[k]);
+    for (std::size_t k = 0; k < m; ++k)
+        if (use[k])
+            emit(k, read_linear<Wide>(g, values, {{h0[k], h1[k], ht[k]}, {d0[k], d1[k], dt[k]}, {p0[k], p1[k], pt[k]}}));
+}
+
+// Blocks of pairs: their coordinates (vectorised), then lookup_block.
+template <bool Wide, typename Values>
+[[gnu::always_inline]] inline void eval_table_passes(const GridSpec& g, const Values& values, Lookup lookup,
+                                                     const Vec3* wi, const Vec3* wo, Rgb* out, std::size_t n) {
+    BlockCoords coords;
+    bool above[kLookupBlock];
+    for (std::size_t start = 0; start < n; start += kLookupBlock) {
+        const std::size_t m = std::min(kLookupBlock, n - start);
+        const Vec3* a = wi + start;
+        const Vec3* b = wo + start;
+        Rgb* o = out + start;
+        for (std::size_t k = 0; k < m; ++k) coords.set(k, fast_bin_coords(g, a[k], b[k]));
+        for (std::size_t k = 0; k < m; ++k) above[k] = (a[k].z > 0.0) & (b[k].z > 0.0);
+        for (std::size_t k = 0; k < m; ++k)
+            if (!above[k]) o[k] = Rgb{};
+        lookup_block<Wide>(
+            g, values, lookup, coords, above, m, [a](std::size_t k) -> const Vec3& { return a[k]; }, b,
+            [o](std::size_t k, const Rgb& f) { o[k] = f; });
+    }
+}
+
+// The kernel's two builds (detail/simd.h); the AVX2 one without FMA, so that both give eval_table's
+// results to the bit.
+template <typename Values>
+[[gnu::flatten]] void eval_table_batch_sse2(const GridSpec& g, const Values& values, Lookup lookup, const Vec3* wi,
+                                            const Vec3* wo, Rgb* out, std::size_t n) {
+    eval_table_passes<false>(g, values, lookup, wi, wo, out, n);
+}
+template <typename Values>
+[[gnu::flatten, gnu::target("avx2")]] void eval_table_batch_avx2(const GridSpec& g, const Values& values,
+                                                                 Lookup lookup, const Vec3* wi, const Vec3* wo,
+                                                                 Rgb* out, std::size_t n) {
+    eval_table_passes<true>(g, values, lookup, wi, wo, out, n);
+}
+
 template <typename Values>
 void eval_table_batch(const GridSpec& g, const Values& values, Lookup lookup, const Vec3* wi, const Vec3* wo,
                       Rgb* out, std::size_t n) {
-    constexpr std::size_t kBlock = 64;
-    BinCoords coords[kBlock];
-    std::size_t bins[kBlock];
-    Corners corners[kBlock];
-    bool above[kBlock];
-    for (std::size_t start = 0; start < n; start += kBlock) {
-        const std::size_t m = std::min(kBlock, n - start);
-        const Vec3* a = wi + start;
-        const Vec3* b = wo + start;
-        for (std::size_t k = 0; k < m; ++k) coords[k] = fast_bin_coords(g, a[k], b[k]);
-        for (std::size_t k = 0; k < m; ++k) above[k] = (a[k].z > 0.0) & (b[k].z > 0.0);
-        if (lookup == Lookup::Nearest) {
-            for (std::size_t k = 0; k < m; ++k) {
-                if (!above[k]) continue;
-                bins[k] = nearest_bin(g, coords[k], a[k], b[k]);
-                __builtin_prefetch(values.address(bins[k]));
-            }
-            for (std::size_t k = 0; k < m; ++k) out[start + k] = above[k] ? read_nearest(values, bins[k]) : Rgb{};
-        } else {
-            for (std::size_t k = 0; k < m; ++k) {
-                if (!above[k]) continue;
-                const Corners& c = corners[k] = linear_corners(g, coords[k], a[k], b[k]);
-                prefetch_corners(g, values, c.h.i0, c.h.i1, c.d.i0, c.d.i1, c.p.i0, c.p.i1);
-            }
-            for (std::size_t k = 0; k < m; ++k)
-                out[start + k] = above[k] ? read_linear(g, values, corners[k]) : Rgb{};
-        }
-    }
+    (simd_level() == Simd::Avx2Fma ? eval_table_batch_avx2<Values> : eval_table_batch_sse2<Values>)(
+        g, values, lookup, wi, wo, out, n);
 }
 
 }  // namespace brdfz::detail

@@ -69,23 +69,18 @@ BrdfSample sample_table(const GridSpec& g, const Values& values, Lookup lookup, 
 }
 
 // Brdf::sample_batch: blocks of draws in passes, as eval_table_batch does for pairs: (1) the draws
-// (HalfVectorSampler::draw_block), (2) their bin coordinates, (3) bins or corners, (4) prefetching
-// the table lines, (5) the table reads and the weights. The passes other than the table reads are
-// branch-free over arrays of numbers, so that they vectorise. Each result is sample_table's, bit for bit.
+// (HalfVectorSampler::draw_block), (2) their bin coordinates, (3) the table reads (lookup_block) and the
+// weights. Each result is sample_table's, bit for bit.
 template <bool Wide, typename Values>
 [[gnu::always_inline]] inline void sample_table_passes(const GridSpec& g, const Values& values, Lookup lookup,
                                                        const HalfVectorSampler& sampler, const Vec3* wo,
                                                        const std::array<double, 2>* u, BrdfSample* out,
                                                        std::size_t n) {
     constexpr std::size_t kBlock = HalfVectorSampler::kBlock;
+    static_assert(kBlock <= kLookupBlock);
     HalfVectorSampler::Draws d;
-    double uh[kBlock], ud[kBlock], up[kBlock];
-    // Linear lookup's corners (Corners) as arrays.
-    int h0[kBlock], h1[kBlock], d0[kBlock], d1[kBlock], p0[kBlock], p1[kBlock];
-    double ht[kBlock], dt[kBlock], pt[kBlock];
-    std::size_t bins[kBlock];
+    BlockCoords coords;
     bool ok[kBlock];
-    const double off = g.sample_offset();
     for (std::size_t start = 0; start < n; start += kBlock) {
         const std::size_t m = std::min(kBlock, n - start);
         BrdfSample* s = out + start;
@@ -97,46 +92,13 @@ template <bool Wide, typename Values>
             if (!ok[k]) s[k] = {};
         }
         // Every draw's angles, set or not (unset ones are zeros, whose coordinates are not used).
-        for (std::size_t k = 0; k < m; ++k) {
-            const BinCoords c =
-                drawn_bin_coords(g, d.sin_h[k], d.cos_h[k], d.sin_p[k], d.cos_p[k], d.sin_o[k], d.cos_o[k]);
-            uh[k] = c.uh, ud[k] = c.ud, up[k] = c.up;
-        }
         for (std::size_t k = 0; k < m; ++k)
-            if (ok[k] && !d.half[k]) {
-                const BinCoords c = fast_bin_coords(g, s[k].wi, w[k]);
-                uh[k] = c.uh, ud[k] = c.ud, up[k] = c.up;
-            }
-        if (lookup == Lookup::Nearest) {
-            for (std::size_t k = 0; k < m; ++k) {
-                if (!ok[k]) continue;
-                bins[k] = nearest_bin(g, {uh[k], ud[k], up[k]}, s[k].wi, w[k]);
-                __builtin_prefetch(values.address(bins[k]));
-            }
-            for (std::size_t k = 0; k < m; ++k)
-                if (ok[k]) set_weight(s[k], read_nearest(values, bins[k]));
-            continue;
-        }
-        // linear_corners without its fallback, for every draw; then the fallback where φd was flagged.
-        for (std::size_t k = 0; k < m; ++k) {
-            const Span h = clamped_span(uh[k] - off, g.n_theta_h), dd = clamped_span(ud[k] - off, g.n_theta_d),
-                       p = periodic_span(up[k] - off, g.n_phi_d);
-            h0[k] = h.i0, h1[k] = h.i1, ht[k] = h.t, d0[k] = dd.i0, d1[k] = dd.i1, dt[k] = dd.t;
-            p0[k] = p.i0, p1[k] = p.i1, pt[k] = p.t;
-        }
+            coords.set(k, drawn_bin_coords(g, d.sin_h[k], d.cos_h[k], d.sin_p[k], d.cos_p[k], d.sin_o[k], d.cos_o[k]));
         for (std::size_t k = 0; k < m; ++k)
-            if (ok[k] && !(up[k] <= g.n_phi_d)) [[unlikely]] {  // kIllConditioned or NaN
-                const Corners c = linear_corners(g, {uh[k], ud[k], up[k]}, s[k].wi, w[k]);
-                h0[k] = c.h.i0, h1[k] = c.h.i1, ht[k] = c.h.t, d0[k] = c.d.i0, d1[k] = c.d.i1, dt[k] = c.d.t;
-                p0[k] = c.p.i0, p1[k] = c.p.i1, pt[k] = c.p.t;
-            }
-        for (std::size_t k = 0; k < m; ++k)
-            if (ok[k]) prefetch_corners(g, values, h0[k], h1[k], d0[k], d1[k], p0[k], p1[k]);
-        for (std::size_t k = 0; k < m; ++k) {
-            if (!ok[k]) continue;
-            const Corners c{{h0[k], h1[k], ht[k]}, {d0[k], d1[k], dt[k]}, {p0[k], p1[k], pt[k]}};
-            set_weight(s[k], read_linear<Wide>(g, values, c));
-        }
+            if (ok[k] && !d.half[k]) coords.set(k, fast_bin_coords(g, s[k].wi, w[k]));
+        lookup_block<Wide>(
+            g, values, lookup, coords, ok, m, [s](std::size_t k) -> const Vec3& { return s[k].wi; }, w,
+            [s](std::size_t k, const Rgb& f) { set_weight(s[k], f); });
     }
 }
 
