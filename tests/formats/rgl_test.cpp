@@ -522,7 +522,7 @@ TEST_CASE("rgl sampler: 10^6 random (wo, u) give finite non-negative pdfs and fi
 }
 
 // The sanitizers' share of the test above (the same draws, first 10^4 per file).
-TEST_CASE("rgl sampler: 10^4 random (wo, u) give finite non-negative pdfs and finite weights", "[rgl][sample]") {
+TEST_CASE("rgl sampler: 10^4 random (wo, u) give finite non-negative pdfs and finite weights", "[rgl][sample][light]") {
     check_random_draws(10000);
 }
 

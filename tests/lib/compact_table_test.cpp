@@ -283,7 +283,7 @@ TEST_CASE("compact tables give finite, non-negative values on 10^6 random pairs"
     check_compact_random_pairs(1000000);
 }
 
-TEST_CASE("compact tables give finite, non-negative values on 10^5 random pairs", "[compact]") {
+TEST_CASE("compact tables give finite, non-negative values on 10^5 random pairs", "[compact][light]") {
     check_compact_random_pairs(100000);
 }
 
@@ -525,7 +525,7 @@ TEST_CASE("the half-vector sampler works on compact tables", "[compact][sample][
     check_compact_samplers(true);
 }
 
-TEST_CASE("the half-vector sampler works on compact tables, one view each", "[compact][sample]") {
+TEST_CASE("the half-vector sampler works on compact tables, one view each", "[compact][sample][light]") {
     check_compact_samplers(false);
 }
 
@@ -558,7 +558,7 @@ TEST_CASE("compact tables of real MERL data stay close to the source", "[compact
 }
 
 // The sanitizers' share of the test above: one table.
-TEST_CASE("a compact table of one real MERL table stays close to the source", "[compact][data]") {
+TEST_CASE("a compact table of one real MERL table stays close to the source", "[compact][data][light]") {
     check_merl_quantisation(1);
 }
 

@@ -194,7 +194,7 @@ TEST_CASE("factored fit=lsq: every layout, colour mode and space gives finite, n
     check_lsq_outputs(true);
 }
 
-TEST_CASE("factored fit=lsq: every layout, colour mode and space gives finite, non-negative outputs (half the cases)", "[factored][lsq]") {
+TEST_CASE("factored fit=lsq: every layout, colour mode and space gives finite, non-negative outputs (half the cases)", "[factored][lsq][light]") {
     check_lsq_outputs(false);
 }
 
@@ -303,7 +303,7 @@ TEST_CASE("factored dtype=f16: float16 factors, exact nbytes, error close to flo
     check_f16(true);
 }
 
-TEST_CASE("factored dtype=f16: float16 factors, exact nbytes, error close to float32 (two of the four cases)", "[factored][f16]") {
+TEST_CASE("factored dtype=f16: float16 factors, exact nbytes, error close to float32 (two of the four cases)", "[factored][f16][light]") {
     check_f16(false);
 }
 

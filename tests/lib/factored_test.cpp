@@ -155,7 +155,7 @@ TEST_CASE("factored: nmf factors and reconstructions are non-negative", "[factor
     check_nmf_non_negative(true);
 }
 
-TEST_CASE("factored: nmf factors and reconstructions are non-negative, one colour mode per space", "[factored][nmf]") {
+TEST_CASE("factored: nmf factors and reconstructions are non-negative, one colour mode per space", "[factored][nmf][light]") {
     check_nmf_non_negative(false);
 }
 
@@ -200,7 +200,7 @@ TEST_CASE("factored: masked factorisation is unaffected by the values in invalid
     check_mask_ignores_fills(true);
 }
 
-TEST_CASE("factored: masked factorisation is unaffected by the values in invalid bins (two of the four cases)", "[factored][mask]") {
+TEST_CASE("factored: masked factorisation is unaffected by the values in invalid bins (two of the four cases)", "[factored][mask][light]") {
     check_mask_ignores_fills(false);
 }
 
@@ -290,7 +290,7 @@ TEST_CASE("factored: bins without data do not extrapolate beyond the data (log a
     check_no_extrapolation(true);
 }
 
-TEST_CASE("factored: bins without data do not extrapolate beyond the data (svd log, nmf cbrt)", "[factored][mask]") {
+TEST_CASE("factored: bins without data do not extrapolate beyond the data (svd log, nmf cbrt)", "[factored][mask][light]") {
     check_no_extrapolation(false);
 }
 
@@ -387,7 +387,7 @@ TEST_CASE("factored: outputs are finite and non-negative on 10^6 random pairs, c
     check_random_pairs(1000000);
 }
 
-TEST_CASE("factored: outputs are finite and non-negative on 10^5 random pairs, clamping counted", "[factored]") {
+TEST_CASE("factored: outputs are finite and non-negative on 10^5 random pairs, clamping counted", "[factored][light]") {
     check_random_pairs(100000);
 }
 
@@ -465,7 +465,7 @@ TEST_CASE("factored: eval is the interpolated reconstruction, within 1e-5, at ra
     check_eval_interpolates(true);
 }
 
-TEST_CASE("factored: eval is the interpolated reconstruction, within 1e-5, at random pairs (half the cases)", "[factored]") {
+TEST_CASE("factored: eval is the interpolated reconstruction, within 1e-5, at random pairs (half the cases)", "[factored][light]") {
     check_eval_interpolates(false);
 }
 
@@ -520,7 +520,7 @@ TEST_CASE("factored: the SSE2 and AVX2 kernels agree", "[factored][heavy]") {
     check_kernels_agree(true);
 }
 
-TEST_CASE("factored: the SSE2 and AVX2 kernels agree (half the cases)", "[factored]") {
+TEST_CASE("factored: the SSE2 and AVX2 kernels agree (half the cases)", "[factored][light]") {
     check_kernels_agree(false);
 }
 
@@ -822,7 +822,7 @@ TEST_CASE("factored sampler: 10^7 random (wo, u) give finite, non-negative pdfs 
 }
 
 // The sanitizers' share of the test above (the same draws, first 10^5).
-TEST_CASE("factored sampler: 10^5 random (wo, u) give finite, non-negative pdfs and weights", "[factored][sample]") {
+TEST_CASE("factored sampler: 10^5 random (wo, u) give finite, non-negative pdfs and weights", "[factored][sample][light]") {
     check_random_draws(100000);
 }
 

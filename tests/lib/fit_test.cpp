@@ -108,7 +108,7 @@ TEST_CASE("fitting recovers every parameter within 5% from noisy, incomplete tab
     check_recovery(GridSpec{});
 }
 
-TEST_CASE("fitting recovers every parameter within 5% from noisy, incomplete tables on a coarser grid", "[fit]") {
+TEST_CASE("fitting recovers every parameter within 5% from noisy, incomplete tables on a coarser grid", "[fit][light]") {
     check_recovery(GridSpec{30, 30, 60});
 }
 
@@ -174,7 +174,7 @@ TEST_CASE("every loss and the robust losses fit, and fits are deterministic", "[
     check_losses(GridSpec{});
 }
 
-TEST_CASE("every loss and the robust losses fit, and fits are deterministic, on a coarser grid", "[fit]") {
+TEST_CASE("every loss and the robust losses fit, and fits are deterministic, on a coarser grid", "[fit][light]") {
     check_losses(GridSpec{30, 30, 60});
 }
 

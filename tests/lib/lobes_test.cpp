@@ -100,7 +100,7 @@ TEST_CASE("every lobe conserves energy at the corners of its parameter bounds", 
     check_corner_albedos(true);
 }
 
-TEST_CASE("every lobe conserves energy at the corners of its parameter bounds, one view each", "[lobes][albedo]") {
+TEST_CASE("every lobe conserves energy at the corners of its parameter bounds, one view each", "[lobes][albedo][light]") {
     check_corner_albedos(false);
 }
 

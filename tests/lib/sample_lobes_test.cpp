@@ -141,7 +141,7 @@ TEST_CASE("analytic samplers: 10^7 random (wo, u, parameters) give finite, non-n
 
 // The sanitizers' share of the test above: one parameter set per model.
 TEST_CASE("analytic samplers: 10^5 random (wo, u, parameters) give finite, non-negative pdfs and weights",
-          "[sample][analytic][robust]") {
+          "[sample][analytic][robust][light]") {
     check_random_draws(100000);
 }
 

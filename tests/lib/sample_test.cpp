@@ -61,7 +61,7 @@ TEST_CASE("tabular sampler: chi-square, normalisation, round trip (glossy and ne
 }
 
 // The sanitizers' share of the test above: the glossy table, 2·10^5 draws, the pdf integral on a coarser grid.
-TEST_CASE("tabular sampler: chi-square, normalisation, round trip (glossy, fewer draws)", "[sample][tabular]") {
+TEST_CASE("tabular sampler: chi-square, normalisation, round trip (glossy, fewer draws)", "[sample][tabular][light]") {
     check_sampler(tabulated(0.12), 200000, 256);
 }
 
@@ -93,7 +93,7 @@ TEST_CASE("tabular sampler: 10^7 random (wo, u) give finite, non-negative pdfs a
 }
 
 // The sanitizers' share of the test above (the same draws, first 10^5).
-TEST_CASE("tabular sampler: 10^5 random (wo, u) give finite, non-negative pdfs and weights", "[sample][tabular]") {
+TEST_CASE("tabular sampler: 10^5 random (wo, u) give finite, non-negative pdfs and weights", "[sample][tabular][light]") {
     check_random_draws(100000);
 }
 
@@ -127,7 +127,7 @@ TEST_CASE("tabular sampler on real MERL tables", "[sample][data][heavy]") {
     check_merl_samplers(true);
 }
 
-TEST_CASE("tabular sampler on real MERL tables, one view each", "[sample][data]") {
+TEST_CASE("tabular sampler on real MERL tables, one view each", "[sample][data][light]") {
     check_merl_samplers(false);
 }
 
