@@ -183,17 +183,13 @@ concept FloatBins = requires(const Values& v) {
 template <bool Wide, typename Values, typename V>
 [[gnu::always_inline]] inline void load_bin(const Values& values, std::size_t bin, V* x) {
     if constexpr (FloatBins<Values>) {
-        const float* p = values.floats(bin);
-        if constexpr (Wide) {
-            Floats4 v;
-            std::memcpy(&v, p, sizeof v);
-            x[0] = __builtin_convertvector(v, Doubles4);
-        } else {
-            Floats4 v;
-            std::memcpy(&v, p, sizeof v);
-            const Doubles4 d = __builtin_convertvector(v, Doubles4);
+        Floats4 v;
+        std::memcpy(&v, values.floats(bin), sizeof v);
+        const Doubles4 d = __builtin_convertvector(v, Doubles4);
+        if constexpr (Wide)
+            x[0] = d;
+        else
             x[0] = Doubles2{d[0], d[1]}, x[1] = Doubles2{d[2], d[3]};
-        }
     } else {
         float v[3];
         values.load(bin, v);
