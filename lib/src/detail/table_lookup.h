@@ -185,11 +185,12 @@ template <bool Wide, typename Values, typename V>
     if constexpr (FloatBins<Values>) {
         Floats4 v;
         std::memcpy(&v, values.floats(bin), sizeof v);
-        const Doubles4 d = __builtin_convertvector(v, Doubles4);
+        // Lane by lane, not __builtin_convertvector: GCC lowers that to two 128-bit conversions and a
+        // spill even in the AVX2 build, where this is one vcvtps2pd.
         if constexpr (Wide)
-            x[0] = d;
+            x[0] = Doubles4{v[0], v[1], v[2], v[3]};
         else
-            x[0] = Doubles2{d[0], d[1]}, x[1] = Doubles2{d[2], d[3]};
+            x[0] = Doubles2{v[0], v[1]}, x[1] = Doubles2{v[2], v[3]};
     } else {
         float v[3];
         values.load(bin, v);
@@ -218,8 +219,8 @@ template <bool Wide, typename Values>
             const std::size_t row = g.index(ih, id, 0);  // the index is linear in φd's
             for (int p = 0; p < 2; ++p) {
                 const double w = wb * (p ? k.p.t : 1.0 - k.p.t);
-                V wv, x[kParts];
-                for (int j = 0; j < kLanes; ++j) wv[j] = w;
+                V x[kParts];
+                const V wv = w - zero;  // w in every lane: one broadcast (a lane loop became two shuffles)
                 load_bin<Wide>(values, row + (p ? k.p.i1 : k.p.i0), x);
                 for (int i = 0; i < kParts; ++i) {
                     // Invalid samples are NaN: they contribute neither value nor weight.
