@@ -107,6 +107,48 @@ struct Finish {
     return {wi, v.share * wi.z / kPi + (1.0 - v.share) * data, th.s, th.c, sin_p, ph.c, ok};
 }
 
+// The data share's density of wi per unit solid angle, 0 where it has none: pdf()'s, and a cosine
+// draw's. The half vector's angles in wo's frame come from s = wi + wo, unnormalised, through the
+// polynomial arctangent: no libm call, so the block kernel runs it inline and agrees with pdf() to
+// the bit. Every index stays within the tables whatever wi is (NaN included).
+[[gnu::always_inline]] inline double data_density(const SamplerView& v, const StackView& st, const Vec3& wo,
+                                                  double sin_o, const Vec3& wi) {
+    const Vec3 s = Azimuth(wo, sin_o).to_local(wi + wo);
+    const double rxy = std::sqrt(s.x * s.x + s.y * s.y), len = std::sqrt(rxy * rxy + s.z * s.z);
+    const double y = std::sqrt(detail::fast_half_turn_angle(rxy, s.z) / (kPi / 2.0));
+    const double x = detail::fast_half_turn_angle(std::fabs(s.y), s.x) / kPi;  // |φh − φo| / π; NaN at the pole
+    const bool inside = y < 1.0;
+    const double yc = inside ? y : 0.0, xc = x < kBelowOne ? x : kBelowOne;
+    // Piecewise2D::View::pdf's cell of (xc, yc), in the two slices around wo's elevation.
+    const int R = st.rows, C = st.cols;
+    const int r = std::min(static_cast<int>(yc * R), R - 1), c = std::min(static_cast<int>(xc * C), C - 1);
+    const SliceSpan sp = slice_span(view_elevation(sin_o, wo), v.theta_max, v.K);
+    const float* d = st.density + r * C + c;
+    const double p_xy = (1.0 - sp.t) * d[sp.k0 * R * C] + sp.t * d[(sp.k0 + 1) * R * C];
+    // dωi/dx dy: 4 (wo·h) · 2π² y sinθh, with h = s / |s| and sinθh = |s_xy| / |s|.
+    const double jac = 4.0 * ((sin_o * s.x + wo.z * s.z) / len) * 2.0 * kPi * kPi * y * (rxy / len);
+    const double p = p_xy / jac;
+    return inside & (std::fabs(p) < std::numeric_limits<double>::infinity()) & (p > 0.0) ? p : 0.0;
+}
+
+// A cosine-weighted draw with sample()'s full pdf at it, from u1 in [0, share) and u2 in [0, 1).
+// φ = 2πu2 through the half-turn sine table: φ and 2π − φ share a cosine, their sines differ in sign.
+struct CosineDraw {
+    Vec3 wi;
+    double pdf;
+    bool ok;  // wi above the horizon
+};
+[[gnu::always_inline]] inline CosineDraw cosine_draw(const SamplerView& v, const StackView& st,
+                                                     const detail::SinCosTable& table, const Vec3& wo, double u1,
+                                                     double u2) {
+    const double e = u1 / v.share, r = std::sqrt(e);
+    const bool lower = u2 < 0.5;
+    const detail::SinCosTable::SinCos phi = table(2.0 * kPi * (lower ? u2 : 1.0 - u2));
+    const Vec3 wi{r * phi.c, r * (lower ? phi.s : -phi.s), std::sqrt(1.0 - e)};
+    const double sin_o = std::sqrt(wo.x * wo.x + wo.y * wo.y);
+    return {wi, v.share * wi.z / kPi + (1.0 - v.share) * data_density(v, st, wo, sin_o, wi), wi.z > 0.0};
+}
+
 // Piecewise2D::sample's CDF search (find_interval) from the guide entry, in a fixed two steps of its
 // scan (it takes about one on average), on `cdf` from index `base`: the interval, and in `found`
 // whether it is find_interval's. It is when the scan has ended: then cdf[i] <= u < cdf[i + 1], so the
@@ -153,8 +195,8 @@ struct Cell {
 }
 
 // HalfVectorSampler::draw_block's data draws in passes over the block, each across draws: (1) placement;
-// (2) the cell searches (gathers from the stacked tables); (3) the half vector, wi and the pdf.
-// Cosine draws are left to the caller.
+// (2) the cell searches (gathers from the stacked tables); (3) the half vector, wi and the pdf; then
+// the cosine draws.
 [[gnu::always_inline]] inline void draw_lanes(const SamplerView& v, const StackView& st,
                                               const detail::SinCosTable& table, const Vec3* wo,
                                               const std::array<double, 2>* u, std::size_t n,
@@ -164,11 +206,13 @@ struct Cell {
     // the doubles' width (a select on bytes between doubles does not vectorise).
     double sin_o[B], t[B], v1[B], v2[B], sign[B], x[B], y[B], p_cell[B], p_other[B];
     int slice[B], other[B];
-    std::int64_t upper[B], data[B];
+    std::int64_t upper[B], data[B], cosine[B];
     for (std::size_t k = 0; k < n; ++k) {
         const double u1 = u[k][0], u2 = u[k][1];
-        // Brdf::can_draw, and not a cosine draw.
-        data[k] = (wo[k].z > 0.0) & (u1 >= v.share) & (u1 < 1.0) & (u2 >= 0.0) & (u2 < 1.0);
+        // Brdf::can_draw, split into data and cosine draws.
+        const bool can = (wo[k].z > 0.0) & (u1 >= 0.0) & (u1 < 1.0) & (u2 >= 0.0) & (u2 < 1.0);
+        data[k] = can & (u1 >= v.share);
+        cosine[k] = can & (u1 < v.share);
         const Placement pl = place(v, wo[k], u1, u2);
         sin_o[k] = pl.sin_o, t[k] = pl.t, v1[k] = pl.v1, v2[k] = pl.v2, sign[k] = pl.sign;
         slice[k] = pl.slice, other[k] = pl.other, upper[k] = pl.upper;
@@ -204,6 +248,14 @@ struct Cell {
         out.sin_h[k] = o ? sh[k] : 0.0, out.cos_h[k] = o ? ch[k] : 0.0;
         out.sin_p[k] = o ? sp[k] : 0.0, out.cos_p[k] = o ? cp[k] : 0.0;
         out.sin_o[k] = o ? sin_o[k] : 0.0, out.cos_o[k] = o ? co[k] : 0.0;
+    }
+    // The cosine share's draws, a twentieth of them, one at a time: across the block they would cost
+    // every lane the density lookup.
+    for (std::size_t k = 0; k < n; ++k) {
+        if (!cosine[k]) continue;
+        const CosineDraw c = cosine_draw(v, st, table, wo[k], u[k][0], u[k][1]);
+        out.wi_x[k] = c.ok ? c.wi.x : 0.0, out.wi_y[k] = c.ok ? c.wi.y : 0.0, out.wi_z[k] = c.ok ? c.wi.z : 0.0;
+        out.pdf[k] = c.ok ? c.pdf : 0.0;
     }
 }
 
@@ -289,40 +341,18 @@ std::size_t HalfVectorSampler::nbytes() const {
            (s.marginal_guide.size() + s.conditional_guide.size()) * sizeof(std::uint32_t);
 }
 
-HalfVectorSampler::SlicePair HalfVectorSampler::slices_for(double theta_o) const {
-    const int K = static_cast<int>(theta_o_.size());
-    const SliceSpan sp = slice_span(theta_o, theta_o_[K - 1], K);
-    return {sp.k0, sp.k0 + 1, sp.t};
-}
-
-double HalfVectorSampler::data_pdf(const Vec3& wo, const Vec3& wi) const {
-    const Vec3 hw = half_vector(wi, wo);
-    const Vec3 h = Azimuth(wo).to_local(hw);
-    const double theta_h = elevation(h);
-    if (!(theta_h < kPi / 2.0)) return 0.0;
-    const double y = std::sqrt(theta_h / (kPi / 2.0));
-    const double x = std::fabs(std::atan2(h.y, h.x)) / kPi;
-    const SlicePair sp = slices_for(view_elevation(std::sqrt(wo.x * wo.x + wo.y * wo.y), wo));
-    const double xc = x < kBelowOne ? x : kBelowOne;
-    const double p_xy = (1.0 - sp.t) * slice(sp.k0).pdf(xc, y) + sp.t * slice(sp.k1).pdf(xc, y);
-    const double jac = 4.0 * dot(wo, hw) * 2.0 * kPi * kPi * y * std::sin(theta_h);
-    const double p = p_xy / jac;
-    return std::isfinite(p) && p > 0.0 ? p : 0.0;
-}
-
 double HalfVectorSampler::pdf(const Vec3& wo, const Vec3& wi) const {
-    return options_.cosine_share * wi.z / kPi + (1.0 - options_.cosine_share) * data_pdf(wo, wi);
+    const SamplerView v{options_.cosine_share, theta_o_.back(), static_cast<int>(theta_o_.size())};
+    return v.share * wi.z / kPi + (1.0 - v.share) * data_density(v, first_, wo, std::sqrt(wo.x * wo.x + wo.y * wo.y), wi);
 }
 
 HalfVectorSampler::Draw HalfVectorSampler::draw(const Vec3& wo, double u1, double u2) const {
     // Each path builds its result whole: a Draw zeroed up front cost a `rep stos` per draw.
-    const double share = options_.cosine_share;
-    if (u1 < share) {
-        const double v = u1 / share, r = std::sqrt(v), phi = 2.0 * kPi * u2;
-        const Vec3 wi{r * std::cos(phi), r * std::sin(phi), std::sqrt(std::fmax(0.0, 1.0 - v))};
-        return wi.z > 0.0 ? Draw{{wi, pdf(wo, wi), {}}} : Draw{};
+    const SamplerView v{options_.cosine_share, theta_o_.back(), static_cast<int>(theta_o_.size())};
+    if (u1 < v.share) {
+        const CosineDraw c = cosine_draw(v, first_, half_turn(), wo, u1, u2);
+        return c.ok ? Draw{{c.wi, c.pdf, {}}} : Draw{};
     }
-    const SamplerView v{share, theta_o_.back(), static_cast<int>(theta_o_.size())};
     const Placement pl = place(v, wo, u1, u2);
     const Piecewise2D::Point p = slice(pl.slice).sample(pl.v1, pl.v2);
     const Finish f = finish(v, half_turn(), wo, pl, p.x, p.y, p.pdf, slice(pl.other).density_at(p.row, p.col));
@@ -334,15 +364,6 @@ void HalfVectorSampler::draw_block(const Vec3* wo, const std::array<double, 2>* 
     const SamplerView v{options_.cosine_share, theta_o_.back(), static_cast<int>(theta_o_.size())};
     (detail::simd_level() == detail::Simd::Avx2Fma ? draw_lanes_avx2 : draw_lanes_sse2)(v, first_, half_turn(), wo, u, n,
                                                                                         out);
-    // The cosine share's draws one at a time: a twentieth of them, each with the full pdf() (libm's
-    // sin and cos, atan2), which would not vectorise.
-    for (std::size_t k = 0; k < n; ++k) {
-        if (!(Brdf::can_draw(wo[k], u[k][0], u[k][1]) && u[k][0] < v.share)) continue;
-        const Draw d = draw(wo[k], u[k][0], u[k][1]);
-        out.wi_x[k] = d.sample.wi.x, out.wi_y[k] = d.sample.wi.y, out.wi_z[k] = d.sample.wi.z;
-        out.pdf[k] = d.sample.pdf;
-        out.half[k] = false;
-    }
 }
 
 }  // namespace brdfz

@@ -72,14 +72,6 @@ public:
     std::size_t nbytes() const;
 
 private:
-    // The two slices around wo's elevation and the weight of the upper one.
-    struct SlicePair {
-        int k0, k1;
-        double t;
-    };
-    SlicePair slices_for(double theta_o) const;
-    double data_pdf(const Vec3& wo, const Vec3& wi) const;
-
     Piecewise2D::View slice(int k) const { return first_.stacked(k); }
 
     HalfVectorSamplerOptions options_;
