@@ -326,7 +326,8 @@ TEST_CASE("tabular sample: the weight from the draw's angles is eval's", "[sampl
         CHECK(worst_coord < 1e-9);
         CHECK(worst_phi < 1e-11);
         CHECK(worst_weight < 1e-10);
-        // Nearest lookup: the bin eval picks, so the weight is eval's exactly.
+        // Nearest lookup: the bin eval picks, so the weight is eval's exactly (set_weight's rounding:
+        // cosθi/pdf once, then per channel).
         t.set_lookup(Lookup::Nearest);
         for (int k = 0; k < 20000; ++k) {
             Vec3 wo = normalize({nd(rng), nd(rng), nd(rng)});
@@ -334,7 +335,7 @@ TEST_CASE("tabular sample: the weight from the draw's angles is eval's", "[sampl
             const BrdfSample s = t.sample(wo, u(rng), u(rng));
             if (s.pdf == 0) continue;
             const Rgb f = t.eval(s.wi, wo);
-            for (int c = 0; c < 3; ++c) REQUIRE(s.weight[c] == f[c] * s.wi.z / s.pdf);
+            for (int c = 0; c < 3; ++c) REQUIRE(s.weight[c] == f[c] * (s.wi.z / s.pdf));
         }
         t.set_lookup(Lookup::Linear);
     }

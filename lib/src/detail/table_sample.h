@@ -51,8 +51,10 @@ inline BinCoords draw_bin_coords(const GridSpec& g, const HalfVectorSampler::Dra
     return d.half ? drawn_bin_coords(g, d) : fast_bin_coords(g, d.sample.wi, wo);
 }
 
+// One division per sample, not one per channel: the kernels are short enough for three to show.
 inline void set_weight(BrdfSample& s, const Rgb& f) {
-    for (int ch = 0; ch < 3; ++ch) s.weight[ch] = f[ch] * s.wi.z / s.pdf;
+    const double c = s.wi.z / s.pdf;
+    for (int ch = 0; ch < 3; ++ch) s.weight[ch] = f[ch] * c;
 }
 
 // One sample with its weight, for wo above the horizon and u in [0, 1)² (Brdf::sample_above).
@@ -86,19 +88,21 @@ template <bool Wide, typename Values>
         BrdfSample* s = out + start;
         const Vec3* w = wo + start;
         sampler.draw_block(w, u + start, m, d);
-        for (std::size_t k = 0; k < m; ++k) {
-            s[k] = {{d.wi_x[k], d.wi_y[k], d.wi_z[k]}, d.pdf[k], {}};
-            ok[k] = Brdf::usable(s[k]);
-            if (!ok[k]) s[k] = {};
-        }
+        for (std::size_t k = 0; k < m; ++k)
+            ok[k] = Brdf::usable({{d.wi_x[k], d.wi_y[k], d.wi_z[k]}, d.pdf[k], {}});
         // Every draw's angles, set or not (unset ones are zeros, whose coordinates are not used).
         for (std::size_t k = 0; k < m; ++k)
             coords.set(k, drawn_bin_coords(g, d.sin_h[k], d.cos_h[k], d.sin_p[k], d.cos_p[k], d.sin_o[k], d.cos_o[k]));
+        const auto wi = [&d](std::size_t k) { return Vec3{d.wi_x[k], d.wi_y[k], d.wi_z[k]}; };
         for (std::size_t k = 0; k < m; ++k)
-            if (ok[k] && !d.half[k]) coords.set(k, fast_bin_coords(g, s[k].wi, w[k]));
-        lookup_block<Wide>(
-            g, values, lookup, coords, ok, m, [s](std::size_t k) -> const Vec3& { return s[k].wi; }, w,
-            [s](std::size_t k, const Rgb& f) { set_weight(s[k], f); });
+            if (ok[k] && !d.half[k]) coords.set(k, fast_bin_coords(g, wi(k), w[k]));
+        // Each sample is written once, whole, with its weight.
+        lookup_block<Wide>(g, values, lookup, coords, ok, m, wi, w, [s, &d, &wi](std::size_t k, const Rgb& f) {
+            s[k] = {wi(k), d.pdf[k], {}};
+            set_weight(s[k], f);
+        });
+        for (std::size_t k = 0; k < m; ++k)
+            if (!ok[k]) s[k] = {};
     }
 }
 
