@@ -7,6 +7,7 @@
 #include "brdfz/errors.h"
 #include "brdfz/formats/io.h"
 #include "brdfz/formats/model_json.h"
+#include "brdfz/formats/scene_json.h"
 #include "brdfz/repr/analytic/coated_diffuse.h"
 #include "test_util.h"
 
@@ -102,4 +103,23 @@ TEST_CASE("the model-file reader rejects every malformed or invalid file, naming
     CHECK_THROWS_WITH(model_json::read(big), Catch::Contains("larger than a model file"));
     CHECK_THROWS_AS(model_json::read((dir.path / "missing.json").string()), IoError);
     CHECK_THROWS_AS(save(CoatedDiffuse(), (dir.path / "x.json").string()), UnsupportedError);
+}
+
+TEST_CASE("scene files: counts and seeds that are not whole numbers in range are refused, naming the member",
+          "[json][io]") {
+    test::TempDir dir;
+    const auto path = (dir.path / "scene.json").string();
+    // Beyond long long's range (found by the fuzzer), negative, fractional, above the limit.
+    for (const char* seed : {"4e107", "-4e107", "-1", "2.5", "2e9"}) {
+        INFO(seed);
+        write_text(path, std::string(R"({"format": "brdfz-scene", "version": 1, "seed": )") + seed + "}");
+        CHECK_THROWS_WITH(scene_json::read(path), Catch::Contains("scene.seed: must be a whole number"));
+    }
+    write_text(path, R"({"format": "brdfz-scene", "version": 1, "views": [{"count": 1e300}]})");
+    CHECK_THROWS_WITH(scene_json::read(path), Catch::Contains("views[0].count: must be a whole number"));
+    write_text(path, R"({"format": "brdfz-scene", "version": 1, "seed": 12345, "views": [{"count": 7}], "lights": [{}]})");
+    const SceneDescription d = scene_json::read(path);
+    CHECK(d.seed == 12345);
+    REQUIRE(d.views.size() == 1);
+    CHECK(d.views[0].count == 7);
 }
