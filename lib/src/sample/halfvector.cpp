@@ -128,7 +128,7 @@ struct Finish {
     // dωi/dx dy: 4 (wo·h) · 2π² y sinθh, with h = s / |s| and sinθh = |s_xy| / |s|.
     const double jac = 4.0 * ((sin_o * s.x + wo.z * s.z) / len) * 2.0 * kPi * kPi * y * (rxy / len);
     const double p = p_xy / jac;
-    return inside & (std::fabs(p) < std::numeric_limits<double>::infinity()) & (p > 0.0) ? p : 0.0;
+    return (inside & (std::fabs(p) < std::numeric_limits<double>::infinity()) & (p > 0.0)) ? p : 0.0;
 }
 
 // A cosine-weighted draw with sample()'s full pdf at it, from u1 in [0, share) and u2 in [0, 1).
