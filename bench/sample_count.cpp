@@ -4,6 +4,7 @@
 // then callgrind_annotate: each measured_* function's inclusive count divided by N is its cost per
 // sample. N random wo (uniform on the hemisphere) and u; the sampler is built before measuring.
 //   measured_sample: Brdf::sample(span), the whole sample including its weight
+//   measured_sample_one: Brdf::sample(wo, u1, u2), the same one call at a time (a renderer's use)
 //   measured_draw:   the sampler's own sample() (direction and pdf), one at a time
 //   measured_draw_block: the same draws in blocks (HalfVectorSampler::draw_block, as sample() draws)
 //   measured_eval:   Brdf::eval(span) at the drawn pairs (the weight's lookup alone)
@@ -24,6 +25,11 @@ extern "C" {
 [[gnu::noinline]] double measured_sample(const Brdf& b, const std::vector<Vec3>& wo,
                                          const std::vector<std::array<double, 2>>& u, std::vector<BrdfSample>& out) {
     b.sample(wo, u, out);
+    return out[0].pdf;
+}
+[[gnu::noinline]] double measured_sample_one(const Brdf& b, const std::vector<Vec3>& wo,
+                                             const std::vector<std::array<double, 2>>& u, std::vector<BrdfSample>& out) {
+    for (std::size_t k = 0; k < wo.size(); ++k) out[k] = b.sample(wo[k], u[k][0], u[k][1]);
     return out[0].pdf;
 }
 [[gnu::noinline]] double measured_draw(const HalfVectorSampler& s, const std::vector<Vec3>& wo,
@@ -74,6 +80,7 @@ int main(int argc, char** argv) {
     std::vector<BrdfSample> out(n), drawn(n);
     std::vector<Rgb> f(n);
     double check = measured_sample(*t, wo, u, out);
+    check += measured_sample_one(*t, wo, u, out);
     check += measured_draw(sampler, wo, u, drawn);
     check += measured_draw_block(sampler, wo, u);
     for (std::size_t k = 0; k < n; ++k) wi[k] = drawn[k].pdf > 0 ? drawn[k].wi : Vec3{0, 0, 1};
