@@ -343,7 +343,8 @@ std::size_t HalfVectorSampler::nbytes() const {
 
 double HalfVectorSampler::pdf(const Vec3& wo, const Vec3& wi) const {
     const SamplerView v{options_.cosine_share, theta_o_.back(), static_cast<int>(theta_o_.size())};
-    return v.share * wi.z / kPi + (1.0 - v.share) * data_density(v, first_, wo, std::sqrt(wo.x * wo.x + wo.y * wo.y), wi);
+    const double sin_o = std::sqrt(wo.x * wo.x + wo.y * wo.y);
+    return v.share * wi.z / kPi + (1.0 - v.share) * data_density(v, first_, wo, sin_o, wi);
 }
 
 HalfVectorSampler::Draw HalfVectorSampler::draw(const Vec3& wo, double u1, double u2) const {
