@@ -8,6 +8,7 @@
 //   measured_draw:   the sampler's own sample() (direction and pdf), one at a time
 //   measured_draw_block: the same draws in blocks (HalfVectorSampler::draw_block, as sample() draws)
 //   measured_eval:   Brdf::eval(span) at the drawn pairs (the weight's lookup alone)
+//   measured_eval_one: Brdf::eval(wi, wo) at the same pairs, one call at a time
 #include <algorithm>
 #include <array>
 #include <cmath>
@@ -53,6 +54,11 @@ extern "C" {
     b.eval(wi, wo, f);
     return f[0][0];
 }
+[[gnu::noinline]] double measured_eval_one(const Brdf& b, const std::vector<Vec3>& wi, const std::vector<Vec3>& wo,
+                                           std::vector<Rgb>& f) {
+    for (std::size_t k = 0; k < wi.size(); ++k) f[k] = b.eval(wi[k], wo[k]);
+    return f[0][0];
+}
 }
 
 int main(int argc, char** argv) {
@@ -85,5 +91,6 @@ int main(int argc, char** argv) {
     check += measured_draw_block(sampler, wo, u);
     for (std::size_t k = 0; k < n; ++k) wi[k] = drawn[k].pdf > 0 ? drawn[k].wi : Vec3{0, 0, 1};
     check += measured_eval(*t, wi, wo, f);
+    check += measured_eval_one(*t, wi, wo, f);
     std::printf("%zu samples [%g]\n", n, check);
 }

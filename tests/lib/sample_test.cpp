@@ -371,16 +371,24 @@ TEST_CASE("table sample_batch: each result is the one-at-a-time sample, and bad 
         for (std::size_t k = 0; k < count; ++k) {
             INFO(k);
             const BrdfSample s = b->sample(wo[k], us[k][0], us[k][1]);
+            detail::simd_cap = detail::Simd::Sse2;  // the one-at-a-time sample has both builds too
+            const BrdfSample s_sse2 = b->sample(wo[k], us[k][0], us[k][1]);
+            detail::simd_cap = detail::Simd::Avx2Fma;
             REQUIRE(out[k].pdf == s.pdf);
+            REQUIRE(s_sse2.pdf == s.pdf);
             REQUIRE(std::isfinite(s.pdf));
             if (k == 4 || k == 6 || (k >= 8 && k <= 11)) REQUIRE(s.pdf == 0.0);  // outside sample()'s domain
             if (s.pdf == 0.0) continue;
             REQUIRE(out[k].wi.x == s.wi.x);
             REQUIRE(out[k].wi.y == s.wi.y);
             REQUIRE(out[k].wi.z == s.wi.z);
+            REQUIRE(s_sse2.wi.x == s.wi.x);
+            REQUIRE(s_sse2.wi.y == s.wi.y);
+            REQUIRE(s_sse2.wi.z == s.wi.z);
             for (int c = 0; c < 3; ++c) {
                 REQUIRE(std::isfinite(s.weight[c]));
                 REQUIRE(out[k].weight[c] == s.weight[c]);
+                REQUIRE(s_sse2.weight[c] == s.weight[c]);
             }
         }
         CHECK(out[7].pdf > 0.0);

@@ -239,11 +239,6 @@ template <bool Wide, typename Values>
     return f;
 }
 
-template <typename Values>
-inline Rgb read_linear(const GridSpec& g, const Values& values, const Corners& k) {
-    return read_linear<false>(g, values, k);
-}
-
 // Prefetches the lines of a linear lookup's corners: per (θh, θd) pair, both φd neighbours, which
 // share a line unless they straddle a line boundary (for float32 bins, a third of the time).
 template <typename Values>
@@ -258,11 +253,30 @@ template <typename Values>
 }
 
 // f_r for one pair above the horizon.
-template <typename Values>
-Rgb eval_table(const GridSpec& g, const Values& values, Lookup lookup, const Vec3& wi, const Vec3& wo) {
+template <bool Wide, typename Values>
+[[gnu::always_inline]] inline Rgb eval_one(const GridSpec& g, const Values& values, Lookup lookup, const Vec3& wi,
+                                           const Vec3& wo) {
     const BinCoords c = fast_bin_coords(g, wi, wo);
     if (lookup == Lookup::Nearest) return read_nearest(values, nearest_bin(g, c, wi, wo));
-    return read_linear(g, values, linear_corners(g, c, wi, wo));
+    return read_linear<Wide>(g, values, linear_corners(g, c, wi, wo));
+}
+
+// Its two builds (detail/simd.h), as the batch kernels': the AVX2 one blends the corners in one register,
+// without FMA, so both give the same bits.
+template <typename Values>
+[[gnu::flatten]] Rgb eval_one_sse2(const GridSpec& g, const Values& values, Lookup lookup, const Vec3& wi,
+                                   const Vec3& wo) {
+    return eval_one<false>(g, values, lookup, wi, wo);
+}
+template <typename Values>
+[[gnu::flatten, gnu::target("avx2")]] Rgb eval_one_avx2(const GridSpec& g, const Values& values, Lookup lookup,
+                                                        const Vec3& wi, const Vec3& wo) {
+    return eval_one<true>(g, values, lookup, wi, wo);
+}
+
+template <typename Values>
+Rgb eval_table(const GridSpec& g, const Values& values, Lookup lookup, const Vec3& wi, const Vec3& wo) {
+    return (simd_level() == Simd::Avx2Fma ? eval_one_avx2<Values> : eval_one_sse2<Values>)(g, values, lookup, wi, wo);
 }
 
 // Batch kernels (eval_table_batch, and sample_table_batch's weights) work in blocks of pairs, in passes

@@ -58,16 +58,37 @@ inline void set_weight(BrdfSample& s, const Rgb& f) {
 }
 
 // One sample with its weight, for wo above the horizon and u in [0, 1)² (Brdf::sample_above).
-template <typename Values>
-BrdfSample sample_table(const GridSpec& g, const Values& values, Lookup lookup, const HalfVectorSampler& sampler,
-                        const Vec3& wo, double u1, double u2) {
+template <bool Wide, typename Values>
+[[gnu::always_inline]] inline BrdfSample sample_one(const GridSpec& g, const Values& values, Lookup lookup,
+                                                    const HalfVectorSampler& sampler, const Vec3& wo, double u1,
+                                                    double u2) {
     const HalfVectorSampler::Draw d = sampler.draw(wo, u1, u2);
     BrdfSample s = d.sample;
     if (!Brdf::usable(s)) return {};
     const BinCoords c = draw_bin_coords(g, d, wo);
     set_weight(s, lookup == Lookup::Nearest ? read_nearest(values, nearest_bin(g, c, s.wi, wo))
-                                            : read_linear(g, values, linear_corners(g, c, s.wi, wo)));
+                                            : read_linear<Wide>(g, values, linear_corners(g, c, s.wi, wo)));
     return s;
+}
+
+// Its two builds, as the batch kernel's below: the AVX2 one blends the corners in one register.
+template <typename Values>
+[[gnu::flatten]] BrdfSample sample_one_sse2(const GridSpec& g, const Values& values, Lookup lookup,
+                                            const HalfVectorSampler& sampler, const Vec3& wo, double u1, double u2) {
+    return sample_one<false>(g, values, lookup, sampler, wo, u1, u2);
+}
+template <typename Values>
+[[gnu::flatten, gnu::target("avx2")]] BrdfSample sample_one_avx2(const GridSpec& g, const Values& values,
+                                                                 Lookup lookup, const HalfVectorSampler& sampler,
+                                                                 const Vec3& wo, double u1, double u2) {
+    return sample_one<true>(g, values, lookup, sampler, wo, u1, u2);
+}
+
+template <typename Values>
+BrdfSample sample_table(const GridSpec& g, const Values& values, Lookup lookup, const HalfVectorSampler& sampler,
+                        const Vec3& wo, double u1, double u2) {
+    return (simd_level() == Simd::Avx2Fma ? sample_one_avx2<Values> : sample_one_sse2<Values>)(g, values, lookup,
+                                                                                               sampler, wo, u1, u2);
 }
 
 // Brdf::sample_batch: blocks of draws in passes, as eval_table_batch does for pairs: (1) the draws
