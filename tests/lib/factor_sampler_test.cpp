@@ -44,8 +44,8 @@ std::string label(const Factors& f) {
 }
 
 // Bonferroni-corrected 1% level over the five view elevations.
-void check_sampler(const Brdf& b, std::size_t samples, int integral_points = 1024) {
-    test::check_sampler(b, samples, 0.01 / std::size(test::kThetaODeg), integral_points);
+void check_sampler(const Brdf& b, std::size_t samples) {
+    test::check_sampler(b, samples, 0.01 / std::size(test::kThetaODeg));
 }
 
 // Random (wo, u) over the upper hemisphere: counts of non-finite or negative pdfs and weights, and of
@@ -97,7 +97,7 @@ Sampled by_factors(const Factored& f) { return Sampled(f.brdf->factor_sampler(),
 TEST_CASE("factor sampler: chi-square, normalisation, round trip on a synthetic factorisation", "[sample][factored]") {
     const Factored f = factor(coated({45, 45, 90}, 0.08), options(FactorMethod::Nmf, 3, FactorSpace::Linear,
                                                                   FactorLayout::HxDP, FactorColour::Separate));
-    check_sampler(by_factors(f), 200000, 512);
+    check_sampler(by_factors(f), 200000);
 }
 
 TEST_CASE("factor sampler: chi-square, normalisation, round trip over layouts, colours and spaces",
@@ -156,10 +156,10 @@ TEST_CASE("factor sampler: draws come from the factors' theta_h distribution", "
         CHECK(outside > 0.01 * n);  // the cosine share is really there
     }
     // And the density stays exact for factors with hard edges, with either θh density.
-    check_sampler(Sampled(s), 150000, 512);
+    check_sampler(Sampled(s), 150000);
     o.density = FactorDensity::Mixture;
     const FactorSampler mixture(f, o);
-    check_sampler(Sampled(mixture), 100000, 256);
+    check_sampler(Sampled(mixture), 100000);
 }
 
 TEST_CASE("factor sampler: random (wo, u) give finite, non-negative pdfs and weights, and no lost draws",
@@ -222,14 +222,14 @@ TEST_CASE("factor sampler: options out of range are rejected", "[sample][factore
 namespace {
 
 // The real-data checks on one MERL table: a small linear nmf of it, sampled from its factors.
-void check_merl(const std::filesystem::path& path, std::size_t samples, int integral_points) {
+void check_merl(const std::filesystem::path& path, std::size_t samples) {
     INFO(path);
     const Loaded l = load(path.string());
     const auto* source = dynamic_cast<const TabularBrdf*>(l.brdf.get());
     REQUIRE(source);
     const Factored f = factor(source->table(), options(FactorMethod::Nmf, 2, FactorSpace::Linear, FactorLayout::HxDP,
                                                        FactorColour::Shared, 10));
-    check_sampler(by_factors(f), samples, integral_points);
+    check_sampler(by_factors(f), samples);
     const RandomDraws r = random_draws(by_factors(f), 200000, 9);
     CHECK(r.bad == 0);
     CHECK(r.failed < 10);
@@ -244,7 +244,7 @@ TEST_CASE("factor sampler on a real MERL table (chrome)", "[sample][factored][da
         WARN("skipped: no MERL chrome table (../shared missing, or numpy unavailable to generate them)");
         return;
     }
-    check_merl(*chrome, 150000, 512);
+    check_merl(*chrome, 150000);
 }
 
 TEST_CASE("factor sampler on every real MERL table", "[sample][factored][data][heavy]") {
@@ -253,5 +253,5 @@ TEST_CASE("factor sampler on every real MERL table", "[sample][factored][data][h
         WARN("skipped: no MERL tables (../shared missing, or numpy unavailable to generate them)");
         return;
     }
-    for (const auto& path : files) check_merl(path, 1000000, 1024);
+    for (const auto& path : files) check_merl(path, 1000000);
 }
