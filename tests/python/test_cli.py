@@ -216,14 +216,17 @@ def test_sample_prints_n_rows_consistent_with_eval(cli, demo_table, tmp_path):
     assert len(rows) == 500
     # Every sample's weight against eval at its pair, in one --pairs run (one run per pair took most
     # of this file's time under the sanitizers; --wi/--wo agree with --pairs bit for bit, tested above).
+    # A failed draw (a direction below the horizon) prints zeros; few do.
+    drawn = [row for row in rows if row[3] > 0]
+    assert all(row == [0.0] * 7 for row in rows if row[3] <= 0) and len(drawn) >= 490
     wo = unit([0.3, 0, 0.9])
     csv = tmp_path / "pairs.csv"
-    write_pairs(csv, [row[:3] + wo for row in rows])
+    write_pairs(csv, [row[:3] + wo for row in drawn])
     fs = parse_rows(run(cli, "eval", demo_table, "--pairs", csv).stdout)
-    assert len(fs) == len(rows)
-    for row, f in zip(rows, fs):
+    assert len(fs) == len(drawn)
+    for row, f in zip(drawn, fs):
         wi, pdf, weight = row[:3], row[3], row[4:]
-        assert pdf > 0 and wi[2] > 0
+        assert wi[2] > 0
         for c in range(3):
             assert weight[c] == pytest.approx(f[c] * wi[2] / pdf, rel=1e-6)
     # Same seed, same samples; another seed, other samples.
