@@ -121,4 +121,10 @@ private:
     std::vector<SinCos> table_;
 };
 
+// sin and cos over [0, π] for the samplers (half-vector azimuths and elevations), shared.
+inline const SinCosTable& half_turn_sincos() {
+    static const SinCosTable table(std::numbers::pi, 256);
+    return table;
+}
+
 }  // namespace brdfz::detail

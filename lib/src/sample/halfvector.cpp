@@ -27,10 +27,7 @@ Vec3 half_at(double x, double y, double sign) {
 }
 
 // sin and cos over [0, π] (θh and |φh − φo|) for sample(), without libm's sincos.
-const detail::SinCosTable& half_turn() {
-    static const detail::SinCosTable table(kPi, 256);
-    return table;
-}
+const detail::SinCosTable& half_turn() { return detail::half_turn_sincos(); }
 
 // wo's elevation without asin, to ~1e-10: it only places wo between two slices, and sample() and
 // pdf() place it alike. sin_o = ‖wo_xy‖, which draw() also needs for wo's azimuth.
