@@ -10,6 +10,8 @@
 #include <filesystem>
 #include <fstream>
 #include <mutex>
+#include <string>
+#include <utility>
 #include <vector>
 
 #include "brdfz/errors.h"
@@ -33,9 +35,50 @@ void limit_openexr() {
     });
 }
 
+// OpenEXR reads a typed attribute's value by the type's own layout, not by the size the header
+// declares for it: a value of another length than declared leaves OpenEXR reading the rest of the
+// header from another offset than the one checked here (a fuzzed file's channel list ended early, and
+// OpenEXR took the bytes after it for a string attribute of 1 GB). So each value must be exactly what
+// its type reads: fixed sizes, a channel list's names and fields, a string vector's lengths. Types
+// outside this list are refused (no brdfz image has them; OpenEXR knows more than it lists here).
+bool value_has_its_layout(const std::string& type, const std::string& v) {
+    static const std::pair<const char*, std::size_t> fixed[] = {
+        {"int", 4},        {"float", 4},     {"double", 8},         {"v2i", 8},         {"v2f", 8},
+        {"v2d", 16},       {"v3i", 12},      {"v3f", 12},           {"v3d", 24},        {"box2i", 16},
+        {"box2f", 16},     {"m33f", 36},     {"m33d", 72},          {"m44f", 64},       {"m44d", 128},
+        {"rational", 8},   {"keycode", 28},  {"timecode", 8},       {"tiledesc", 9},    {"compression", 1},
+        {"lineOrder", 1},  {"envmap", 1},    {"deepImageState", 1}, {"chromaticities", 32}};
+    for (const auto& [name, bytes] : fixed)
+        if (type == name) return v.size() == bytes;
+    if (type == "string") return true;
+    if (type == "floatvector") return v.size() % 4 == 0;
+    if (type == "chlist") {  // names (up to 255 characters) each followed by 16 bytes, then an empty name
+        for (std::size_t at = 0;;) {
+            const std::size_t end = v.find('\0', at);
+            if (end == std::string::npos || end - at > 255) return false;
+            if (end == at) return end + 1 == v.size();
+            at = end + 1 + 16;
+        }
+    }
+    if (type == "stringvector") {  // a 32-bit length before each string
+        std::size_t at = 0;
+        while (at < v.size()) {
+            if (v.size() - at < 4) return false;
+            const std::uint32_t n = std::uint32_t{static_cast<unsigned char>(v[at])} |
+                                    std::uint32_t{static_cast<unsigned char>(v[at + 1])} << 8 |
+                                    std::uint32_t{static_cast<unsigned char>(v[at + 2])} << 16 |
+                                    std::uint32_t{static_cast<unsigned char>(v[at + 3])} << 24;
+            if (n > v.size() - at - 4) return false;
+            at += 4 + n;
+        }
+        return true;
+    }
+    return false;
+}
+
 // The header OpenEXR will parse, checked first: a single-part scanline image (what write() makes)
-// whose every attribute fits in the file, so that no declared size makes OpenEXR allocate more than
-// the file holds.
+// whose every attribute fits in the file and has its type's layout (value_has_its_layout), so that no
+// declared size makes OpenEXR allocate more than the file holds.
 void check_header(const std::string& path) {
     std::ifstream in(path, std::ios::binary);
     in.seekg(0, std::ios::end);
@@ -68,7 +111,11 @@ void check_header(const std::string& path) {
             bytes > size - static_cast<std::uint64_t>(in.tellg()))
             throw FormatError(path, "corrupt OpenEXR header (attribute '" + attr.substr(0, max_name) +
                                         "' does not fit in the file)");
-        in.seekg(bytes, std::ios::cur);
+        std::string value(bytes, '\0');
+        in.read(value.data(), bytes);
+        if (!in || !value_has_its_layout(type, value))
+            throw FormatError(path, "corrupt OpenEXR header (attribute '" + attr + "' of type '" + type +
+                                        "' is not " + std::to_string(bytes) + " bytes of that type)");
     }
 }
 
