@@ -352,8 +352,13 @@ HalfVectorSampler::Draw HalfVectorSampler::draw(const Vec3& wo, double u1, doubl
         return c.ok ? Draw{{c.wi, c.pdf, {}}} : Draw{};
     }
     const Placement pl = place(v, wo, u1, u2);
-    const Piecewise2D::Point p = slice(pl.slice).sample(pl.v1, pl.v2);
-    const Finish f = finish(v, half_turn(), wo, pl, p.x, p.y, p.pdf, slice(pl.other).density_at(p.row, p.col));
+    // The block kernel's cell search, and Piecewise2D itself where it does not settle (as there).
+    Cell c = find_cell(first_, pl.slice, pl.other, pl.v1, pl.v2);
+    if (!c.found) {
+        const Piecewise2D::Point p = slice(pl.slice).sample(pl.v1, pl.v2);
+        c = {p.x, p.y, p.pdf, slice(pl.other).density_at(p.row, p.col), true};
+    }
+    const Finish f = finish(v, half_turn(), wo, pl, c.x, c.y, c.p_cell, c.p_other);
     if (!f.ok) return {};
     return {{f.wi, f.pdf, {}}, true, f.sin_h, f.cos_h, f.sin_p, f.cos_p, pl.sin_o, wo.z};
 }
