@@ -7,6 +7,7 @@
 
 #include <cstdio>
 #include <cstdint>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <mutex>
@@ -16,6 +17,7 @@
 
 #include "brdfz/errors.h"
 #include "brdfz/formats/exr.h"
+#include "detail/bytes.h"
 
 namespace brdfz::exr {
 namespace {
@@ -41,6 +43,13 @@ void limit_openexr() {
 // OpenEXR took the bytes after it for a string attribute of 1 GB). So each value must be exactly what
 // its type reads: fixed sizes, a channel list's names and fields, a string vector's lengths. Types
 // outside this list are refused (no brdfz image has them; OpenEXR knows more than it lists here).
+// A little-endian uint32 of the file at p.
+std::uint32_t u32_at(const char* p) {
+    std::uint32_t v;
+    std::memcpy(&v, p, 4);
+    return detail::from_little_endian(v);
+}
+
 bool value_has_its_layout(const std::string& type, const std::string& v) {
     static const std::pair<const char*, std::size_t> fixed[] = {
         {"int", 4},        {"float", 4},     {"double", 8},         {"v2i", 8},         {"v2f", 8},
@@ -64,10 +73,7 @@ bool value_has_its_layout(const std::string& type, const std::string& v) {
         std::size_t at = 0;
         while (at < v.size()) {
             if (v.size() - at < 4) return false;
-            const std::uint32_t n = std::uint32_t{static_cast<unsigned char>(v[at])} |
-                                    std::uint32_t{static_cast<unsigned char>(v[at + 1])} << 8 |
-                                    std::uint32_t{static_cast<unsigned char>(v[at + 2])} << 16 |
-                                    std::uint32_t{static_cast<unsigned char>(v[at + 3])} << 24;
+            const std::uint32_t n = u32_at(v.data() + at);
             if (n > v.size() - at - 4) return false;
             at += 4 + n;
         }
@@ -85,9 +91,9 @@ void check_header(const std::string& path) {
     const std::uint64_t size = static_cast<std::uint64_t>(in.tellg());
     in.seekg(0);
     const auto u32 = [&]() {
-        unsigned char b[4] = {};
-        in.read(reinterpret_cast<char*>(b), 4);
-        return std::uint32_t{b[0]} | std::uint32_t{b[1]} << 8 | std::uint32_t{b[2]} << 16 | std::uint32_t{b[3]} << 24;
+        char b[4] = {};
+        in.read(b, 4);
+        return u32_at(b);
     };
     const auto name = [&](std::size_t max) {
         std::string s;
