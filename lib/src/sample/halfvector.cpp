@@ -26,9 +26,6 @@ Vec3 half_at(double x, double y, double sign) {
     return spherical_direction(kPi / 2.0 * y * y, sign * kPi * x);
 }
 
-// sin and cos over [0, π] (θh and |φh − φo|) for sample(), without libm's sincos.
-const detail::SinCosTable& half_turn() { return detail::half_turn_sincos(); }
-
 // wo's elevation without asin, to ~1e-10: it only places wo between two slices, and sample() and
 // pdf() place it alike. sin_o = ‖wo_xy‖, which draw() also needs for wo's azimuth.
 double view_elevation(double sin_o, const Vec3& wo) { return detail::fast_half_turn_angle(sin_o, wo.z); }
@@ -191,6 +188,13 @@ struct Cell {
             static_cast<bool>(found_r & found_c & found_x & found_y)};
 }
 
+// Piecewise2D itself, for the draws whose find_cell did not settle (its scans are longer, or its cell
+// coordinates need a nudge).
+Cell exact_cell(const StackView& v, int slice, int other, double u1, double u2) {
+    const Piecewise2D::Point p = v.stacked(slice).sample(u1, u2);
+    return {p.x, p.y, p.pdf, v.stacked(other).density_at(p.row, p.col), true};
+}
+
 // HalfVectorSampler::draw_block's data draws in passes over the block, each across draws: (1) placement;
 // (2) the cell searches (gathers from the stacked tables); (3) the half vector, wi and the pdf; then
 // the cosine draws.
@@ -220,11 +224,10 @@ struct Cell {
         x[k] = c.x, y[k] = c.y, p_cell[k] = c.p_cell, p_other[k] = c.p_other;
         redo[k] = data[k] & !c.found;
     }
-    // The few whose scans are longer, or whose cell coordinates need a nudge: Piecewise2D itself.
     for (std::size_t k = 0; k < n; ++k) {
         if (!redo[k]) continue;
-        const Piecewise2D::Point p = st.stacked(slice[k]).sample(v1[k], v2[k]);
-        x[k] = p.x, y[k] = p.y, p_cell[k] = p.pdf, p_other[k] = st.stacked(other[k]).density_at(p.row, p.col);
+        const Cell c = exact_cell(st, slice[k], other[k], v1[k], v2[k]);
+        x[k] = c.x, y[k] = c.y, p_cell[k] = c.p_cell, p_other[k] = c.p_other;
     }
     // The results into local arrays first: the compiler cannot rule out that `out` overlaps the sine
     // table it gathers from, and then does not vectorise.
@@ -348,25 +351,22 @@ HalfVectorSampler::Draw HalfVectorSampler::draw(const Vec3& wo, double u1, doubl
     // Each path builds its result whole: a Draw zeroed up front cost a `rep stos` per draw.
     const SamplerView v{options_.cosine_share, theta_o_.back(), static_cast<int>(theta_o_.size())};
     if (u1 < v.share) {
-        const CosineDraw c = cosine_draw(v, first_, half_turn(), wo, u1, u2);
+        const CosineDraw c = cosine_draw(v, first_, detail::half_turn_sincos(), wo, u1, u2);
         return c.ok ? Draw{{c.wi, c.pdf, {}}} : Draw{};
     }
     const Placement pl = place(v, wo, u1, u2);
-    // The block kernel's cell search, and Piecewise2D itself where it does not settle (as there).
+    // The block kernel's cell search, and its fallback where that does not settle.
     Cell c = find_cell(first_, pl.slice, pl.other, pl.v1, pl.v2);
-    if (!c.found) {
-        const Piecewise2D::Point p = slice(pl.slice).sample(pl.v1, pl.v2);
-        c = {p.x, p.y, p.pdf, slice(pl.other).density_at(p.row, p.col), true};
-    }
-    const Finish f = finish(v, half_turn(), wo, pl, c.x, c.y, c.p_cell, c.p_other);
+    if (!c.found) c = exact_cell(first_, pl.slice, pl.other, pl.v1, pl.v2);
+    const Finish f = finish(v, detail::half_turn_sincos(), wo, pl, c.x, c.y, c.p_cell, c.p_other);
     if (!f.ok) return {};
     return {{f.wi, f.pdf, {}}, true, f.sin_h, f.cos_h, f.sin_p, f.cos_p, pl.sin_o, wo.z};
 }
 
 void HalfVectorSampler::draw_block(const Vec3* wo, const std::array<double, 2>* u, std::size_t n, Draws& out) const {
     const SamplerView v{options_.cosine_share, theta_o_.back(), static_cast<int>(theta_o_.size())};
-    (detail::simd_level() == detail::Simd::Avx2Fma ? draw_lanes_avx2 : draw_lanes_sse2)(v, first_, half_turn(), wo, u, n,
-                                                                                        out);
+    (detail::simd_level() == detail::Simd::Avx2Fma ? draw_lanes_avx2 : draw_lanes_sse2)(
+        v, first_, detail::half_turn_sincos(), wo, u, n, out);
 }
 
 }  // namespace brdfz
