@@ -287,7 +287,7 @@ TEST_CASE("compact tables give finite, non-negative values on 10^5 random pairs"
     check_compact_random_pairs(100000);
 }
 
-TEST_CASE("bivariate tables: exact for a φd-independent table, the φd mean otherwise", "[compact][bivariate]") {
+TEST_CASE("bivariate tables: exact for a φd-independent table, the φd mean otherwise", "[compact][bivariate][heavy]") {
     const GridSpec fine{90, 90, 180};
     Table flat(fine), wavy(fine);
     for (int ih = 0; ih < 90; ++ih)
@@ -562,7 +562,7 @@ TEST_CASE("a compact table of one real MERL table stays close to the source", "[
     check_merl_quantisation(1);
 }
 
-TEST_CASE("compact tables of real RGL data: quantisation costs little against resampling", "[compact][data][rgl]") {
+TEST_CASE("compact tables of real RGL data: quantisation costs little against resampling", "[compact][data][rgl][heavy]") {
     const std::filesystem::path file = std::filesystem::path(BRDFZ_SHARED_DIR) / "data" / "rgl" / "paper_white_rgb.bsdf";
     if (!std::filesystem::exists(file)) {
         WARN("skipped: " << file.string() << " missing");

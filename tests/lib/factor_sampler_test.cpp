@@ -94,7 +94,7 @@ Sampled by_factors(const Factored& f) { return Sampled(f.brdf->factor_sampler(),
 
 }  // namespace
 
-TEST_CASE("factor sampler: chi-square, normalisation, round trip on a synthetic factorisation", "[sample][factored]") {
+TEST_CASE("factor sampler: chi-square, normalisation, round trip on a synthetic factorisation", "[sample][factored][heavy]") {
     const Factored f = factor(coated({45, 45, 90}, 0.08), options(FactorMethod::Nmf, 3, FactorSpace::Linear,
                                                                   FactorLayout::HxDP, FactorColour::Separate));
     check_sampler(by_factors(f), 200000);
@@ -237,7 +237,7 @@ void check_merl(const std::filesystem::path& path, std::size_t samples) {
 
 }  // namespace
 
-TEST_CASE("factor sampler on a real MERL table (chrome)", "[sample][factored][data]") {
+TEST_CASE("factor sampler on a real MERL table (chrome)", "[sample][factored][data][heavy]") {
     const auto files = test::merl_tables();
     const auto chrome = std::find_if(files.begin(), files.end(), [](const auto& p) { return p.stem() == "chrome"; });
     if (chrome == files.end()) {

@@ -85,7 +85,7 @@ double held_out_error(const Brdf& approx, const Brdf& ref, int n, std::uint64_t 
 
 }  // namespace
 
-TEST_CASE("factored fit=lsq: an interpolated rank-k product is recovered through the lookup", "[factored][lsq]") {
+TEST_CASE("factored fit=lsq: an interpolated rank-k product is recovered through the lookup", "[factored][lsq][heavy]") {
     for (const GridSpec g : {GridSpec{8, 6, 10, BinPosition::Centre}, GridSpec{8, 6, 10, BinPosition::Centre, 0.8}})
         for (FactorColour colour : {FactorColour::Separate, FactorColour::Shared}) {
             if (colour == FactorColour::Shared && g.theta_d_warp == 0.0) continue;  // one slow CP case is enough
@@ -118,7 +118,7 @@ TEST_CASE("factored fit=lsq: an interpolated rank-k product is recovered through
         }
 }
 
-TEST_CASE("factored fit=lsq: beats point-sampled factors between the samples", "[factored][lsq]") {
+TEST_CASE("factored fit=lsq: beats point-sampled factors between the samples", "[factored][lsq][heavy]") {
     // A glossy coat on a coarse grid at a rank that leaves the interpolation between samples as the main
     // error (at rank 3 on this grid the rank limits first, and the refit, which weighs the grid's points
     // rather than the held-out pairs' uniform directions, can lose: 1.2-1.5x at alpha 0.2-0.35).

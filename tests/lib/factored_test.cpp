@@ -127,16 +127,10 @@ TEST_CASE("factored: error falls monotonically with rank", "[factored][heavy]") 
         }
 }
 
-namespace {
-
-// Every space with both colour modes (`all`), or with one each, the spaces taking them in turn.
-void check_nmf_non_negative(bool all) {
+TEST_CASE("factored: nmf factors and reconstructions are non-negative", "[factored][nmf][heavy]") {
     const Table t = coated({16, 16, 32}, 0.05);
-    bool shared_turn = false;
-    for (FactorSpace space : {FactorSpace::Linear, FactorSpace::Cos, FactorSpace::Log, FactorSpace::Cbrt}) {
-        shared_turn = !shared_turn;
+    for (FactorSpace space : {FactorSpace::Linear, FactorSpace::Cos, FactorSpace::Log, FactorSpace::Cbrt})
         for (FactorColour colour : {FactorColour::Separate, FactorColour::Shared}) {
-            if (!all && (colour == FactorColour::Shared) != shared_turn) continue;
             INFO(factor_space_name(space) << " " << factor_colour_name(colour));
             const Factored f = factor(t, options(FactorMethod::Nmf, 3, space, FactorLayout::HxDP, colour));
             const Factors& x = f.brdf->factors();
@@ -145,18 +139,6 @@ void check_nmf_non_negative(bool all) {
             CHECK(f.report.clamped == 0);
             CHECK(f.report.residual < 0.5);
         }
-    }
-}
-
-}  // namespace
-
-// The test below factors each space once, in one colour mode.
-TEST_CASE("factored: nmf factors and reconstructions are non-negative", "[factored][nmf][heavy]") {
-    check_nmf_non_negative(true);
-}
-
-TEST_CASE("factored: nmf factors and reconstructions are non-negative, one colour mode per space", "[factored][nmf][light]") {
-    check_nmf_non_negative(false);
 }
 
 namespace {
@@ -258,10 +240,7 @@ void check_bounded(const FactoredBrdf& f, const Table& t) {
 
 }  // namespace
 
-namespace {
-
-// Both methods in both spaces (`all`), or svd in log and nmf in cbrt.
-void check_no_extrapolation(bool all) {
+TEST_CASE("factored: bins without data do not extrapolate beyond the data (log and cbrt spaces)", "[factored][mask][heavy]") {
     // A sharp coat's grazing bins are below the horizon (invalid); with one θh row entirely invalid
     // as well. Unregularised, rank 4 reconstructed log-space values of 490–630 there (expm1: beyond
     // any float) and cbrt values up to 1,200, against data at most 8.9 and 19.
@@ -271,7 +250,6 @@ void check_no_extrapolation(bool all) {
         for (int ip = 0; ip < g.n_phi_d; ++ip) t.invalidate(g.index(15, id, ip));
     for (FactorMethod method : {FactorMethod::Svd, FactorMethod::Nmf})
         for (FactorSpace space : {FactorSpace::Log, FactorSpace::Cbrt}) {
-            if (!all && (method == FactorMethod::Nmf) != (space == FactorSpace::Cbrt)) continue;
             INFO(factor_method_name(method) << " " << factor_space_name(space));
             FactorOptions o = options(method, 4, space);
             o.max_iterations = 100;
@@ -281,17 +259,6 @@ void check_no_extrapolation(bool all) {
             // (svd, log), 0.0066 (nmf, log), 0.0011 (svd, cbrt), 0.0032 (nmf, cbrt).
             CHECK(f.report.residual < (space == FactorSpace::Log ? 0.01 : 0.005));
         }
-}
-
-}  // namespace
-
-// The test below runs svd in log and nmf in cbrt: both methods, both spaces.
-TEST_CASE("factored: bins without data do not extrapolate beyond the data (log and cbrt spaces)", "[factored][mask][heavy]") {
-    check_no_extrapolation(true);
-}
-
-TEST_CASE("factored: bins without data do not extrapolate beyond the data (svd log, nmf cbrt)", "[factored][mask][light]") {
-    check_no_extrapolation(false);
 }
 
 TEST_CASE("factored: RGL cc_ibiza_sunset factors to a finite sampler (nmf and svd)", "[factored][data][heavy]") {

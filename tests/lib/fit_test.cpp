@@ -69,9 +69,7 @@ MeasurementSet grazing_only() {
 
 }  // namespace
 
-namespace {
-
-void check_recovery(const GridSpec& grid) {
+TEST_CASE("fitting recovers every parameter within 5% from noisy, incomplete tables", "[fit][heavy]") {
     struct Case {
         const char* model;
         std::vector<double> params;
@@ -83,7 +81,7 @@ void check_recovery(const GridSpec& grid) {
     };
     for (const Case& c : cases) {
         const AnalyticBrdf truth(c.model, c.params);
-        const TabularBrdf data = noisy_table(truth, 42, 0.02, 0.10, grid);
+        const TabularBrdf data = noisy_table(truth, 42);
         FitOptions o;
         const FitResult r = fit(data, c.model, o);
         INFO(report(r));
@@ -99,17 +97,6 @@ void check_recovery(const GridSpec& grid) {
         CHECK(r.report.samples > 10000);
         CHECK_FALSE(r.report.poor_fit);
     }
-}
-
-}  // namespace
-
-// MERL's grid; the test below runs the same fits on a grid with 27 times fewer bins.
-TEST_CASE("fitting recovers every parameter within 5% from noisy, incomplete tables", "[fit][heavy]") {
-    check_recovery(GridSpec{});
-}
-
-TEST_CASE("fitting recovers every parameter within 5% from noisy, incomplete tables on a coarser grid", "[fit][light]") {
-    check_recovery(GridSpec{30, 30, 60});
 }
 
 TEST_CASE("a fit that converges to a model missing the data is flagged poor, its status kept", "[fit]") {
@@ -135,14 +122,16 @@ TEST_CASE("a fit that converges to a model missing the data is flagged poor, its
 
 namespace {
 
-// Every loss fitted twice and the Cauchy loss on outliers, on a noisy table of `grid`.
-void check_losses(const GridSpec& grid) {
+// Every loss fitted twice and the Cauchy loss on outliers, on a noisy table of `grid`, from `starts`
+// starts.
+void check_losses(const GridSpec& grid, int starts) {
     const AnalyticBrdf truth("lambert+ggx", {0.3, 0.2, 0.1, 0.6, 0.5, 0.4, 0.2, 0.1});
     const TabularBrdf data = noisy_table(truth, 7, 0.02, 0.10, grid);
     for (const char* loss : {"cos", "log", "cbrt"}) {
         FitOptions o;
         o.loss = parse_fit_loss(loss);
         o.threads = 1;
+        o.starts = starts;
         const FitResult a = fit(data, "lambert+ggx", o), b = fit(data, "lambert+ggx", o);
         INFO(loss << "\n" << report(a));
         check_sane(a);
@@ -159,6 +148,7 @@ void check_losses(const GridSpec& grid) {
     FitOptions o;
     o.robust = RobustLoss::Cauchy;
     o.robust_scale = 0.05;
+    o.starts = starts;
     const FitResult robust = fit(set, "lambert+ggx", o);
     INFO(report(robust));
     check_sane(robust);
@@ -169,13 +159,14 @@ void check_losses(const GridSpec& grid) {
 
 }  // namespace
 
-// MERL's grid; the test below runs the same fits on a grid with 27 times fewer bins.
+// MERL's grid from the default starts; the test below runs the same fits on a grid with 216 times fewer
+// bins from two starts.
 TEST_CASE("every loss and the robust losses fit, and fits are deterministic", "[fit][heavy]") {
-    check_losses(GridSpec{});
+    check_losses(GridSpec{}, FitOptions{}.starts);
 }
 
 TEST_CASE("every loss and the robust losses fit, and fits are deterministic, on a coarser grid", "[fit][light]") {
-    check_losses(GridSpec{30, 30, 60});
+    check_losses(GridSpec{15, 15, 30}, 2);
 }
 
 TEST_CASE("autodiff Jacobians of every lobe agree with finite differences", "[fit][lobes]") {

@@ -339,7 +339,7 @@ TEST_CASE("PCA: compress kind pca:basis=FILE,k=K", "[pca][compress]") {
     CHECK_THROWS_AS(compress(analytic, "pca:basis=" + (dir.path / "none.brdfz").string() + ",k=2"), IoError);
 }
 
-TEST_CASE("PCA on real MERL tables: training beats held out", "[pca][merl]") {
+TEST_CASE("PCA on real MERL tables: training beats held out", "[pca][merl][heavy]") {
     const std::vector<fs::path> files = test::merl_tables();
     if (files.size() < 4) {
         WARN("skipped: fewer than 4 MERL tables in BRDFZ_MERL_DIR (generated from ../shared by ctest)");

@@ -169,7 +169,7 @@ TEST_CASE("analytic samplers: lobes are chosen in proportion to their albedo", "
 }
 
 TEST_CASE("analytic samplers: sampled albedo matches quadrature, with far less variance than cosine sampling",
-          "[sample][analytic]") {
+          "[sample][analytic][heavy]") {
     for (const Case& c : cases()) {
         const AnalyticBrdf b(c.model, c.params);
         INFO(b.describe());
