@@ -37,12 +37,6 @@ void limit_openexr() {
     });
 }
 
-// OpenEXR reads a typed attribute's value by the type's own layout, not by the size the header
-// declares for it: a value of another length than declared leaves OpenEXR reading the rest of the
-// header from another offset than the one checked here (a fuzzed file's channel list ended early, and
-// OpenEXR took the bytes after it for a string attribute of 1 GB). So each value must be exactly what
-// its type reads: fixed sizes, a channel list's names and fields, a string vector's lengths. Types
-// outside this list are refused (no brdfz image has them; OpenEXR knows more than it lists here).
 // A little-endian uint32 of the file at p.
 std::uint32_t u32_at(const char* p) {
     std::uint32_t v;
@@ -50,6 +44,12 @@ std::uint32_t u32_at(const char* p) {
     return detail::from_little_endian(v);
 }
 
+// OpenEXR reads a typed attribute's value by the type's own layout, not by the size the header
+// declares for it: a value of another length than declared leaves OpenEXR reading the rest of the
+// header from another offset than the one checked here (a fuzzed file's channel list ended early, and
+// OpenEXR took the bytes after it for a string attribute of 1 GB). So each value must be exactly what
+// its type reads: fixed sizes, a channel list's names and fields, a string vector's lengths. Types
+// outside this list are refused (no brdfz image has them; OpenEXR knows more than it lists here).
 bool value_has_its_layout(const std::string& type, const std::string& v) {
     static const std::pair<const char*, std::size_t> fixed[] = {
         {"int", 4},        {"float", 4},     {"double", 8},         {"v2i", 8},         {"v2f", 8},
