@@ -147,13 +147,16 @@ struct CosineDraw {
 // scan (it takes about one on average), on `cdf` from index `base`: the interval, and in `found`
 // whether it is find_interval's. It is when the scan has ended: then cdf[i] <= u < cdf[i + 1], so the
 // interval is not empty either. Every index stays within the tables for any u, NaN or inf. Indices are
-// ints (the stacked tables' sizes are checked), which the gathers need.
-[[gnu::always_inline]] inline int guided_interval(const float* cdf, int base, const std::uint32_t* guide,
-                                                  int guide_base, int n, double u, bool& found) {
+// ints (the stacked tables' sizes are checked), which the gathers need. In two parts, the guide entry
+// (where the scan starts) and the scan, so that the block kernel can run them as separate passes.
+[[gnu::always_inline]] inline int guide_entry(const std::uint32_t* guide, int guide_base, int n, double u) {
     const float x = static_cast<float>(u);
     // x is at most 1 for a data draw; the bound keeps the bucket of other lanes (u2 = inf) in range.
     const int j = std::min(static_cast<int>(x > 0.0f ? std::min(static_cast<double>(x), 1.0) * n : 0.0), n - 1);
-    int i = static_cast<int>(guide[guide_base + j]);
+    return static_cast<int>(guide[guide_base + j]);
+}
+[[gnu::always_inline]] inline int scan_interval(const float* cdf, int base, int n, int i, double u, bool& found) {
+    const float x = static_cast<float>(u);
     for (int step = 0; step < 2; ++step) i += (i < n - 1) & (cdf[base + i + 1] <= x);
     found = cdf[base + i + 1] > x;
     return i;
@@ -168,24 +171,42 @@ struct CosineDraw {
 
 // Piecewise2D::sample(u1, u2) on a slice's stacked tables, with the other slice's density of the cell:
 // the same operations (float differences of CDF entries included), so when `found` the same results.
+// In three steps, each a pass across the block kernel's draws: the row; the guide entry of the column's
+// search; the column, the cell and the densities. One pass for all three ran each draw's chain of
+// dependent table reads in turn, with few of the next draws' reads overlapping it.
+struct Row {
+    int r;      // the row within the slice
+    double fy;  // where u1 lies within it
+    bool found;
+};
+[[gnu::always_inline]] inline Row find_row(const StackView& v, int slice, double u1) {
+    const int R = v.rows, mb = slice * (R + 1);
+    bool found;
+    const int r = scan_interval(v.marginal, mb, R, guide_entry(v.marginal_guide, slice * R, R, u1), u1, found);
+    const float w_r = v.marginal[mb + r + 1] - v.marginal[mb + r];
+    return {r, std::clamp((u1 - v.marginal[mb + r]) / w_r, 0.0, 1.0), found};
+}
+[[gnu::always_inline]] inline int column_start(const StackView& v, int slice, int r, double u2) {
+    return guide_entry(v.conditional_guide, (slice * v.rows + r) * v.cols, v.cols, u2);
+}
 struct Cell {
     double x, y, p_cell, p_other;
     bool found;
 };
-[[gnu::always_inline]] inline Cell find_cell(const StackView& v, int slice, int other, double u1, double u2) {
-    const int R = v.rows, C = v.cols;
-    bool found_r, found_c, found_x, found_y;
-    const int mb = slice * (R + 1);
-    const int r = guided_interval(v.marginal, mb, v.marginal_guide, slice * R, R, u1, found_r);
-    const float w_r = v.marginal[mb + r + 1] - v.marginal[mb + r];
-    const double fy = std::clamp((u1 - v.marginal[mb + r]) / w_r, 0.0, 1.0);
-    const int row = slice * R + r, cb = row * (C + 1);
-    const int c = guided_interval(v.conditional, cb, v.conditional_guide, row * C, C, u2, found_c);
+[[gnu::always_inline]] inline Cell find_column(const StackView& v, int slice, int other, const Row& row, int start,
+                                               double u2) {
+    const int R = v.rows, C = v.cols, rs = slice * R + row.r, cb = rs * (C + 1);
+    bool found_c, found_x, found_y;
+    const int c = scan_interval(v.conditional, cb, C, start, u2, found_c);
     const float w_c = v.conditional[cb + c + 1] - v.conditional[cb + c];
     const double fx = std::clamp((u2 - v.conditional[cb + c]) / w_c, 0.0, 1.0);
-    const double x = cell_coord(c, C, fx, found_x), y = cell_coord(r, R, fy, found_y);
-    return {x, y, v.density[row * C + c], v.density[(other * R + r) * C + c],
-            static_cast<bool>(found_r & found_c & found_x & found_y)};
+    const double x = cell_coord(c, C, fx, found_x), y = cell_coord(row.r, R, row.fy, found_y);
+    return {x, y, v.density[rs * C + c], v.density[(other * R + row.r) * C + c],
+            static_cast<bool>(row.found & found_c & found_x & found_y)};
+}
+[[gnu::always_inline]] inline Cell find_cell(const StackView& v, int slice, int other, double u1, double u2) {
+    const Row row = find_row(v, slice, u1);
+    return find_column(v, slice, other, row, column_start(v, slice, row.r, u2), u2);
 }
 
 // Piecewise2D itself, for the draws whose find_cell did not settle (its scans are longer, or its cell
@@ -218,9 +239,17 @@ Cell exact_cell(const StackView& v, int slice, int other, double u1, double u2) 
         sin_o[k] = pl.sin_o, t[k] = pl.t, v1[k] = pl.v1, v2[k] = pl.v2, sign[k] = pl.sign;
         slice[k] = pl.slice, other[k] = pl.other, upper[k] = pl.upper;
     }
-    std::int64_t redo[B];
+    // find_cell's steps, each a pass.
+    int row[B], start[B];
+    double fy[B];
+    std::int64_t row_found[B], redo[B];
     for (std::size_t k = 0; k < n; ++k) {
-        const Cell c = find_cell(st, slice[k], other[k], v1[k], v2[k]);
+        const Row r = find_row(st, slice[k], v1[k]);
+        row[k] = r.r, fy[k] = r.fy, row_found[k] = r.found;
+    }
+    for (std::size_t k = 0; k < n; ++k) start[k] = column_start(st, slice[k], row[k], v2[k]);
+    for (std::size_t k = 0; k < n; ++k) {
+        const Cell c = find_column(st, slice[k], other[k], {row[k], fy[k], row_found[k] != 0}, start[k], v2[k]);
         x[k] = c.x, y[k] = c.y, p_cell[k] = c.p_cell, p_other[k] = c.p_other;
         redo[k] = data[k] & !c.found;
     }
