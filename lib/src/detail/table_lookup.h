@@ -280,10 +280,11 @@ Rgb eval_table(const GridSpec& g, const Values& values, Lookup lookup, const Vec
 }
 
 // Batch kernels (eval_table_batch, and sample_table_batch's weights) work in blocks of pairs, in passes
-// over arrays of numbers, not of structs, so that the branch-free passes vectorise.
-constexpr std::size_t kLookupBlock = 64;
-// How far ahead of its read a linear lookup's eight lines are prefetched. The whole block's 512
-// prefetches at once ran 5–20 % slower at random pairs on a 17.5 MB table (bench/README.md): more
+// over arrays of numbers, not of structs, so that the branch-free passes vectorise. As many pairs as
+// the sampler draws at once (HalfVectorSampler::kBlock).
+constexpr std::size_t kLookupBlock = 128;
+// How far ahead of its read a linear lookup's eight lines are prefetched. A block of 64 lookups'
+// 512 prefetches at once ran 5–20 % slower at random pairs on a 17.5 MB table (bench/README.md): more
 // misses than the core can track, so the first reads waited behind the last prefetches.
 constexpr std::size_t kLinearAhead = 16;
 
