@@ -59,7 +59,7 @@ public:
     // for bit: the same operations per draw, run across draws in vector registers (SSE2, or AVX2
     // without FMA contraction where the CPU has it: detail/simd.h). Inputs outside sample()'s domain
     // (Brdf::can_draw) give a failed draw, pdf 0. 128 draws ran 2–5 % faster than 64 with the table
-    // kernel (bench/README.md); the kernel's arrays then take ~47 KB of stack.
+    // kernel (bench/README.md); the kernel's arrays then take ~50 KB of stack.
     static constexpr std::size_t kBlock = 128;
     struct Draws {
         double wi_x[kBlock], wi_y[kBlock], wi_z[kBlock], pdf[kBlock];  // pdf 0: failed
