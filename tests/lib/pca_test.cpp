@@ -20,6 +20,7 @@
 #include "brdfz/repr/analytic/model.h"
 #include "brdfz/repr/pca.h"
 #include "brdfz/tabulate.h"
+#include "sample_stats.h"
 #include "test_util.h"
 
 using namespace brdfz;
@@ -209,6 +210,41 @@ TEST_CASE("PCA: bad input gives clear errors", "[pca]") {
     CHECK_THROWS_WITH(basis->project(Table(kGrid), 2), Catch::Contains("too few"));
 }
 
+// A PCA material samples as its reconstructed table does (the tabular sampler, tested in
+// sample_test.cpp): the sampler's checks on a held-out material, and every draw the table's.
+TEST_CASE("PCA: sampling is the reconstructed table's, one call or a batch", "[pca][sample]") {
+    const std::vector<Table> tables = family();
+    const auto basis = trained(tables, 6);
+    const PcaBrdf pca(basis, basis->project(material(0.1, 0.6, 0.3, 0.2, 0.5), 6));
+    test::check_sampler(pca, 200000, 0.01 / std::size(test::kThetaODeg));
+
+    // Random views, a tenth of them below the horizon, and u: the same results whichever way.
+    std::mt19937_64 rng(11);
+    std::uniform_real_distribution<double> u01(0, 1);
+    std::normal_distribution<double> nd;
+    const std::size_t count = 1000;
+    std::vector<Vec3> wo(count);
+    std::vector<std::array<double, 2>> us(count);
+    for (std::size_t k = 0; k < count; ++k) {
+        wo[k] = normalize({nd(rng), nd(rng), nd(rng)});
+        wo[k].z = (k % 10 ? 1.0 : -1.0) * std::fabs(wo[k].z);
+        us[k] = {u01(rng), u01(rng)};
+    }
+    std::vector<BrdfSample> batch(count), table_batch(count);
+    pca.sample(wo, us, batch);
+    pca.table().sample(wo, us, table_batch);
+    std::size_t drawn = 0;
+    for (std::size_t k = 0; k < count; ++k) {
+        const BrdfSample one = pca.sample(wo[k], us[k][0], us[k][1]);
+        REQUIRE(std::memcmp(&one, &batch[k], sizeof one) == 0);
+        REQUIRE(std::memcmp(&one, &table_batch[k], sizeof one) == 0);
+        if (one.pdf == 0) continue;
+        ++drawn;
+        REQUIRE(pca.pdf(wo[k], one.wi) == Approx(one.pdf).epsilon(1e-9));
+    }
+    CHECK(drawn > count / 2);
+}
+
 TEST_CASE("PCA: nbytes counts the per-material part; the basis its own", "[pca]") {
     const std::vector<Table> tables = family();
     const auto basis = trained(tables, 5);
@@ -360,4 +396,6 @@ TEST_CASE("PCA on real MERL tables: training beats held out", "[pca][merl][heavy
     CHECK(mt.log_rmse.mean < 1e-3);
     CHECK(mt.log_rmse.mean < mh.log_rmse.mean);
     CHECK(mt.cos_rmse_rel.mean < mh.cos_rmse_rel.mean);
+    // The held-out reconstruction samples with an exact pdf, as any table does.
+    test::check_sampler(held_pca, 300000, 0.01 / std::size(test::kThetaODeg));
 }
