@@ -6,8 +6,11 @@
 
 #include <catch2/catch.hpp>
 
+#include <array>
 #include <cmath>
+#include <cstdint>
 #include <random>
+#include <utility>
 #include <vector>
 
 #include "brdfz/brdf.h"
@@ -158,11 +161,14 @@ inline Chi2Result chi2_test(const Brdf& b, const Vec3& wo, std::size_t samples, 
 // The view elevations the issue asks every sampler to be tested at.
 inline constexpr double kThetaODeg[] = {0, 30, 60, 80, 87};
 
+// The 1 % level, Bonferroni-corrected over the five views: check_sampler's default.
+inline constexpr double kViewsLevel = 0.01 / std::size(kThetaODeg);
+
 // At each of kThetaODeg: χ² of `samples` draws against the pdf (fails below p_min: callers Bonferroni-
 // correct it for the number of tests they run), ∫ pdf dωi = 1 ± 1% (on the χ² test's quadrature: 512
 // points a side, 2048 where the horizon crosses), and the sample → pdf round trip with the weight
 // f·cosθi/pdf.
-inline void check_sampler(const Brdf& b, std::size_t samples, double p_min) {
+inline void check_sampler(const Brdf& b, std::size_t samples, double p_min = kViewsLevel) {
     for (double deg : kThetaODeg) {
         INFO("theta_o = " << deg);
         const Vec3 wo = spherical_direction(deg * M_PI / 180, 0.4);
@@ -179,6 +185,22 @@ inline void check_sampler(const Brdf& b, std::size_t samples, double p_min) {
             for (int c = 0; c < 3; ++c) REQUIRE(s.weight[c] == Approx(f[c] * s.wi.z / s.pdf).epsilon(1e-9));
         }
     }
+}
+
+// count random views above the horizon and u pairs, from one seeded generator.
+inline std::pair<std::vector<Vec3>, std::vector<std::array<double, 2>>> random_views(std::size_t count,
+                                                                                     std::uint64_t seed) {
+    std::mt19937_64 rng(seed);
+    std::uniform_real_distribution<double> u(0, 1);
+    std::normal_distribution<double> nd;
+    std::vector<Vec3> wo(count);
+    std::vector<std::array<double, 2>> us(count);
+    for (std::size_t k = 0; k < count; ++k) {
+        wo[k] = normalize({nd(rng), nd(rng), nd(rng)});
+        wo[k].z = std::fabs(wo[k].z);
+        us[k] = {u(rng), u(rng)};
+    }
+    return {wo, us};
 }
 
 }  // namespace brdfz::test

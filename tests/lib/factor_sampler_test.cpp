@@ -15,6 +15,7 @@
 #include "test_util.h"
 
 using namespace brdfz;
+using test::check_sampler;
 
 namespace {
 
@@ -41,11 +42,6 @@ FactorOptions options(FactorMethod method, int rank, FactorSpace space, FactorLa
 std::string label(const Factors& f) {
     return std::string(factor_method_name(f.method)) + " rank " + std::to_string(f.rank) + " " +
            factor_space_name(f.space) + " " + factor_layout_name(f.layout) + " " + factor_colour_name(f.colour);
-}
-
-// Bonferroni-corrected 1% level over the five view elevations.
-void check_sampler(const Brdf& b, std::size_t samples) {
-    test::check_sampler(b, samples, 0.01 / std::size(test::kThetaODeg));
 }
 
 // Random (wo, u) over the upper hemisphere: counts of non-finite or negative pdfs and weights, and of

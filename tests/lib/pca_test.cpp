@@ -216,20 +216,12 @@ TEST_CASE("PCA: sampling is the reconstructed table's, one call or a batch", "[p
     const std::vector<Table> tables = family();
     const auto basis = trained(tables, 6);
     const PcaBrdf pca(basis, basis->project(material(0.1, 0.6, 0.3, 0.2, 0.5), 6));
-    test::check_sampler(pca, 200000, 0.01 / std::size(test::kThetaODeg));
+    test::check_sampler(pca, 200000);
 
     // Random views, a tenth of them below the horizon, and u: the same results whichever way.
-    std::mt19937_64 rng(11);
-    std::uniform_real_distribution<double> u01(0, 1);
-    std::normal_distribution<double> nd;
     const std::size_t count = 1000;
-    std::vector<Vec3> wo(count);
-    std::vector<std::array<double, 2>> us(count);
-    for (std::size_t k = 0; k < count; ++k) {
-        wo[k] = normalize({nd(rng), nd(rng), nd(rng)});
-        wo[k].z = (k % 10 ? 1.0 : -1.0) * std::fabs(wo[k].z);
-        us[k] = {u01(rng), u01(rng)};
-    }
+    auto [wo, us] = test::random_views(count, 11);
+    for (std::size_t k = 0; k < count; k += 10) wo[k].z = -wo[k].z;
     std::vector<BrdfSample> batch(count), table_batch(count);
     pca.sample(wo, us, batch);
     pca.table().sample(wo, us, table_batch);
@@ -397,5 +389,5 @@ TEST_CASE("PCA on real MERL tables: training beats held out", "[pca][merl][heavy
     CHECK(mt.log_rmse.mean < mh.log_rmse.mean);
     CHECK(mt.cos_rmse_rel.mean < mh.cos_rmse_rel.mean);
     // The held-out reconstruction samples with an exact pdf, as any table does.
-    test::check_sampler(held_pca, 300000, 0.01 / std::size(test::kThetaODeg));
+    test::check_sampler(held_pca, 300000);
 }

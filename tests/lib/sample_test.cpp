@@ -25,32 +25,15 @@
 
 using namespace brdfz;
 
+using test::check_sampler;
+using test::random_views;
+
 namespace {
 
 TabularBrdf tabulated(double alpha) {
     CoatedDiffuseParams p;
     p.alpha = alpha;
     return TabularBrdf(tabulate(CoatedDiffuse(p)).table);
-}
-
-// count random views above the horizon and u pairs, from one seeded generator.
-std::pair<std::vector<Vec3>, std::vector<std::array<double, 2>>> random_views(std::size_t count, std::uint64_t seed) {
-    std::mt19937_64 rng(seed);
-    std::uniform_real_distribution<double> u(0, 1);
-    std::normal_distribution<double> nd;
-    std::vector<Vec3> wo(count);
-    std::vector<std::array<double, 2>> us(count);
-    for (std::size_t k = 0; k < count; ++k) {
-        wo[k] = normalize({nd(rng), nd(rng), nd(rng)});
-        wo[k].z = std::fabs(wo[k].z);
-        us[k] = {u(rng), u(rng)};
-    }
-    return {wo, us};
-}
-
-// Bonferroni-corrected 1% level over the five view elevations.
-void check_sampler(const Brdf& b, std::size_t samples) {
-    test::check_sampler(b, samples, 0.01 / std::size(test::kThetaODeg));
 }
 
 }  // namespace
