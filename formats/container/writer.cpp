@@ -78,7 +78,7 @@ Achieved write(const std::string& path, const Brdf& brdf, const WriteOptions& op
         achieved.counts = tab.counts;
         tabulated = std::make_unique<TabularBrdf>(std::move(tab.table), table ? table->lookup() : Lookup::Linear);
         stored = tabulated.get();
-        module = &detail::tabular_storage();
+        module = detail::find_storage("tabular");
         if (options.metrics) {
             MetricOptions m;
             m.threads = options.threads;
