@@ -29,7 +29,7 @@ void add_convert(CLI::App& app) {
         if (!args->res.empty()) options.save.grid = parse_resolution(args->res);
         options.save.progress = progress_bar("tabulating");
         const ValidityCounts c = convert(args->in, args->out, options);
-        std::cout << "wrote " << args->out << ": " << c.valid << " valid bins";
+        std::cout << "wrote " << args->out << ": " << c.valid << " valid entries";
         if (c.below_horizon) std::cout << ", " << c.below_horizon << " below the horizon";
         if (c.clamped) std::cout << ", " << c.clamped << " negative clamped to 0";
         if (c.negative + c.nan + c.inf)

@@ -28,7 +28,9 @@ ValidityCounts write(const Brdf& brdf, const std::string& path, const SaveOption
     const auto* model = dynamic_cast<const AnalyticBrdf*>(&brdf);
     if (!model) throw UnsupportedError(path, "only analytic models can be written as .json (brdfz fit makes them)");
     model_json::write(path, *model);
-    return {};
+    ValidityCounts written;
+    written.valid = model->params().size();
+    return written;
 }
 
 bool sniff(std::string_view head, std::uintmax_t) {

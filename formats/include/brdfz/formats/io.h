@@ -87,7 +87,8 @@ bool holds_measurements(const std::string& path);
 // Cornell .brdf or ALTA .dat; UnsupportedError for formats that hold a BRDF (use load).
 LoadedMeasurements load_measurements(const std::string& path);
 
-// Writes atomically; returns the counts of what was written.
+// Writes atomically; returns the counts of what was written: table bins, or a stored representation's
+// entries (parameters, the factors' grid bins, an RGL file's rgb values).
 ValidityCounts save(const Brdf& brdf, const std::string& path, const SaveOptions& options = {});
 
 struct ConvertOptions {
