@@ -9,7 +9,7 @@
 
 #include "brdfz/coords.h"
 #include "brdfz/errors.h"
-#include "detail/grid_sweep.h"
+#include "detail/parallel.h"
 #include "repr/factored_impl.h"
 #include "repr/factored_solve.h"
 

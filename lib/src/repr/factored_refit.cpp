@@ -11,7 +11,7 @@
 
 #include "brdfz/errors.h"
 #include "detail/fit_points.h"
-#include "detail/grid_sweep.h"
+#include "detail/parallel.h"
 #include "detail/table_lookup.h"
 #include "repr/factored_impl.h"
 #include "repr/factored_solve.h"
