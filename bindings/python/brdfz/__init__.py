@@ -37,18 +37,22 @@ from ._core import (
     Selection,
     Trial,
     UnsupportedError,
+    ValidationCheck,
+    ValidationReport,
     albedo,
     benchmark_specs,
     compress_kinds,
     default_candidates,
     format_of,
     load,
+    validate,
 )
 
 __all__ = [
     "Brdf", "Candidate", "ChannelMetrics", "Compressed", "FitReport", "FitResult", "FormatError", "Metrics",
-    "Scene", "Selection", "Trial", "UnsupportedError", "albedo", "benchmark_specs", "compress", "compress_kinds",
-    "convert", "default_candidates", "fit", "format_of", "load", "metrics", "read_scene", "save", "tabulate", "trial",
+    "Scene", "Selection", "Trial", "UnsupportedError", "ValidationCheck", "ValidationReport", "albedo",
+    "benchmark_specs", "compress", "compress_kinds", "convert", "default_candidates", "fit", "format_of", "load",
+    "metrics", "read_scene", "save", "tabulate", "trial", "validate",
 ]
 
 Path = Union[str, os.PathLike]
