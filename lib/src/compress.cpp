@@ -59,10 +59,9 @@ Lookup lookup_option(const ReprSpec& spec) {
     return parse_lookup(spec.get_choice("lookup", "linear", {"linear", "nearest"}));
 }
 
-// ss=N: each bin the mean of N points per axis (box filter), default 1 (point samples), as measured
-// (bench/README.md, "Compact tables"): with linear lookup the box blurs what interpolation blurs again
-// (3x the error of point samples for 16x16x16 on RGL's paper_white), and for bivariate tables, whose
-// φd mean is a box anyway, ss=2 gained nothing on three of the four RGL materials at 4x the build time.
+// ss=N: each bin the mean of N points per axis (box filter), default 1 (point samples): with linear
+// lookup the box blurs what the interpolation blurs again, and for bivariate tables, whose φd mean is
+// a box already, a finer box adds build time and little else.
 //
 // filter=lsq: instead of the mean, the values whose linear lookup fits the ss³ points of each bin best
 // (tabulate.h), default ss=3.
@@ -167,8 +166,7 @@ Compressed build_pca(const Brdf& source, const ReprSpec& spec, const CompressOpt
 
 // svd / nmf (repr/factored.h): a table factored in a transform space. The source is factored on its
 // own grid when it is a table and no res= is given, else tabulated on res (default 90x90x180), with
-// dwarp=W its θd axis warped as for tables (bench/README.md: satin_rosaline at 90x32x16 rank 6,
-// 3.94 -> 2.96 %).
+// dwarp=W its θd axis warped as for tables (finer towards grazing θd, where glossy data change fastest).
 Compressed build_factored(FactorMethod method, const Brdf& source, const ReprSpec& spec, const CompressOptions& options) {
     FactorOptions fo;
     fo.method = method;
