@@ -94,6 +94,21 @@ void write_source_keys(JsonWriter& j, const std::string& path, const SourceInfo&
     j.key("inf").value(info.counts.inf);
 }
 
+void print_source_lines(std::ostream& os, const std::string& path, const SourceInfo& info, const std::string& describe,
+                        std::size_t nbytes, const SourceNotes& notes) {
+    std::string dims;
+    for (std::size_t d : info.dims) dims += (dims.empty() ? "" : "x") + std::to_string(d);
+    os << path << "\n"
+       << "  format     " << info.format << "\n"
+       << "  dims       " << dims << notes.dims << "\n"
+       << "  stored as  " << describe << "\n"
+       << "  nbytes     " << nbytes << "\n"
+       << "  valid      " << info.counts.valid << "\n"
+       << "  negative   " << info.counts.negative << notes.negative << "\n"
+       << "  nan        " << info.counts.nan << notes.nan << "\n"
+       << "  inf        " << info.counts.inf << notes.inf << "\n";
+}
+
 void print_info(const std::string& path, const Loaded& loaded, bool json, std::ostream& os,
                 const container::Metadata* container) {
     const SourceInfo& info = loaded.info;
@@ -131,18 +146,8 @@ void print_info(const std::string& path, const Loaded& loaded, bool json, std::o
         os << "\n";
         return;
     }
-    std::string dims;
-    for (std::size_t d : info.dims) dims += (dims.empty() ? "" : "x") + std::to_string(d);
-    os << path << "\n"
-       << "  format     " << info.format << "\n"
-       << "  dims       " << dims << "\n"
-       << "  stored as  " << loaded.brdf->describe() << "\n"
-       << "  nbytes     " << loaded.brdf->nbytes() << "\n"
-       << "  valid      " << info.counts.valid << "\n"
-       << "  negative   " << info.counts.negative << "\n"
-       << "  nan        " << info.counts.nan << "\n"
-       << "  inf        " << info.counts.inf << "\n"
-       << "  range      [" << fixed(info.min_value) << ", " << fixed(info.max_value) << "]"
+    print_source_lines(os, path, info, loaded.brdf->describe(), loaded.brdf->nbytes());
+    os << "  range      [" << fixed(info.min_value) << ", " << fixed(info.max_value) << "]"
        << (info.format == "merl" || info.format == "exr" || info.format == "brdfz" ? " 1/sr\n" : " (stored values)\n")
        << "  albedo     theta_o      r        g        b         sampled (" << kAlbedoSamples
        << " samples)  r, g, b ± stderr\n";

@@ -71,6 +71,19 @@ py::dict counts_dict(const ValidityCounts& c) {
     return d;
 }
 
+// save() with the GIL released and progress reported; the written bins' counts.
+py::dict save_counts(const Brdf& brdf, const Path& path, SaveOptions o, py::object progress) {
+    Progress bar(std::move(progress));
+    o.progress = bar.hook();
+    ValidityCounts c;
+    {
+        py::gil_scoped_release release;
+        c = save(brdf, path.string(), o);
+    }
+    bar.rethrow();
+    return counts_dict(c);
+}
+
 py::list rgb_list(const Rgb& v) { return py::cast(std::vector<double>(v.begin(), v.end())); }
 
 // A check as `brdfz validate --json` prints it: ok, tested, failed, and the worst offences with
@@ -147,15 +160,7 @@ void bind_operations(py::module_& m) {
               if (res) o.grid = grid_of(*res);
               o.format = format;
               o.threads = threads;
-              Progress bar(std::move(progress));
-              o.progress = bar.hook();
-              ValidityCounts c;
-              {
-                  py::gil_scoped_release release;
-                  c = save(*brdf, path.string(), o);
-              }
-              bar.rethrow();
-              return counts_dict(c);
+              return save_counts(*brdf, path, o, std::move(progress));
           },
           py::arg("brdf"), py::arg("path"), py::kw_only(), py::arg("res") = py::none(), py::arg("format") = "",
           py::arg("threads") = 0, py::arg("progress") = py::none(),
@@ -172,15 +177,7 @@ void bind_operations(py::module_& m) {
               o.source = src.string();
               o.source_format = from;
               o.threads = threads;
-              Progress bar(std::move(progress));
-              o.progress = bar.hook();
-              ValidityCounts c;
-              {
-                  py::gil_scoped_release release;
-                  c = save(*in, dst.string(), o);
-              }
-              bar.rethrow();
-              return counts_dict(c);
+              return save_counts(*in, dst, o, std::move(progress));
           },
           py::arg("src"), py::arg("dst"), py::kw_only(), py::arg("res") = py::none(), py::arg("src_format") = "",
           py::arg("dst_format") = "", py::arg("lookup") = "linear", py::arg("bin_position") = "centre",

@@ -21,9 +21,6 @@ namespace {
 
 using Mat = detail::FactorMat;
 using Vec = detail::FactorVec;
-using detail::balance;
-using detail::nnls;
-using detail::scale_for_f16;
 using detail::Solved;
 
 // What one side of an alternating step needs, row i of each matrix being row i of that side's factor
@@ -99,7 +96,7 @@ ColourSums update_side(Mat& out, const Mat& other, const Side& side, const Mat& 
             ridged.diagonal().array() += 1e-10 * a.trace() / static_cast<double>(k) + 1e-300;
             u = out.row(begin + r).transpose();
             if (nonneg) {
-                nnls(ridged, b, u);
+                detail::nnls(ridged, b, u);
             } else {
                 ldlt.compute(ridged);
                 u = ldlt.solve(b);
@@ -227,13 +224,13 @@ Solved solve(const Data& d, int k, bool nonneg, const FactorOptions& o, const st
             for (int c = 0; c < channels; ++c) {
                 Vec s = r.s.row(c).transpose();
                 if (nonneg)
-                    nnls(kk, sums.r[c], s);
+                    detail::nnls(kk, sums.r[c], s);
                 else
                     s = kk.ldlt().solve(sums.r[c]);
                 r.s.row(c) = s.transpose();
             }
         }
-        balance(r, channels > 1);
+        detail::balance(r, channels > 1);
         if (!std::isfinite(r.objective) || !r.u.allFinite() || !r.v.allFinite() || !r.s.allFinite())
             throw ValueError(std::string(factor_method_name(o.method)) +
                              ": the factorisation diverged (non-finite values after " + std::to_string(it) +
@@ -346,7 +343,7 @@ Factored factor(const Table& table, const FactorOptions& o) {
         const Data d = prepare(table, o, rows, cols, channels);
         if (d.valid == 0) throw ValueError(std::string(method) + ": the table has no valid bins to factor");
         Solved r = solve(d, k, nonneg, o, step(solve_index));
-        if (o.dtype == FactorDtype::F16) scale_for_f16(r, shared);  // FactoredBrdf rounds them
+        if (o.dtype == FactorDtype::F16) detail::scale_for_f16(r, shared);  // FactoredBrdf rounds them
         report.valid_bins = d.valid;
         report.iterations = std::max(report.iterations, r.iterations);
         report.converged = report.converged && r.converged;
