@@ -1,6 +1,5 @@
 """brdfz.validate: the library's plausibility checks from Python, equal to `brdfz validate --json`."""
 import json
-import struct
 
 import numpy as np
 import pytest
@@ -38,22 +37,24 @@ def test_a_plausible_table_passes_with_known_counts(demo_table):
     assert report["non-negativity"].worst == []
 
 
-def test_energy_violations_name_the_elevations(demo_table, tmp_path):
-    """The demo table scaled by 4 reflects more than it receives, at every elevation, 4x its albedo."""
-    data = demo_table.read_bytes()
-    dims = struct.unpack("<3i", data[:12])
-    values = np.frombuffer(data[12:], dtype="<f8").copy()
-    values[values > 0] *= 4.0
-    hot = tmp_path / "hot.binary"
-    hot.write_bytes(struct.pack("<3i", *dims) + values.astype("<f8").tobytes())
-    report = brdfz.validate(brdfz.load(hot), theta=[0, 30, 60])
+def test_energy_violations_name_the_elevations(tmp_path):
+    """lambert + ggx with both weights near 1 reflects more than it receives: every offence holds the
+    model's albedo, viewed and lit alike (the model is reciprocal)."""
+    params = {f"lambert.rho_{c}": 0.9 for c in "rgb"} | {f"ggx.ks_{c}": 0.9 for c in "rgb"}
+    params |= {"ggx.alpha": 0.3, "ggx.f0": 1.0}
+    path = tmp_path / "bright.json"
+    path.write_text(json.dumps({"format": "brdfz-analytic", "version": 1, "model": "lambert+ggx",
+                                "parameters": params}))
+    model = brdfz.load(path)
+    report = brdfz.validate(model, res=(16, 16, 32), theta=[0, 30, 60])
     energy = report["energy"]
-    assert not report.ok and not energy.ok and report["reciprocity"].ok
+    assert not report.ok and not energy.ok and report["reciprocity"].ok and report["non-negativity"].ok
     assert energy.failed == 3 and len(energy.worst) == 3
-    rho = brdfz.albedo(brdfz.load(demo_table), np.radians([w["theta_i_deg"] for w in energy.worst]))
+    rho = brdfz.albedo(model, np.radians([w["theta_i_deg"] for w in energy.worst]))
     for w, r in zip(energy.worst, rho):
         assert w["theta_i_deg"] == w["theta_o_deg"] and w["theta_i_deg"] in (0, 30, 60)
-        assert np.allclose(w["albedo_viewed"], 4 * r, rtol=1e-9)
+        assert np.allclose(w["albedo_viewed"], r, rtol=1e-12) and np.allclose(w["reflectance_lit"], r, rtol=1e-9)
+        assert min(r) > 1.01
     badness = [max(w["albedo_viewed"] + w["reflectance_lit"]) for w in energy.worst]
     assert badness == sorted(badness, reverse=True)
     assert "energy" in repr(report)
