@@ -104,6 +104,22 @@ void write_source_keys(JsonWriter& j, const std::string& path, const SourceInfo&
     j.key("inf").value(info.counts.inf);
 }
 
+void print_source_lines(std::ostream& os, const std::string& path, const SourceInfo& info, const std::string& describe,
+                        std::size_t nbytes, const SourceNotes& notes) {
+    std::string dims;
+    for (std::size_t d : info.dims) dims += (dims.empty() ? "" : "x") + std::to_string(d);
+    os << path << "\n"
+       << "  format     " << info.format << "\n"
+       << "  dims       " << dims << (notes.dims.empty() && !info.dims_of.empty() ? " (" + info.dims_of + ")" : notes.dims)
+       << "\n"
+       << "  stored as  " << describe << "\n"
+       << "  nbytes     " << nbytes << "\n"
+       << "  valid      " << info.counts.valid << "\n"
+       << "  negative   " << info.counts.negative << notes.negative << "\n"
+       << "  nan        " << info.counts.nan << notes.nan << "\n"
+       << "  inf        " << info.counts.inf << notes.inf << "\n";
+}
+
 void print_info(const std::string& path, const Loaded& loaded, bool json, std::ostream& os,
                 const container::Metadata* container) {
     const SourceInfo& info = loaded.info;
@@ -142,18 +158,8 @@ void print_info(const std::string& path, const Loaded& loaded, bool json, std::o
         os << "\n";
         return;
     }
-    std::string dims;
-    for (std::size_t d : info.dims) dims += (dims.empty() ? "" : "x") + std::to_string(d);
-    os << path << "\n"
-       << "  format     " << info.format << "\n"
-       << "  dims       " << dims << (info.dims_of.empty() ? "" : " (" + info.dims_of + ")") << "\n"
-       << "  stored as  " << loaded.brdf->describe() << "\n"
-       << "  nbytes     " << loaded.brdf->nbytes() << "\n"
-       << "  valid      " << info.counts.valid << "\n"
-       << "  negative   " << info.counts.negative << "\n"
-       << "  nan        " << info.counts.nan << "\n"
-       << "  inf        " << info.counts.inf << "\n"
-       << "  range      " << range_text(info) << "\n"
+    print_source_lines(os, path, info, loaded.brdf->describe(), loaded.brdf->nbytes());
+    os << "  range      " << range_text(info) << "\n"
        << "  albedo     theta_o      r        g        b         sampled (" << kAlbedoSamples
        << " samples)  r, g, b ± stderr\n";
     for (std::size_t k = 0; k < std::size(kAlbedoAnglesDeg); ++k) {

@@ -1,4 +1,4 @@
-// Module-level functions: load / save / convert, compress, fit, metrics, tabulate, albedo. Each
+// Module-level functions: load / save / convert, compress, fit, metrics, tabulate, albedo, validate. Each
 // releases the GIL while the library works; long ones take a progress callable (module.h).
 #include <pybind11/numpy.h>
 #include <pybind11/stl.h>
@@ -19,6 +19,7 @@
 #include "brdfz/repr/analytic/model.h"
 #include "brdfz/repr/tabular.h"
 #include "brdfz/tabulate.h"
+#include "brdfz/validate.h"
 #include "module.h"
 
 namespace brdfz::python {
@@ -68,6 +69,42 @@ py::dict counts_dict(const ValidityCounts& c) {
     d["inf"] = c.inf;
     d["clamped"] = c.clamped;
     d["below_horizon"] = c.below_horizon;
+    return d;
+}
+
+// save() with the GIL released and progress reported; the written bins' counts.
+py::dict save_counts(const Brdf& brdf, const Path& path, SaveOptions o, py::object progress) {
+    Progress bar(std::move(progress));
+    o.progress = bar.hook();
+    ValidityCounts c;
+    {
+        py::gil_scoped_release release;
+        c = save(brdf, path.string(), o);
+    }
+    bar.rethrow();
+    return counts_dict(c);
+}
+
+py::list rgb_list(const Rgb& v) { return py::cast(std::vector<double>(v.begin(), v.end())); }
+
+// A check as `brdfz validate --json` prints it: ok, tested, failed, and the worst offences with
+// their values under the check's names for them.
+py::dict check_dict(const ValidationCheck& c) {
+    py::list worst;
+    for (const ValidationOffence& o : c.worst) {
+        py::dict w;
+        w["theta_i_deg"] = o.theta_i_deg;
+        w["theta_o_deg"] = o.theta_o_deg;
+        w["dphi_deg"] = o.dphi_deg;
+        w[py::str(c.f_name)] = rgb_list(o.f);
+        if (!c.g_name.empty()) w[py::str(c.g_name)] = rgb_list(o.g);
+        worst.append(w);
+    }
+    py::dict d;
+    d["ok"] = c.ok();
+    d["tested"] = c.tested;
+    d["failed"] = c.failed;
+    d["worst"] = worst;
     return d;
 }
 
@@ -124,15 +161,7 @@ void bind_operations(py::module_& m) {
               if (res) o.grid = grid_of(*res);
               o.format = format;
               o.threads = threads;
-              Progress bar(std::move(progress));
-              o.progress = bar.hook();
-              ValidityCounts c;
-              {
-                  py::gil_scoped_release release;
-                  c = save(*brdf, path.string(), o);
-              }
-              bar.rethrow();
-              return counts_dict(c);
+              return save_counts(*brdf, path, o, std::move(progress));
           },
           py::arg("brdf"), py::arg("path"), py::kw_only(), py::arg("res") = py::none(), py::arg("format") = "",
           py::arg("threads") = 0, py::arg("progress") = py::none(),
@@ -359,6 +388,53 @@ void bind_operations(py::module_& m) {
           },
           py::arg("brdf"), py::arg("theta_o"),
           "directional albedo (quadrature, albedo.h) at θo in radians: shape of theta_o + (3,)");
+
+    py::class_<ValidationCheck>(m, "ValidationCheck", "one plausibility check (validate.h)")
+        .def_readonly("name", &ValidationCheck::name, "non-negativity, reciprocity or energy")
+        .def_readonly("unit", &ValidationCheck::unit, "what was tested: bins, pairs or elevations")
+        .def_readonly("tested", &ValidationCheck::tested)
+        .def_readonly("failed", &ValidationCheck::failed)
+        .def_property_readonly("ok", &ValidationCheck::ok)
+        .def_property_readonly("worst", [](const ValidationCheck& c) { return py::list(check_dict(c)["worst"]); },
+                               "the worst offences, worst first: angles in degrees and the values involved")
+        .def("to_dict", &check_dict)
+        .def("__repr__", [](const ValidationCheck& c) {
+            return "<brdfz.ValidationCheck " + c.name + ": " + (c.ok() ? "ok" : "FAIL") + ", " + std::to_string(c.failed) +
+                   " of " + std::to_string(c.tested) + " " + c.unit + " fail>";
+        });
+    py::class_<ValidationReport>(m, "ValidationReport", "the checks of validate(), in order")
+        .def_readonly("checks", &ValidationReport::checks)
+        .def_property_readonly("ok", &ValidationReport::ok)
+        .def("__getitem__", [](const ValidationReport& r, const std::string& name) {
+            for (const ValidationCheck& c : r.checks)
+                if (c.name == name) return c;
+            throw py::key_error(name);
+        })
+        .def("to_dict", [](const ValidationReport& r) {
+            py::dict d;
+            d["ok"] = r.ok();
+            for (const ValidationCheck& c : r.checks) d[py::str(c.name)] = check_dict(c);
+            return d;
+        }, "as `brdfz validate --json` prints it, without the file name")
+        .def("__repr__", [](const ValidationReport& r) {
+            return "<brdfz.ValidationReport " + (r.ok() ? std::string("ok") : "failed: " + r.failed_names()) + ">";
+        });
+    m.def("validate", [](const BrdfPtr& brdf, const std::tuple<int, int, int>& res, const std::vector<double>& theta,
+                         double rtol, double atol, double albedo_tol) {
+              ValidateOptions o;
+              o.grid = grid_of(res);
+              o.theta_deg = theta;
+              o.rtol = rtol;
+              o.atol = atol;
+              o.albedo_tol = albedo_tol;
+              py::gil_scoped_release release;
+              return validate(*brdf, o);
+          },
+          py::arg("brdf"), py::kw_only(), py::arg("res") = std::make_tuple(90, 90, 180),
+          py::arg("theta") = ValidateOptions{}.theta_deg, py::arg("rtol") = 0.05, py::arg("atol") = 1e-3,
+          py::arg("albedo_tol") = 0.01,
+          "non-negativity (a table's values, else f on the res grid), reciprocity (rtol, atol in 1/sr) and "
+          "energy (reflectance <= 1 + albedo_tol at the elevations theta, degrees), as `brdfz validate`");
 }
 
 }  // namespace brdfz::python

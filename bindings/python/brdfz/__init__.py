@@ -37,6 +37,8 @@ from ._core import (
     Selection,
     Trial,
     UnsupportedError,
+    ValidationCheck,
+    ValidationReport,
     albedo,
     benchmark_specs,
     compress_kinds,
@@ -45,13 +47,14 @@ from ._core import (
     formats,
     load,
     representations,
+    validate,
 )
 
 __all__ = [
     "Brdf", "Candidate", "ChannelMetrics", "Compressed", "FitReport", "FitResult", "FormatError", "Metrics",
-    "Scene", "Selection", "Trial", "UnsupportedError", "albedo", "benchmark_specs", "compress", "compress_kinds",
-    "convert", "default_candidates", "fit", "format_of", "formats", "load", "metrics", "read_scene", "representations",
-    "save", "tabulate", "trial",
+    "Scene", "Selection", "Trial", "UnsupportedError", "ValidationCheck", "ValidationReport", "albedo",
+    "benchmark_specs", "compress", "compress_kinds", "convert", "default_candidates", "fit", "format_of", "formats",
+    "load", "metrics", "read_scene", "representations", "save", "tabulate", "trial", "validate",
 ]
 
 Path = Union[str, os.PathLike]

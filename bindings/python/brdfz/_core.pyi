@@ -7,7 +7,7 @@ import numpy
 import numpy.typing
 import os
 import typing
-__all__: list[str] = ['Brdf', 'Candidate', 'ChannelMetrics', 'Compressed', 'FitReport', 'FitResult', 'FormatError', 'Metrics', 'Scene', 'Selection', 'Trial', 'UnsupportedError', 'albedo', 'benchmark_specs', 'compress', 'compress_kinds', 'convert', 'default_candidates', 'fit', 'format_of', 'formats', 'load', 'metrics', 'read_scene', 'representations', 'save', 'select_representation', 'tabulate', 'trial']
+__all__: list[str] = ['Brdf', 'Candidate', 'ChannelMetrics', 'Compressed', 'FitReport', 'FitResult', 'FormatError', 'Metrics', 'Scene', 'Selection', 'Trial', 'UnsupportedError', 'ValidationCheck', 'ValidationReport', 'albedo', 'benchmark_specs', 'compress', 'compress_kinds', 'convert', 'default_candidates', 'fit', 'format_of', 'formats', 'load', 'metrics', 'read_scene', 'representations', 'save', 'select_representation', 'tabulate', 'trial', 'validate']
 class FormatError(ValueError):
     pass
 class UnsupportedError(ValueError):
@@ -225,6 +225,56 @@ class FitResult:
     @property
     def report(self) -> FitReport:
         ...
+class ValidationCheck:
+    """
+    one plausibility check (validate.h)
+    """
+    def __repr__(self) -> str:
+        ...
+    def to_dict(self) -> dict:
+        ...
+    @property
+    def failed(self) -> int:
+        ...
+    @property
+    def name(self) -> str:
+        """
+        non-negativity, reciprocity or energy
+        """
+    @property
+    def ok(self) -> bool:
+        ...
+    @property
+    def tested(self) -> int:
+        ...
+    @property
+    def unit(self) -> str:
+        """
+        what was tested: bins, pairs or elevations
+        """
+    @property
+    def worst(self) -> list:
+        """
+        the worst offences, worst first: angles in degrees and the values involved
+        """
+class ValidationReport:
+    """
+    the checks of validate(), in order
+    """
+    def __getitem__(self, arg0: str) -> ValidationCheck:
+        ...
+    def __repr__(self) -> str:
+        ...
+    def to_dict(self) -> dict:
+        """
+        as `brdfz validate --json` prints it, without the file name
+        """
+    @property
+    def checks(self) -> list[ValidationCheck]:
+        ...
+    @property
+    def ok(self) -> bool:
+        ...
 class Trial:
     """
     what one representation achieved against its source (select.h)
@@ -387,4 +437,8 @@ def tabulate(brdf: Brdf, res: tuple[typing.SupportsInt | typing.SupportsIndex, t
 def trial(brdf: Brdf, spec: str, *, measure_speed: bool = True, max_theta: typing.SupportsFloat | typing.SupportsIndex = 80.0, threads: typing.SupportsInt | typing.SupportsIndex = 0, progress: typing.Any = None) -> Trial:
     """
     compress(brdf, spec) and measure it: bytes, metrics, eval speed, build time
+    """
+def validate(brdf: Brdf, *, res: tuple[typing.SupportsInt | typing.SupportsIndex, typing.SupportsInt | typing.SupportsIndex, typing.SupportsInt | typing.SupportsIndex] = (90, 90, 180), theta: collections.abc.Sequence[typing.SupportsFloat | typing.SupportsIndex] = [0.0, 10.0, 20.0, 30.0, 40.0, 50.0, 60.0, 70.0, 80.0, 85.0], rtol: typing.SupportsFloat | typing.SupportsIndex = 0.05, atol: typing.SupportsFloat | typing.SupportsIndex = 0.001, albedo_tol: typing.SupportsFloat | typing.SupportsIndex = 0.01) -> ValidationReport:
+    """
+    non-negativity (a table's values, else f on the res grid), reciprocity (rtol, atol in 1/sr) and energy (reflectance <= 1 + albedo_tol at the elevations theta, degrees), as `brdfz validate`
     """
