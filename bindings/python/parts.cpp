@@ -6,6 +6,7 @@
 #include <pybind11/stl.h>
 
 #include <cstdint>
+#include <optional>
 #include <vector>
 
 #include "brdfz/repr/analytic/model.h"
@@ -67,7 +68,7 @@ py::dict halfvector_parts(const HalfVectorSampler& s) {
 
 }  // namespace
 
-py::object brdf_parts(const BrdfPtr& brdf) {
+std::optional<py::dict> brdf_parts(const BrdfPtr& brdf) {
     const py::object owner = py::cast(brdf);
     py::dict d;
     if (const auto* t = dynamic_cast<const TabularBrdf*>(brdf.get())) {
@@ -124,12 +125,12 @@ py::object brdf_parts(const BrdfPtr& brdf) {
         d["terms"] = terms;
         d["params"] = copy(a->params().data(), a->params().size());
     } else {
-        return py::none();
+        return std::nullopt;
     }
     return d;
 }
 
-py::object sampler_parts(const BrdfPtr& brdf) {
+std::optional<py::dict> sampler_parts(const BrdfPtr& brdf) {
     // Building a sampler takes up to a few hundred milliseconds: without the GIL.
     const auto build = [](auto&& get) -> decltype(auto) {
         py::gil_scoped_release release;
@@ -154,7 +155,7 @@ py::object sampler_parts(const BrdfPtr& brdf) {
         d["albedo"] = table;
         return d;
     }
-    return py::none();
+    return std::nullopt;
 }
 
 }  // namespace brdfz::python
