@@ -176,8 +176,9 @@ def _check_variant() -> None:
                          "(use llvm_ad_rgb, cuda_ad_rgb or scalar_rgb)")
 
 
-def _make(brdf: Brdf, incident: str, native: Optional[bool]) -> "mi.BSDF":
+def _make(brdf: Brdf, incident: str, native: Optional[bool], props: Optional["mi.Properties"] = None) -> "mi.BSDF":
     _check_variant()
+    props = mi.Properties() if props is None else props
     if incident not in ("light", "camera"):
         raise ValueError(f"brdfz BSDF: incident must be 'light' or 'camera', not {incident!r}")
     if native is not False:
@@ -190,12 +191,12 @@ def _make(brdf: Brdf, incident: str, native: Optional[bool]) -> "mi.BSDF":
                                  f"not {mi.variant()!r}")
         else:
             try:
-                return bsdf_class()(mi.Properties(), Model(brdf), incident)
+                return bsdf_class()(props, Model(brdf), incident)
             except Unsupported as e:
                 if native:
                     raise ValueError(f"brdfz.mitsuba: no native port for {e} (RGL files and scattered "
                                      "measurements take the wavefront bridge: native=None or False)") from None
-    return _class()(mi.Properties(), brdf, incident)
+    return _class()(props, brdf, incident)
 
 
 def register(name: str = "brdfz") -> None:
@@ -208,7 +209,7 @@ def register(name: str = "brdfz") -> None:
         if "filename" not in props:
             raise ValueError("brdfz BSDF: give 'filename' (a file brdfz.load reads)")
         brdf = load(str(props["filename"]), lookup=props.get("lookup", "linear"))
-        return _make(brdf, props.get("incident", "camera"), props.get("native", None))
+        return _make(brdf, props.get("incident", "camera"), props.get("native", None), props)
 
     mi.register_bsdf(name, plugin)
 

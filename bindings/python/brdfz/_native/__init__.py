@@ -20,7 +20,7 @@ import mitsuba as mi
 
 from ._halfvector import HalfVectorSampler
 from ._lobes import AnalyticModel
-from ._math import F32, F64, U32, u32
+from ._math import F64, u32
 from ._tables import (FactoredEval, Float32Values, Grid, HalfValues, LogU8Values, TableEval, Unsupported, pca_table)
 
 __all__ = ["Model", "Unsupported"]

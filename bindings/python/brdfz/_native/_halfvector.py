@@ -11,7 +11,7 @@ import numpy as np
 import drjit as dr
 
 from ._math import (BELOW_ONE, PI, F32, U32, u32, Azimuth, clamp, dot, f32, f64, gather32, gather_u32, half_turn_angle,
-                    i32, next_down, next_up, std_min)
+                    i32, next_down, next_up)
 
 
 def _floats(a):

@@ -7,11 +7,10 @@ Beckmann sampler's slope inversions are the C++ Newton iterations (dr.while_loop
 erfc(−x) = 1 + erf(x) (its relative error stays below 1e-9 for the u a float32 sampler gives)."""
 from __future__ import annotations
 
-import math
-
 import drjit as dr
 
 from ._math import (PI, clamp, dot, f64, i32, normalize, reflect, select3)
+from ._tables import Unsupported
 
 TINY = 1e-12          # lobe.h kTiny
 DBL_MIN = 2.2250738585072014e-308
@@ -463,7 +462,6 @@ class LafortuneSampler:
         return dr.select(ok, lobe, CosineSampler.density(p, wo, w))
 
 
-_CORRELATED = _microfacet(_dv_ggx_correlated, _schlick)
 FAMILIES = {
     # name: (eval, sampler, parameter count)
     "lambert": (_lambert, CosineSampler, 3),
@@ -492,7 +490,6 @@ class AnalyticModel:
     def __init__(self, terms, n_params: int):
         for name, _, _ in terms:
             if name not in FAMILIES:
-                from ._tables import Unsupported
                 raise Unsupported(f"lobe family {name!r}")
         self.terms = [(FAMILIES[name], int(offset)) for name, offset, _ in terms]
         self.n_params = n_params

@@ -19,7 +19,7 @@ import math
 import drjit as dr
 import numpy as np
 
-from ._math import (PI, F32, F64, U32, u32, Azimuth, clamp0, dot, f32, f64, gather32, half_turn_angle, i32)
+from ._math import (PI, F32, U32, u32, clamp0, dot, f32, f64, gather32, half_turn_angle, i32)
 
 _MAX_INDEX = 2 ** 32  # Dr.Jit arrays are indexed with 32-bit integers
 
