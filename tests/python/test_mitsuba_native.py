@@ -77,13 +77,24 @@ RGL_SPECS = [
 ]
 
 
+SYMBOLIC = (dr.JitFlag.SymbolicLoops, dr.JitFlag.SymbolicCalls)
+
+
 @pytest.fixture(scope="module")
 def llvm():
+    """llvm_ad_rgb in Mitsuba's default symbolic mode, which wavefront BSDFs built by earlier tests have
+    switched off (and which `prb` needs): on once they are gone, restored afterwards."""
     try:
         mi.set_variant("llvm_ad_rgb")
     except Exception as e:  # no LLVM that Dr.Jit can use (scripts/setup-deps installs libllvm19)
         pytest.skip(f"Mitsuba's llvm_ad_rgb variant is unavailable: {e}")
-    return mi
+    flags = {f: dr.flag(f) for f in SYMBOLIC}
+    gc.collect()
+    for f in SYMBOLIC:
+        dr.set_flag(f, True)
+    yield mi
+    for f, v in flags.items():
+        dr.set_flag(f, v)
 
 
 def model_file(path, model, params):
@@ -274,7 +285,7 @@ def test_native_renders_as_the_wavefront_bridge(llvm, glossy, rgl_files):
     """Same scene, samples and seed: the two bridges differ by float rounding only."""
     materials = [glossy, brdfz.compress(glossy, "svd:rank=3,res=16x16x32"),
                  brdfz.compress(brdfz.load(rgl_files[0]), "tabular:res=16x16x32,dtype=u8log")]
-    flags = {f: dr.flag(f) for f in (dr.JitFlag.SymbolicLoops, dr.JitFlag.SymbolicCalls)}
+    flags = {f: dr.flag(f) for f in SYMBOLIC}
     try:
         for m in materials:
             native = mitsuba_sphere.render(brdfz.mitsuba.bsdf(m, native=True), 32, 8)  # symbolic mode

@@ -37,8 +37,9 @@ Two implementations behind one interface:
 - wavefront (every other kind: RGL-EPFL files, scattered measurements; scalar variants; or
   native=False): each call hands its lanes to brdfz's C++ batch kernels through numpy. It cannot be
   traced into a kernel, so building one switches Dr.Jit's symbolic loops and calls off for the process
-  (wavefront mode, one batch per bounce). Scalar variants work too, one pair per call. Not
-  differentiable.
+  (wavefront mode, one batch per bounce); while one exists, symbolic mode must stay off (a symbolic
+  call traces every live BSDF), and Mitsuba's differentiable integrators (`prb`), which need it, do
+  not run. Scalar variants work too, one pair per call. Not differentiable.
 Spectral, monochrome and polarised variants are not supported (brdfz materials are RGB): ValueError.
 """
 from __future__ import annotations
