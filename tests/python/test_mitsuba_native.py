@@ -3,7 +3,7 @@ and analytic representations as Dr.Jit code.
 
 - Through the BSDF's own eval / pdf / sample, at 10^5 pairs (float32 directions, as Mitsuba hands
   them over), the results equal brdfz's C++ Brdf.eval / pdf / sample to 1e-5 relative, every kind, on
-  synthetic materials and on an RGL-EPFL file's compressed forms. Factored and PCA representations
+  synthetic materials, on a MERL table and on an RGL-EPFL file's compressed forms. Factored and PCA representations
   sum float32 terms in both implementations (the factors' blend; the components' combination), in
   different orders: there the bound is 1e-5 relative plus 16 float32 roundings of those terms
   (Σ |term|, the size of the sum before it cancels), carried through the inverse transform.
@@ -269,6 +269,12 @@ def test_rgl_representations_match_the_library(llvm, rgl_files):
     source = brdfz.load(rgl_files[0])
     for spec in RGL_SPECS:
         check_native(brdfz.compress(source, spec))
+
+
+def test_merl_table_matches_the_library(llvm, merl_tables):
+    """A full 90x90x180 MERL table (from ../shared), both lookups: nearest picks MERL's bins."""
+    for lookup in ("linear", "nearest"):
+        check_native(brdfz.load(merl_tables[0], lookup=lookup))
 
 
 def test_rgl_pca_matches_the_library(llvm, cli, rgl_files, tmp_path):

@@ -51,6 +51,8 @@ import mitsuba as mi
 import numpy as np
 
 from . import Brdf, load
+from ._native import Model, Unsupported
+from ._native._bsdf import bsdf_class
 
 _classes: dict = {}  # the wavefront class per variant
 
@@ -118,7 +120,7 @@ def _class():
             return ctx.is_enabled(mi.BSDFFlags.GlossyReflection, 0)
 
         def _value(self, view: np.ndarray, light: np.ndarray) -> np.ndarray:
-            """f·cosθ(light), brdfz's wi at the light (default) or at the camera side."""
+            """f·cosθ(light), brdfz's wi at the camera side (the default) or at the light."""
             if self.camera:
                 return self.brdf.eval(view, light) * np.maximum(light[:, 2:3], 0.0)
             return self.brdf.eval_cos(light, view)
@@ -183,9 +185,6 @@ def _make(brdf: Brdf, incident: str, native: Optional[bool], props: Optional["mi
     if incident not in ("light", "camera"):
         raise ValueError(f"brdfz BSDF: incident must be 'light' or 'camera', not {incident!r}")
     if native is not False:
-        from ._native import Model, Unsupported
-        from ._native._bsdf import bsdf_class
-
         if not dr.is_jit_v(mi.Float):
             if native:
                 raise ValueError(f"brdfz.mitsuba: the native bridge needs a JIT variant (llvm_ad_rgb, cuda_ad_rgb), "
