@@ -3,15 +3,17 @@ and analytic representations as Dr.Jit code.
 
 - Through the BSDF's own eval / pdf / sample, at 10^5 pairs (float32 directions, as Mitsuba hands
   them over), the results equal brdfz's C++ Brdf.eval / pdf / sample to 1e-5 relative, every kind, on
-  synthetic materials, on a MERL table and on an RGL-EPFL file's compressed forms. Factored and PCA representations
-  sum float32 terms in both implementations (the factors' blend; the components' combination), in
-  different orders: there the bound is 1e-5 relative plus 16 float32 roundings of those terms
-  (Σ |term|, the size of the sum before it cancels), carried through the inverse transform.
+  synthetic materials, a MERL table and an RGL-EPFL file's compressed forms (analytic and PCA
+  materials with both settings of `incident`). Factored and PCA representations sum float32 terms in both implementations (the
+  factors' blend; the components' combination), in different orders: there the bound is 1e-5
+  relative plus 16 float32 roundings of those terms (Σ |term|, the size of the sum before it
+  cancels), carried through the inverse transform.
 - A sphere rendered through the native bridge (Mitsuba's default symbolic mode) matches the
   wavefront bridge to >= 60 dB PSNR.
 - Gradients of a render reach every kind's arrays, and the inverse-rendering example's loss falls
   by >= 10x.
-- Unsupported variants and kinds are clear errors; evaluation from several threads agrees.
+- Unsupported variants and kinds are clear errors; evaluation from several threads agrees; the
+  registered plugin passes mitsuba.chi2.
 """
 import gc
 import json
