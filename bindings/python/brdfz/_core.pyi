@@ -30,6 +30,10 @@ class Brdf:
         """
         f_r·cosθi at direction pairs -> (N, 3) float64
         """
+    def parts(self) -> dict | None:
+        """
+        the representation's stored arrays and parameters as a dict ('kind': tabular, compact, factored, pca or analytic), read-only; None for kinds without parts (RGL files, scattered measurements)
+        """
     def pdf(self, wo: numpy.typing.NDArray[numpy.floating], wi: numpy.typing.NDArray[numpy.floating]) -> numpy.typing.NDArray[numpy.float64]:
         """
         density of sample(wo, ·) at wi per unit solid angle -> (N,)
@@ -37,6 +41,10 @@ class Brdf:
     def sample(self, wo: numpy.typing.NDArray[numpy.floating], u: numpy.typing.NDArray[numpy.floating]) -> tuple[numpy.typing.NDArray[numpy.float64], numpy.typing.NDArray[numpy.float64], numpy.typing.NDArray[numpy.float64]]:
         """
         draws wi for each wo from u in [0, 1)^2 of shape (N, 2) -> (wi (N, 3), pdf (N,), weight (N, 3)); weight = f·cosθi/pdf, failed samples have pdf 0 and weight 0
+        """
+    def sampler_parts(self) -> dict | None:
+        """
+        the tables of the sampler sample() and pdf() use ('kind': halfvector or lobes), built on first use; None for kinds without them
         """
     @property
     def channels(self) -> int:

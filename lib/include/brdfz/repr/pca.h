@@ -60,6 +60,8 @@ public:
 
     // Bytes of the stored parameters (median, mean, components as float32; variances as float64).
     std::size_t nbytes() const;
+    // cosθi·cosθo at each bin's sample position (φh = 0), 0 below the horizon: the mapping's weight w.
+    std::span<const float> weights() const { return weight_; }
 
     // Least-squares coefficients of `table` (on grid()) over its valid, kept bins, for the first k
     // components. ValueError for another grid, k outside [0, k_max], or fewer valid bins than k.

@@ -72,6 +72,13 @@ public:
 
     std::size_t nbytes() const;
 
+    // Read-only views of the tables, for ports of the sampler (the Python package's Mitsuba bridge):
+    // the options, the slices' view elevations, and slice 0's view of the stacked distributions
+    // (slice k is slices().stacked(k)).
+    const HalfVectorSamplerOptions& options() const { return options_; }
+    const std::vector<double>& theta_o() const { return theta_o_; }
+    Piecewise2D::View slices() const { return first_; }
+
 private:
     Piecewise2D::View slice(int k) const { return first_.stacked(k); }
 
