@@ -118,11 +118,19 @@ void bind_operations(py::module_& m) {
           py::arg("format") = "", "a BRDF file (.binary, .bsdf, .brdfz, .exr, .json; format overrides the extension)");
 
     m.def("save", [](const BrdfPtr& brdf, const Path& path, const Resolution& res, const std::string& format,
-                     int threads, py::object progress) {
+                     int threads, py::object progress, const std::string& build_spec, const std::optional<Path>& source,
+                     const py::object& source_metrics) {
               SaveOptions o;
               if (res) o.grid = grid_of(*res);
               o.format = format;
               o.threads = threads;
+              o.build_spec = build_spec;
+              if (source) {
+                  o.source = source->string();
+                  o.source_format = format_of(o.source);
+              }
+              // An object, not std::optional<Metrics>: Metrics is bound below, after this signature is made.
+              if (!source_metrics.is_none()) o.source_metrics = source_metrics.cast<Metrics>();
               Progress bar(std::move(progress));
               o.progress = bar.hook();
               ValidityCounts c;
@@ -134,8 +142,11 @@ void bind_operations(py::module_& m) {
               return counts_dict(c);
           },
           py::arg("brdf"), py::arg("path"), py::kw_only(), py::arg("res") = py::none(), py::arg("format") = "",
-          py::arg("threads") = 0, py::arg("progress") = py::none(),
-          "writes atomically (format from the extension unless given); returns the written bins' counts");
+          py::arg("threads") = 0, py::arg("progress") = py::none(), py::arg("build_spec") = "",
+          py::arg("source") = py::none(), py::arg("source_metrics") = py::none(),
+          "writes atomically (format from the extension unless given); returns the written bins' counts. .brdfz "
+          "keeps provenance: build_spec (the compress() spec), source (the file it came from: name, format and "
+          "SHA-256) and source_metrics (its metrics against that file)");
 
     m.def("convert", [](const Path& src, const Path& dst, const Resolution& res, const std::string& src_format,
                         const std::string& dst_format, const std::string& lookup, const std::string& bin_position,

@@ -364,9 +364,9 @@ def read_scene(path: os.PathLike | str | bytes) -> Scene:
     """
     a scene file (docs/scene-json.md), its samples drawn
     """
-def save(brdf: Brdf, path: os.PathLike | str | bytes, *, res: tuple[typing.SupportsInt | typing.SupportsIndex, typing.SupportsInt | typing.SupportsIndex, typing.SupportsInt | typing.SupportsIndex] | None = None, format: str = '', threads: typing.SupportsInt | typing.SupportsIndex = 0, progress: typing.Any = None) -> dict:
+def save(brdf: Brdf, path: os.PathLike | str | bytes, *, res: tuple[typing.SupportsInt | typing.SupportsIndex, typing.SupportsInt | typing.SupportsIndex, typing.SupportsInt | typing.SupportsIndex] | None = None, format: str = '', threads: typing.SupportsInt | typing.SupportsIndex = 0, progress: typing.Any = None, build_spec: str = '', source: os.PathLike | str | bytes | None = None, source_metrics: typing.Any = None) -> dict:
     """
-    writes atomically (format from the extension unless given); returns the written bins' counts
+    writes atomically (format from the extension unless given); returns the written bins' counts. .brdfz keeps provenance: build_spec (the compress() spec), source (the file it came from: name, format and SHA-256) and source_metrics (its metrics against that file)
     """
 def select_representation(brdf: Brdf, max_error: typing.SupportsFloat | typing.SupportsIndex, *, metric: str = 'log', scene: Scene | None = None, candidates: collections.abc.Sequence[str] = [], measure_speed: bool = True, threads: typing.SupportsInt | typing.SupportsIndex = 0, on_candidate: typing.Any = None) -> Selection:
     """
@@ -380,3 +380,4 @@ def trial(brdf: Brdf, spec: str, *, measure_speed: bool = True, max_theta: typin
     """
     compress(brdf, spec) and measure it: bytes, metrics, eval speed, build time
     """
+__version__: str = '0.1.0'
