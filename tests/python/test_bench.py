@@ -128,6 +128,10 @@ def test_stability_heatmap(tmp_path):
         'metal,metal,"svd:rank=2","ok",1000,0.8,0.2,1,1,3,1e7,1,"error blow-up; bad values"\n')
     assert stability_charts.main([str(src), "--out", str(tmp_path / "out")]) == 0
     assert is_png(tmp_path / "out" / "stability_heatmap.png")
+    assert (tmp_path / "out" / "table.md").read_text().splitlines() == [
+        "| method | diffuse | metal |", "|---|---|---|",
+        "| `analytic:lambert+ggx` | 0.001 | 0.3 ⚠ hit_bounds ⚠ poor fit ⚠ grazing artefacts |",
+        "| `svd:rank=2` | fails | 0.8 ⚠ error blow-up ⚠ bad values |"]
     assert stability_charts.flag_letters("hit_bounds; grazing artefacts") == "FG"
     assert stability_charts.flag_letters("hit_bounds; poor fit; grazing artefacts") == "FPG"
     assert stability_charts.flag_letters("error blow-up; bad values; sampler worse than cosine") == "BVS"
@@ -136,3 +140,44 @@ def test_stability_heatmap(tmp_path):
     bad.write_text("material,repr\nx,y\n")
     with pytest.raises(ValueError, match="not a stability CSV"):
         stability_charts.main([str(bad)])
+
+
+def test_stability_study(cli, rgl_files, tmp_path):
+    """scripts/stability's driver: bench/stability once per (material, spec) on two Dask workers gives the
+    rows the program's own loop gives, a corrupt file fails its own tasks only, and a rerun reuses every
+    finished task."""
+    program = pathlib.Path(cli).resolve().parents[2] / "bench" / "stability"
+    if not program.exists():
+        pytest.skip("bench/stability is not built (BRDFZ_BUILD_BENCH=OFF)")
+    import subprocess
+
+    from brdfz import batch, stability
+
+    corrupt = tmp_path / "broken_rgb.bsdf"
+    corrupt.write_bytes(rgl_files[0].read_bytes()[:50_000])
+    specs = ["tabular:res=16x16x32", "bivariate:res=32x32"]
+    out = tmp_path / "out"
+    with batch.Engine(workers=2) as engine:
+        rows = stability.run(program, [rgl_files[0], corrupt], out, specs=specs, synthetic=["diffuse"], engine=engine)
+    assert [(r["material"], r["repr"]) for r in rows] == [(m, s) for m in ("diffuse", rgl_files[0].stem, "broken_rgb")
+                                                          for s in specs]
+    direct = tmp_path / "direct.csv"
+    subprocess.run([program, "--out", direct, *[a for s in specs for a in ("--spec", s)], "--synthetic", "diffuse",
+                    rgl_files[0]], check=True, capture_output=True, timeout=600)
+    timings = ("eval_pairs_per_s", "build_s")
+    with open(direct, newline="") as f:
+        expected = [{k: v for k, v in r.items() if k not in timings} for r in csv.DictReader(f)]
+    assert [{k: v for k, v in r.items() if k not in timings} for r in rows[:4]] == expected
+    for r in rows[4:]:
+        assert r["status"].startswith("error: ") and str(corrupt) in r["status"] and r["flags"] == "failed"
+    with open(out / "stability.csv", newline="") as f:
+        assert list(csv.DictReader(f)) == rows
+    table = (out / "table.md").read_text()
+    assert table.count("\n") == 2 + len(specs) and "| `bivariate:res=32x32` |" in table and "| fails | fails |" not in table
+    assert table.splitlines()[2].endswith("| fails |")
+    assert is_png(out / "stability_heatmap.png") and len((out / "stability.log").read_text().splitlines()) == 6
+    records = {p: p.stat().st_mtime_ns for p in (out / "parts").rglob("*.json")}
+    assert len(records) == 4  # the failed tasks keep no record, so a rerun tries them again
+    assert stability.run(program, [rgl_files[0]], out, specs=specs, synthetic=["diffuse"],
+                         engine=batch.Engine(workers=1), charts=False) == rows[:4]
+    assert {p: p.stat().st_mtime_ns for p in (out / "parts").rglob("*.json")} == records

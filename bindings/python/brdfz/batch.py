@@ -117,11 +117,11 @@ def _grid_bins(spec: str) -> int:
     return 90 * 90 * 180
 
 
-def estimate_memory(path: PathLike, spec: str) -> int:
-    """A task's peak memory in bytes, above a worker's baseline: the material as loaded plus the build's
-    work on its grid. Calibrated on the shared RGL files and MERL tables (bench/README.md, batch)."""
-    size = os.path.getsize(path)
-    return int(64e6 + 3 * size + 400 * _grid_bins(spec))
+def estimate_memory(input_bytes: int, spec: str) -> int:
+    """A task's peak memory in bytes, above a worker's baseline: the material as loaded (its file's
+    size) plus the build's work on its grid. Calibrated on the shared RGL files and MERL tables
+    (bench/README.md, batch)."""
+    return int(64e6 + 3 * input_bytes + 400 * _grid_bins(spec))
 
 
 # ----------------------------------------------------------------------------------------------- tasks
@@ -473,7 +473,7 @@ def run(materials: Sequence[PathLike], specs: Sequence[str], out: PathLike, *, w
                 catalogue.add(row)
             else:
                 jobs.append(Job(build_task, (name, str(path), spec, str(out), overs, engine.task_threads(), fp),
-                                f"{name} {spec}", estimate_memory(path, spec), f"{name}/{spec_hash(spec)}"))
+                                f"{name} {spec}", estimate_memory(path.stat().st_size, spec), f"{name}/{spec_hash(spec)}"))
     reused = len(catalogue.by_key)
     print(f"batch: {len(jobs)} tasks to run, {reused} finished before", file=sys.stderr)
     started = time.monotonic()
@@ -551,7 +551,7 @@ def render_all(engine: Engine, out: pathlib.Path, rows: Sequence[Row], named: Di
         if reps and name in named:
             outputs = [str(out / r["output"]) if r.get("output") else None for r in reps]
             jobs.append(Job(render_task, (name, str(named[name]), reps, outputs, str(out / "renders" / f"{name}.png"),
-                                          size, env_samples), name, estimate_memory(named[name], "")))
+                                          size, env_samples), name, estimate_memory(named[name].stat().st_size, "")))
     done = []
     for job, _, error in engine.map(jobs, "renders"):
         if error:

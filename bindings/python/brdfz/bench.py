@@ -112,7 +112,7 @@ def auto_selection(engine: batch.Engine, materials: Dict[str, pathlib.Path], bud
     """auto_task on every material at every budget, one task each; rows in material, budget order."""
     tried = candidates or brdfz.default_candidates()
     jobs = [batch.Job(auto_task, (name, str(path), budget, candidates, engine.task_threads()),
-                      f"{name} budget {budget:g}", max(batch.estimate_memory(path, c) for c in tried))
+                      f"{name} budget {budget:g}", max(batch.estimate_memory(path.stat().st_size, c) for c in tried))
             for name, path in materials.items() for budget in budgets]
     done = {}
     for job, row, error in engine.map(jobs, "auto"):
