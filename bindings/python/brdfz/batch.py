@@ -53,7 +53,8 @@ PathLike = Union[str, os.PathLike]
 METRICS = ["cos_rmse", "cos_rmse_rel", "log_rmse", "cbrt_rmse"]
 COLUMNS = ["material", "spec", "status", "bytes", *METRICS, "eval_rate", "build_seconds", "output", "error",
            "over", "build_spec", "describe", "notes", "format", "input", "input_bytes", "input_sha256", "ratio",
-           "file_bytes", "load_seconds", "measure_seconds", "write_seconds", "worker", "started", "brdfz_version"]
+           "file_bytes", "load_seconds", "measure_seconds", "write_seconds", "cpu_seconds", "worker", "started",
+           "brdfz_version"]
 OVERS = ("grid", "directions")
 # What folders are searched for: the BRDF files brdfz.load reads.
 BRDF_SUFFIXES = (".binary", ".bsdf", ".brdfz", ".exr")
@@ -169,6 +170,7 @@ def build_task(material: str, path: str, spec: str, out_dir: str, overs: Sequenc
     try:
         row["input_bytes"] = os.path.getsize(path)
         row["format"] = brdfz.format_of(path)
+        cpu = time.process_time()
         t0 = time.perf_counter()
         ref = brdfz.load(path)
         t1 = time.perf_counter()
@@ -201,7 +203,7 @@ def build_task(material: str, path: str, spec: str, out_dir: str, overs: Sequenc
             "build_spec": trial.spec, "describe": trial.describe, "notes": "; ".join(trial.notes),
             "ratio": row["input_bytes"] / trial.bytes, "file_bytes": output.stat().st_size,
             "load_seconds": t1 - t0, "measure_seconds": (t2 - t1 - trial.build_seconds) + (t3 - t2),
-            "write_seconds": t4 - t3}
+            "write_seconds": t4 - t3, "cpu_seconds": time.process_time() - cpu}
     _write_json(record, {"fingerprint": fingerprint, "row": row})
     return row
 
