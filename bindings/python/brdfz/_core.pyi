@@ -7,7 +7,7 @@ import numpy
 import numpy.typing
 import os
 import typing
-__all__: list[str] = ['Brdf', 'Candidate', 'ChannelMetrics', 'Compressed', 'FitReport', 'FitResult', 'FormatError', 'Metrics', 'Scene', 'Selection', 'Trial', 'UnsupportedError', 'albedo', 'benchmark_specs', 'compress', 'compress_kinds', 'convert', 'default_candidates', 'fit', 'format_of', 'load', 'metrics', 'read_scene', 'save', 'select_representation', 'tabulate', 'trial']
+__all__: list[str] = ['Brdf', 'Candidate', 'ChannelMetrics', 'Compressed', 'FitReport', 'FitResult', 'FormatError', 'Metrics', 'Scene', 'Selection', 'Trial', 'UnsupportedError', 'albedo', 'benchmark_specs', 'compress', 'compress_kinds', 'convert', 'default_candidates', 'fit', 'format_of', 'load', 'metric_samples', 'metrics', 'metrics_at', 'read_scene', 'save', 'select_representation', 'tabulate', 'trial']
 class FormatError(ValueError):
     pass
 class UnsupportedError(ValueError):
@@ -356,9 +356,17 @@ def load(path: os.PathLike | str | bytes, *, lookup: str = 'linear', bin_positio
     """
     a BRDF file (.binary, .bsdf, .brdfz, .exr, .json; format overrides the extension)
     """
-def metrics(reference: typing.Any, approx: Brdf, *, max_theta: typing.SupportsFloat | typing.SupportsIndex = 80.0, threads: typing.SupportsInt | typing.SupportsIndex = 0) -> Metrics:
+def metric_samples(reference: Brdf, *, max_theta: typing.SupportsFloat | typing.SupportsIndex = 80.0, threads: typing.SupportsInt | typing.SupportsIndex = 0, over: str = 'grid', directions: typing.SupportsInt | typing.SupportsIndex = 262144, seed: typing.SupportsInt | typing.SupportsIndex = 1) -> tuple[numpy.typing.NDArray[numpy.float64], numpy.typing.NDArray[numpy.float64], numpy.typing.NDArray[numpy.float64]]:
+    """
+    (wi, wo, f_reference): the samples metrics() takes against reference
+    """
+def metrics(reference: typing.Any, approx: Brdf, *, max_theta: typing.SupportsFloat | typing.SupportsIndex = 80.0, threads: typing.SupportsInt | typing.SupportsIndex = 0, over: str = 'grid', directions: typing.SupportsInt | typing.SupportsIndex = 262144, seed: typing.SupportsInt | typing.SupportsIndex = 1) -> Metrics:
     """
     metrics of approx against reference (a Brdf, or a file: a BRDF or Cornell/ALTA measurements)
+    """
+def metrics_at(wi: typing.Any, reference: typing.Any, approx: typing.Any) -> Metrics:
+    """
+    the metrics of approx against reference values (N, 3) at pairs whose incident directions are wi
     """
 def read_scene(path: os.PathLike | str | bytes) -> Scene:
     """
@@ -368,7 +376,7 @@ def save(brdf: Brdf, path: os.PathLike | str | bytes, *, res: tuple[typing.Suppo
     """
     writes atomically (format from the extension unless given); returns the written bins' counts. .brdfz keeps provenance: build_spec (the compress() spec), source (the file it came from: name, format and SHA-256) and source_metrics (its metrics against that file)
     """
-def select_representation(brdf: Brdf, max_error: typing.SupportsFloat | typing.SupportsIndex, *, metric: str = 'log', scene: Scene | None = None, candidates: collections.abc.Sequence[str] = [], measure_speed: bool = True, threads: typing.SupportsInt | typing.SupportsIndex = 0, on_candidate: typing.Any = None) -> Selection:
+def select_representation(brdf: Brdf, max_error: typing.SupportsFloat | typing.SupportsIndex, *, metric: str = 'log', scene: Scene | None = None, candidates: collections.abc.Sequence[str] = [], measure_speed: bool = True, threads: typing.SupportsInt | typing.SupportsIndex = 0, over: str = 'grid', directions: typing.SupportsInt | typing.SupportsIndex = 262144, seed: typing.SupportsInt | typing.SupportsIndex = 1, on_candidate: typing.Any = None) -> Selection:
     """
     the smallest candidate within the budget (select.h); on_candidate(candidate, index, total) after each
     """
@@ -376,7 +384,7 @@ def tabulate(brdf: Brdf, res: tuple[typing.SupportsInt | typing.SupportsIndex, t
     """
     the Brdf evaluated on a (θh, θd, φd) Rusinkiewicz grid at bin centres, as a table
     """
-def trial(brdf: Brdf, spec: str, *, measure_speed: bool = True, max_theta: typing.SupportsFloat | typing.SupportsIndex = 80.0, threads: typing.SupportsInt | typing.SupportsIndex = 0, progress: typing.Any = None) -> Trial:
+def trial(brdf: Brdf, spec: str, *, measure_speed: bool = True, max_theta: typing.SupportsFloat | typing.SupportsIndex = 80.0, threads: typing.SupportsInt | typing.SupportsIndex = 0, over: str = 'grid', directions: typing.SupportsInt | typing.SupportsIndex = 262144, seed: typing.SupportsInt | typing.SupportsIndex = 1, progress: typing.Any = None) -> Trial:
     """
     compress(brdf, spec) and measure it: bytes, metrics, eval speed, build time
     """
