@@ -102,27 +102,31 @@ def file_sha256(path: PathLike) -> str:
         return hashlib.file_digest(f, "sha256").hexdigest()
 
 
-def _grid_bins(spec: str) -> int:
-    """Bins of the grid a spec builds on: its res= (θh×θd×φd, or θh×θd for bivariate), else MERL's."""
-    kind, _, options = spec.partition(":")
-    for o in options.split(","):
-        if o.startswith("res="):
-            try:
-                dims = [int(d) for d in o[4:].split("x")]
-            except ValueError:
-                break
-            n = 1
-            for d in dims:
-                n *= d
-            return n * (180 if kind == "bivariate" and len(dims) == 2 else 1)
-    return 90 * 90 * 180
+def _integers(text: str, default: List[int]) -> List[int]:
+    try:
+        return [int(v) for v in text.split("x")] if text else default
+    except ValueError:
+        return default
 
 
 def estimate_memory(input_bytes: int, spec: str) -> int:
-    """A task's peak memory in bytes, above a worker's baseline: the material as loaded (its file's
-    size) plus the build's work on its grid. Calibrated on the shared RGL files and MERL tables
-    (bench/README.md, batch)."""
-    return int(64e6 + 3 * input_bytes + 400 * _grid_bins(spec))
+    """A task's peak memory in bytes above a worker's baseline, from its input file's size and the grid
+    its spec builds on (res=, else MERL's 90x90x180; bivariate: × phi), with the sample points of an
+    lsq fit or filter (ss³ per bin). An upper bound of the peaks measured on the shared RGL files and
+    MERL tables (bench/README.md, "brdfz.batch at scale"), with room for larger inputs."""
+    kind, _, options = spec.partition(":")
+    opts = dict(o.split("=", 1) for o in options.split(",") if "=" in o)
+    dims = _integers(opts.get("res", ""), [90, 90, 180])
+    bins = 1
+    for d in dims:
+        bins *= max(d, 1)
+    if kind == "bivariate" and len(dims) == 2:
+        bins *= _integers(opts.get("phi", ""), [180])[0]
+    peak = 64e6 + input_bytes + 100 * bins
+    if "lsq" in (opts.get("fit"), opts.get("filter")):
+        ss = _integers(opts.get("ss", ""), [2 if kind in ("svd", "nmf") else 3])[0]
+        peak += 400 * bins * ss ** 3
+    return int(peak)
 
 
 # ----------------------------------------------------------------------------------------------- tasks
