@@ -2,12 +2,14 @@
 task, and from them the wall time of a larger database on more cores.
 
     PYTHONPATH=build/python .venv/bin/python bench/batch_scale.py [--materials DIR_OR_FILE ...]
-        [--specs SPEC ...] [--runs serial dask1 dask2] [--noop N] [--project M --cores 8 64 512]
+        [--specs SPEC ...] [--runs serial dask1 dask2] [--repeat R] [--noop N] [--project M --cores 8 64 512]
 
 1. Each --runs entry runs batch.run of every spec on every material into a fresh folder, timed from
    the call (cluster start included) to the last row: "serial" is --workers 1 (no Dask; the library
-   uses every core), "daskN" a LocalCluster of N workers, one library thread per task. Prints wall
-   time, the tasks' summed wall and CPU time, and the speed-up against the first entry.
+   uses every core), "daskN" a LocalCluster of N workers, one library thread per task. The entries
+   alternate, --repeat times; prints the median wall time (and its range), the tasks' summed wall
+   and CPU time (medians), the speed-up of the median against the first entry's, and the load
+   average over the runs.
 2. The per-task cost table of the last run: per spec, the median over materials of load, build,
    measure (metrics and eval speed) and write seconds, and the CPU seconds.
 3. The scheduler's cost per task: --noop N empty tasks (with a MEMORY resource, as batch tasks are)
@@ -80,6 +82,7 @@ def main():
     p.add_argument("--materials", nargs="+", default=["../shared/data/rgl"])
     p.add_argument("--specs", nargs="+", default=bench.QUICK_SPECS)
     p.add_argument("--runs", nargs="+", default=["serial", "dask1", "dask2"])
+    p.add_argument("--repeat", type=int, default=1)
     p.add_argument("--noop", type=int, default=2000)
     p.add_argument("--project", type=int, metavar="M", help="materials of the projected database")
     p.add_argument("--cores", nargs="+", type=int, default=[8, 64, 512])
@@ -88,21 +91,30 @@ def main():
     files = batch.material_files(args.materials)
     print(f"{len(files)} materials × {len(args.specs)} specs; {os.cpu_count()} CPUs; load average "
           f"{' '.join(f'{x:.1f}' for x in os.getloadavg())} at start")
-    first = None
     rows = []
-    print("| run | wall s | Σ task wall s | Σ task CPU s | speed-up | load average after |")
-    print("|---|---|---|---|---|---|")
-    for mode in args.runs:
-        wall, rows = timed_run(files, args.specs, mode)
-        ok = [r for r in rows if r["status"] == "ok"]
-        task_wall = sum(r["load_seconds"] + r["build_seconds"] + r["measure_seconds"] + r["write_seconds"] for r in ok)
-        cpu = sum(r["cpu_seconds"] for r in ok)
-        first = first or wall
-        print(f"| {mode} | {wall:.0f} | {task_wall:.0f} | {cpu:.0f} | {first / wall:.2f} | "
-              f"{os.getloadavg()[0]:.1f} |", flush=True)
-        failed = [r for r in rows if r["status"] != "ok"]
-        if failed:
-            print(f"  {len(failed)} failed: {failed[0]['material']} {failed[0]['spec']}: {failed[0]['error']}")
+    runs = {mode: [] for mode in args.runs}
+    loads = []
+    for _ in range(args.repeat):
+        for mode in args.runs:
+            wall, rows = timed_run(files, args.specs, mode)
+            ok = [r for r in rows if r["status"] == "ok"]
+            task_wall = sum(r["load_seconds"] + r["build_seconds"] + r["measure_seconds"] + r["write_seconds"]
+                            for r in ok)
+            runs[mode].append((wall, task_wall, sum(r["cpu_seconds"] for r in ok)))
+            loads.append(os.getloadavg()[0])
+            print(f"  {mode}: {wall:.0f} s, load {loads[-1]:.1f}", flush=True)
+            failed = [r for r in rows if r["status"] != "ok"]
+            if failed:
+                print(f"  {len(failed)} failed: {failed[0]['material']} {failed[0]['spec']}: {failed[0]['error']}")
+    print(f"| run | wall s (median, range of {args.repeat}) | Σ task wall s | Σ task CPU s | speed-up |")
+    print("|---|---|---|---|---|")
+    first = statistics.median(w for w, _, _ in runs[args.runs[0]])
+    for mode, got in runs.items():
+        wall = statistics.median(w for w, _, _ in got)
+        print(f"| {mode} | {wall:.0f} ({min(w for w, _, _ in got):.0f}–{max(w for w, _, _ in got):.0f}) | "
+              f"{statistics.median(t for _, t, _ in got):.0f} | {statistics.median(c for _, _, c in got):.0f} | "
+              f"{first / wall:.2f} |")
+    print(f"load average after each run: {min(loads):.1f}–{max(loads):.1f}")
 
     print("\n| spec | load s | build s | measure s | write s | CPU s |")
     print("|---|---|---|---|---|---|")

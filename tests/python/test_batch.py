@@ -203,6 +203,17 @@ def test_worker_killed_during_a_task(cluster, inputs, tmp_path):
         assert brdfz.load(tmp_path / r["output"]).nbytes == r["bytes"]
 
 
+def test_local_cluster_declares_memory():
+    """The LocalCluster an Engine starts gives each worker its MEMORY; a task declaring more than any
+    worker has is clamped to the largest, so it runs instead of waiting forever."""
+    with batch.Engine(workers=2, memory_per_worker=int(1.5e9)) as engine:
+        engine.start()
+        workers = engine.client.scheduler_info()["workers"].values()
+        assert [w["resources"] for w in workers] == [{"MEMORY": 1.5e9}] * 2
+        done = list(engine.map([batch.Job(os.getpid, (), "pid", memory=int(8e9))], "pid"))
+    assert len(done) == 1 and done[0][2] == "" and done[0][1] != os.getpid()
+
+
 def test_ctrl_c_leaves_a_valid_catalogue(inputs, tmp_path):
     files, _ = inputs
     env = dict(os.environ)

@@ -161,8 +161,8 @@ def _paths(out_dir: PathLike, material: str, spec: str) -> Tuple[pathlib.Path, p
 def build_task(material: str, path: str, spec: str, out_dir: str, overs: Sequence[str], threads: int,
                fingerprint: Dict[str, Any]) -> Row:
     """One (material, spec) task, run on a worker: load, build, measure, write; returns its catalogue
-    row. Bad input (a corrupt file, a bad spec: ValueError / OSError) is a failed row; other exceptions
-    propagate, for Dask to retry."""
+    row. A failure (a corrupt file, a bad spec, a write that fails) is a failed row with its one-line
+    error; MemoryError propagates, for Dask to retry the task."""
     output, record = _paths(out_dir, material, spec)
     row: Row = dict.fromkeys(columns(overs)) | {
         "material": material, "spec": spec, "status": "failed", "over": overs[0], "input": path,
@@ -525,8 +525,6 @@ def write_charts(out: pathlib.Path, rows: Sequence[Row], auto: Sequence[Row]) ->
         print("batch: matplotlib is not installed, so no charts or summary.md (pip install 'brdfz[batch]')",
               file=sys.stderr)
         return None
-    if not any(report.ok(r) for r in rows):
-        return []
     return report.write_charts(out, rows, auto)
 
 

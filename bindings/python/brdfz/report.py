@@ -269,7 +269,9 @@ def chart_auto(rows: Sequence[Row], auto: Sequence[Row], x: str, path: pathlib.P
 def write_charts(out: pathlib.Path, rows: Sequence[Row], auto: Sequence[Row]) -> List[str]:
     """Every chart of a catalogue into `out`: bytes vs each error metric (over directions too when
     measured), eval speed vs error, and with `auto` rows the choices over the Pareto fronts. Returns
-    the file names."""
+    the file names (none when no row is ok)."""
+    if not any(ok(r) for r in rows):
+        return []
     charts = []
     metrics = METRICS + (DIRECTIONS_METRICS if has_directions(rows) else [])
     for metric in metrics:
