@@ -44,7 +44,7 @@ def stray_files(out):
 def cluster():
     # Each worker declares 2 GB of MEMORY, as the batch's own LocalCluster does with its share.
     c = distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True, memory_limit="3GB",
-                                 resources={"MEMORY": 2e9}, dashboard_address=None)
+                                 resources={"MEMORY": 2e9}, dashboard_address=":0")
     yield c
     c.close()
 

@@ -312,9 +312,10 @@ class Engine:
             self.client = Client(self.scheduler)
         else:
             memory = int(self.memory_per_worker or MEMORY_LIMIT // self.workers)
+            # dashboard_address ":0": any free port, so that batches side by side do not contend for one.
             self.cluster = LocalCluster(n_workers=self.workers, threads_per_worker=self.threads_per_worker,
                                         processes=True, memory_limit=memory, resources={"MEMORY": memory},
-                                        dashboard_address=None, preload=[__name__])
+                                        dashboard_address=":0", preload=[__name__])
             self.client = Client(self.cluster)
         workers = self.client.scheduler_info()["workers"].values()
         self.memory_slot = max((w.get("resources", {}).get("MEMORY", 0) for w in workers), default=0)
@@ -323,15 +324,15 @@ class Engine:
                   "(start them with --resources MEMORY=BYTES)", file=sys.stderr)
 
     def close(self) -> None:
+        # The client first, releasing its results, then the workers, then the scheduler: a worker
+        # removed while it holds a result, or a scheduler closed under running workers, logs a warning.
+        if self.client is not None and self.client is not self.scheduler:
+            self.client.close()
         if self.cluster is not None:
-            # Workers first: a scheduler closed under running workers makes each log a failed heartbeat.
             self.cluster.scale(0)
             deadline = time.monotonic() + 30
             while self.cluster.workers and time.monotonic() < deadline:
                 time.sleep(0.05)
-        if self.client is not None and self.client is not self.scheduler:
-            self.client.close()
-        if self.cluster is not None:
             self.cluster.close()
         self.client = self.cluster = None
 
