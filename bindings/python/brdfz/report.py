@@ -24,8 +24,9 @@ import brdfz
 Row = Dict[str, Any]
 
 METRICS = ["cos_rmse_rel", "cos_rmse", "log_rmse", "cbrt_rmse"]
-# Columns of the error measured over direction pairs (brdfz.metrics(over="directions")), when measured.
-DIRECTIONS_METRICS = ["directions_" + m for m in METRICS]
+# Columns of the error measured over direction pairs (brdfz.metrics(over="directions")), when measured,
+# in the order of the grid's columns.
+DIRECTIONS_METRICS = ["directions_" + m for m in ("cos_rmse", "cos_rmse_rel", "log_rmse", "cbrt_rmse")]
 DEFAULT_BUDGETS = [0.02, 0.05]
 # Log axes cannot show 0: smaller errors (a lossless table) are drawn at this floor.
 ERROR_FLOOR = 1e-6
@@ -273,7 +274,7 @@ def write_charts(out: pathlib.Path, rows: Sequence[Row], auto: Sequence[Row]) ->
     if not any(ok(r) for r in rows):
         return []
     charts = []
-    metrics = METRICS + (DIRECTIONS_METRICS if has_directions(rows) else [])
+    metrics = METRICS + (["directions_" + m for m in METRICS] if has_directions(rows) else [])
     for metric in metrics:
         chart_tradeoff(rows, "bytes", metric, out / f"size_vs_{metric}.png")
         charts.append(f"size_vs_{metric}.png")
