@@ -421,8 +421,12 @@ class Catalogue:
         table = pa.Table.from_pylist([{c: r.get(c) for c in self.cols} for r in rows], schema=schema)
         path = self.out / "catalogue.parquet"
         tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")
-        pq.write_table(table, tmp)
-        os.replace(tmp, path)
+        try:
+            pq.write_table(table, tmp)
+            os.replace(tmp, path)
+        except BaseException:
+            tmp.unlink(missing_ok=True)
+            raise
 
 
 def failed_row(material: str, path: pathlib.Path, spec: str, overs: Sequence[str], error: str,
@@ -447,7 +451,7 @@ def run(materials: Sequence[PathLike], specs: Sequence[str], out: PathLike, *, w
         scheduler: Any = None, over: Union[str, Sequence[str]] = "grid",
         budgets: Sequence[float] = DEFAULT_BUDGETS, force: bool = False, retries: int = 2,
         threads: Optional[int] = None, memory_per_worker: Optional[int] = None, charts: bool = True,
-        render_size: int = 0, engine: Optional[Engine] = None, title: str = "brdfz batch") -> List[Row]:
+        render_size: int = 0, engine: Optional[Engine] = None) -> List[Row]:
     """Every spec on every material (files, or folders of them) into `out`, as the command does; returns
     the catalogue's rows (dicts with columns(over); numbers as numbers, missing values None). `over`
     names the errors' domain, "grid" or "directions"; a pair measures both, the second in columns
@@ -512,7 +516,7 @@ def run(materials: Sequence[PathLike], specs: Sequence[str], out: PathLike, *, w
         auto = report.budget_choice(rows, budgets)
         names = write_charts(out, rows, auto)
         if names is not None:
-            report.write_summary(out, title, rows, names, source="brdfz.batch", table="catalogue.csv",
+            report.write_summary(out, "brdfz batch", rows, names, source="brdfz.batch", table="catalogue.csv",
                                  renders=renders, auto=auto,
                                  auto_heading="Smallest setting within each cos_rmse_rel budget")
     return rows
