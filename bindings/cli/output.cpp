@@ -38,6 +38,23 @@ void add_load_options(CLI::App* cmd, LoadOptions& options) {
             std::map<std::string, Lookup>{{"nearest", Lookup::Nearest}, {"linear", Lookup::Linear}}));
 }
 
+const char* const kOverHelp =
+    "where the metrics are taken: grid (each bin of the reference's Rusinkiewicz grid once, the MERL "
+    "literature's convention) or directions (--directions pairs uniform in solid angle, theta_i below "
+    "--max-theta and within the reference's measured range, theta_o below --max-theta, every azimuth; "
+    "each pair once: what a renderer asks for)";
+
+void add_over_options(CLI::App* cmd, MetricOptions& options) {
+    cmd->add_option("--over", options.over, kOverHelp)
+        ->transform(CLI::CheckedTransformer(
+            std::map<std::string, Over>{{"grid", Over::Grid}, {"directions", Over::Directions}}))
+        ->default_str("grid");
+    cmd->add_option("--directions", options.directions, "direction pairs drawn with --over directions")
+        ->check(CLI::Range(std::size_t{1}, MetricOptions::kMaxDirections))
+        ->capture_default_str();
+    cmd->add_option("--seed", options.seed, "seed of those pairs")->capture_default_str();
+}
+
 bool parse_numbers(const std::string& text, double* out, int count) {
     const char* p = text.c_str();
     for (int k = 0; k < count; ++k) {

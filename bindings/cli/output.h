@@ -10,6 +10,7 @@
 
 #include "brdfz/formats/io.h"
 #include "brdfz/formats/json_writer.h"
+#include "brdfz/metrics.h"
 
 namespace brdfz::cli {
 
@@ -24,6 +25,11 @@ std::function<void(double)> progress_bar(const std::string& label);
 
 // --bin-position and --lookup, shared by every command that loads files.
 void add_load_options(CLI::App* cmd, LoadOptions& options);
+
+// --over grid|directions, --directions N and --seed S: where the metrics are taken (metrics.h).
+void add_over_options(CLI::App* cmd, MetricOptions& options);
+// The help text of --over, which diff and compress print.
+extern const char* const kOverHelp;
 
 // Parses exactly `count` comma-separated numbers; false on anything else.
 bool parse_numbers(const std::string& text, double* out, int count);

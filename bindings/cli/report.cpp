@@ -189,7 +189,7 @@ void write_metrics(JsonWriter& j, const Metrics& m) {
     j.end_object();
 }
 
-void print_metrics(const Metrics& m, bool json, std::ostream& os) {
+void print_metrics(const Metrics& m, bool json, std::ostream& os, Over over) {
     if (json) {
         JsonWriter j(os);
         write_metrics(j, m);
@@ -203,7 +203,8 @@ void print_metrics(const Metrics& m, bool json, std::ostream& os) {
         std::snprintf(buf, sizeof buf, "  %-13s  %-11.5g  %-11.5g  %-11.5g  %.5g\n", name, v->r, v->g, v->b, v->mean);
         os << buf;
     }
-    os << "  over " << m.samples << " bins (theta_i, theta_o < cut-off)";
+    os << "  over " << m.samples
+       << (over == Over::Grid ? " bins (theta_i, theta_o < cut-off)" : " direction pairs (uniform in solid angle)");
     if (m.negatives) os << "; " << m.negatives << " negative values taken as 0";
     os << "\n";
 }

@@ -31,7 +31,7 @@ void print_source_lines(std::ostream& os, const std::string& path, const SourceI
 
 void print_info(const std::string& path, const Loaded& loaded, bool json, std::ostream& os,
                 const container::Metadata* container = nullptr);
-void print_metrics(const Metrics& m, bool json, std::ostream& os);
+void print_metrics(const Metrics& m, bool json, std::ostream& os, Over over = Over::Grid);
 // The metrics as one JSON object value: {cos_rmse: {r, g, b, mean}, ..., samples, negatives}.
 void write_metrics(JsonWriter& j, const Metrics& m);
 

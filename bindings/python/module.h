@@ -11,6 +11,7 @@
 
 #include "brdfz/brdf.h"
 #include "brdfz/errors.h"
+#include "brdfz/metrics.h"
 
 namespace brdfz::python {
 
@@ -27,6 +28,11 @@ void bind_select(py::module_& m);
 // Brdf.parts() and Brdf.sampler_parts() (parts.cpp): a dict, or None for kinds without parts.
 std::optional<py::dict> brdf_parts(const BrdfPtr& brdf);
 std::optional<py::dict> sampler_parts(const BrdfPtr& brdf);
+
+// The metric options every measuring function takes (metrics.h): max_theta in degrees, over "grid" or
+// "directions", the number of direction pairs and their seed.
+MetricOptions metric_options(double max_theta, int threads, const std::string& over, std::size_t directions,
+                             std::uint64_t seed);
 
 // A library IoError about a file that does not exist becomes FileNotFoundError (an OSError), with
 // the library's message; every other error goes to the module's translator (_core.cpp).

@@ -4,6 +4,7 @@
 #include <pybind11/stl.h>
 #include <pybind11/stl/filesystem.h>
 
+#include <cstring>
 #include <filesystem>
 #include <numbers>
 #include <optional>
@@ -147,7 +148,38 @@ py::dict per_channel_dict(const PerChannel& c) {
     return d;
 }
 
+using Rows = py::array_t<double, py::array::c_style | py::array::forcecast>;
+
+// An (N, 3) float64 array (converted when given otherwise); ValueError naming it for any other shape.
+Rows rows3(const py::handle& obj, const char* name) {
+    Rows a = Rows::ensure(obj);
+    if (!a || a.ndim() != 2 || a.shape(1) != 3) {
+        PyErr_Clear();
+        throw ValueError(std::string(name) + ": expected an array of shape (N, 3)");
+    }
+    return a;
+}
+
+template <typename T>
+Rows to_rows(const std::vector<T>& v) {
+    Rows a({static_cast<py::ssize_t>(v.size()), py::ssize_t{3}});
+    static_assert(sizeof(T) == 3 * sizeof(double));
+    if (!v.empty()) std::memcpy(a.mutable_data(), v.data(), v.size() * sizeof(T));
+    return a;
+}
+
 }  // namespace
+
+MetricOptions metric_options(double max_theta, int threads, const std::string& over, std::size_t directions,
+                             std::uint64_t seed) {
+    MetricOptions o;
+    o.max_theta_deg = max_theta;
+    o.threads = threads;
+    o.over = parse_over(over);
+    o.directions = directions;
+    o.seed = seed;
+    return o;
+}
 
 void bind_operations(py::module_& m) {
     m.def("load", [](const Path& path, const std::string& lookup, const std::string& bin_position,
@@ -156,16 +188,27 @@ void bind_operations(py::module_& m) {
           py::arg("format") = "", "a BRDF file (.binary, .bsdf, .brdfz, .exr, .json; format overrides the extension)");
 
     m.def("save", [](const BrdfPtr& brdf, const Path& path, const Resolution& res, const std::string& format,
-                     int threads, py::object progress) {
+                     int threads, py::object progress, const std::string& build_spec, const std::optional<Path>& source,
+                     const py::object& source_metrics) {
               SaveOptions o;
               if (res) o.grid = grid_of(*res);
               o.format = format;
               o.threads = threads;
+              o.build_spec = build_spec;
+              if (source) {
+                  o.source = source->string();
+                  o.source_format = detect_format(o.source);
+              }
+              // An object, not std::optional<Metrics>: Metrics is bound below, after this signature is made.
+              if (!source_metrics.is_none()) o.source_metrics = source_metrics.cast<Metrics>();
               return save_counts(*brdf, path, o, std::move(progress));
           },
           py::arg("brdf"), py::arg("path"), py::kw_only(), py::arg("res") = py::none(), py::arg("format") = "",
-          py::arg("threads") = 0, py::arg("progress") = py::none(),
-          "writes atomically (format from the extension unless given); returns the written bins' counts");
+          py::arg("threads") = 0, py::arg("progress") = py::none(), py::arg("build_spec") = "",
+          py::arg("source") = py::none(), py::arg("source_metrics") = py::none(),
+          "writes atomically (format from the extension unless given); returns the written bins' counts. .brdfz "
+          "keeps provenance: build_spec (the compress() spec), source (the file it came from: name, format and "
+          "SHA-256) and source_metrics (its metrics against that file)");
 
     m.def("convert", [](const Path& src, const Path& dst, const Resolution& res, const std::string& src_format,
                         const std::string& dst_format, const std::string& lookup, const std::string& bin_position,
@@ -268,17 +311,43 @@ void bind_operations(py::module_& m) {
             return py::str("Metrics(cos_rmse={:.6g}, cos_rmse_rel={:.6g}, log_rmse={:.6g}, cbrt_rmse={:.6g}, samples={})")
                 .format(x.cos_rmse.mean, x.cos_rmse_rel.mean, x.log_rmse.mean, x.cbrt_rmse.mean, x.samples);
         });
-    m.def("metrics", [](const py::object& reference, const BrdfPtr& approx, double max_theta, int threads) {
+    m.def("metrics", [](const py::object& reference, const BrdfPtr& approx, double max_theta, int threads,
+                        const std::string& over, std::size_t directions, std::uint64_t seed) {
+              const MetricOptions o = metric_options(max_theta, threads, over, directions, seed);
               const Data ref = data_of(reference);
-              MetricOptions o;
-              o.max_theta_deg = max_theta;
-              o.threads = threads;
               py::gil_scoped_release release;
               if (const auto* set = std::get_if<MeasurementSet>(&ref)) return compare(*set, *approx, o);
               return compare(*std::get<BrdfPtr>(ref), *approx, o);
           },
           py::arg("reference"), py::arg("approx"), py::kw_only(), py::arg("max_theta") = 80.0, py::arg("threads") = 0,
+          py::arg("over") = "grid", py::arg("directions") = MetricOptions{}.directions, py::arg("seed") = MetricOptions{}.seed,
           "metrics of approx against reference (a Brdf, or a file: a BRDF or Cornell/ALTA measurements)");
+    m.def("metric_samples", [](const BrdfPtr& reference, double max_theta, int threads, const std::string& over,
+                               std::size_t directions, std::uint64_t seed) {
+              const MetricOptions o = metric_options(max_theta, threads, over, directions, seed);
+              MetricSamples s;
+              {
+                  py::gil_scoped_release release;
+                  s = metric_samples(*reference, o);
+              }
+              return py::make_tuple(to_rows(s.wi), to_rows(s.wo), to_rows(s.reference));
+          },
+          py::arg("reference"), py::kw_only(), py::arg("max_theta") = 80.0, py::arg("threads") = 0,
+          py::arg("over") = "grid", py::arg("directions") = MetricOptions{}.directions, py::arg("seed") = MetricOptions{}.seed,
+          "(wi, wo, f_reference): the samples metrics() takes against reference");
+    m.def("metrics_at", [](const py::object& wi_obj, const py::object& ref_obj, const py::object& app_obj) {
+              const Rows wi = rows3(wi_obj, "wi"), ref = rows3(ref_obj, "reference"), app = rows3(app_obj, "approx");
+              const auto n = static_cast<std::size_t>(wi.shape(0));
+              if (static_cast<std::size_t>(ref.shape(0)) != n || static_cast<std::size_t>(app.shape(0)) != n)
+                  throw ValueError("metrics_at: wi, reference and approx have different lengths");
+              std::vector<Vec3> w(n);
+              for (std::size_t k = 0; k < n; ++k) w[k] = {wi.at(k, 0), wi.at(k, 1), wi.at(k, 2)};
+              const auto* r = reinterpret_cast<const Rgb*>(ref.data());
+              const auto* a = reinterpret_cast<const Rgb*>(app.data());
+              return compare_values(w, std::span<const Rgb>(r, n), std::span<const Rgb>(a, n));
+          },
+          py::arg("wi"), py::arg("reference"), py::arg("approx"),
+          "the metrics of approx against reference values (N, 3) at pairs whose incident directions are wi");
 
     py::class_<FitReport>(m, "FitReport", "how a fit went (fit/fit.h)")
         .def_property_readonly("status", [](const FitReport& r) { return fit_status_name(r.status); },

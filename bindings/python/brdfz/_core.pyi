@@ -7,7 +7,7 @@ import numpy
 import numpy.typing
 import os
 import typing
-__all__: list[str] = ['Brdf', 'Candidate', 'ChannelMetrics', 'Compressed', 'FitReport', 'FitResult', 'FormatError', 'Metrics', 'Scene', 'Selection', 'Trial', 'UnsupportedError', 'ValidationCheck', 'ValidationReport', 'albedo', 'benchmark_specs', 'compress', 'compress_kinds', 'convert', 'default_candidates', 'fit', 'format_of', 'formats', 'load', 'metrics', 'read_scene', 'representations', 'save', 'select_representation', 'tabulate', 'trial', 'validate']
+__all__: list[str] = ['Brdf', 'Candidate', 'ChannelMetrics', 'Compressed', 'FitReport', 'FitResult', 'FormatError', 'Metrics', 'Scene', 'Selection', 'Trial', 'UnsupportedError', 'ValidationCheck', 'ValidationReport', 'albedo', 'benchmark_specs', 'compress', 'compress_kinds', 'convert', 'default_candidates', 'fit', 'format_of', 'formats', 'load', 'metric_samples', 'metrics', 'metrics_at', 'read_scene', 'representations', 'save', 'select_representation', 'tabulate', 'trial', 'validate']
 class FormatError(ValueError):
     pass
 class UnsupportedError(ValueError):
@@ -418,9 +418,17 @@ def load(path: os.PathLike | str | bytes, *, lookup: str = 'linear', bin_positio
     """
     a BRDF file (.binary, .bsdf, .brdfz, .exr, .json; format overrides the extension)
     """
-def metrics(reference: typing.Any, approx: Brdf, *, max_theta: typing.SupportsFloat | typing.SupportsIndex = 80.0, threads: typing.SupportsInt | typing.SupportsIndex = 0) -> Metrics:
+def metric_samples(reference: Brdf, *, max_theta: typing.SupportsFloat | typing.SupportsIndex = 80.0, threads: typing.SupportsInt | typing.SupportsIndex = 0, over: str = 'grid', directions: typing.SupportsInt | typing.SupportsIndex = 262144, seed: typing.SupportsInt | typing.SupportsIndex = 1) -> tuple[numpy.typing.NDArray[numpy.float64], numpy.typing.NDArray[numpy.float64], numpy.typing.NDArray[numpy.float64]]:
+    """
+    (wi, wo, f_reference): the samples metrics() takes against reference
+    """
+def metrics(reference: typing.Any, approx: Brdf, *, max_theta: typing.SupportsFloat | typing.SupportsIndex = 80.0, threads: typing.SupportsInt | typing.SupportsIndex = 0, over: str = 'grid', directions: typing.SupportsInt | typing.SupportsIndex = 262144, seed: typing.SupportsInt | typing.SupportsIndex = 1) -> Metrics:
     """
     metrics of approx against reference (a Brdf, or a file: a BRDF or Cornell/ALTA measurements)
+    """
+def metrics_at(wi: typing.Any, reference: typing.Any, approx: typing.Any) -> Metrics:
+    """
+    the metrics of approx against reference values (N, 3) at pairs whose incident directions are wi
     """
 def read_scene(path: os.PathLike | str | bytes) -> Scene:
     """
@@ -430,11 +438,11 @@ def representations() -> list:
     """
     the representation kinds compress() builds, as `brdfz representations --json` lists them
     """
-def save(brdf: Brdf, path: os.PathLike | str | bytes, *, res: tuple[typing.SupportsInt | typing.SupportsIndex, typing.SupportsInt | typing.SupportsIndex, typing.SupportsInt | typing.SupportsIndex] | None = None, format: str = '', threads: typing.SupportsInt | typing.SupportsIndex = 0, progress: typing.Any = None) -> dict:
+def save(brdf: Brdf, path: os.PathLike | str | bytes, *, res: tuple[typing.SupportsInt | typing.SupportsIndex, typing.SupportsInt | typing.SupportsIndex, typing.SupportsInt | typing.SupportsIndex] | None = None, format: str = '', threads: typing.SupportsInt | typing.SupportsIndex = 0, progress: typing.Any = None, build_spec: str = '', source: os.PathLike | str | bytes | None = None, source_metrics: typing.Any = None) -> dict:
     """
-    writes atomically (format from the extension unless given); returns the written bins' counts
+    writes atomically (format from the extension unless given); returns the written bins' counts. .brdfz keeps provenance: build_spec (the compress() spec), source (the file it came from: name, format and SHA-256) and source_metrics (its metrics against that file)
     """
-def select_representation(brdf: Brdf, max_error: typing.SupportsFloat | typing.SupportsIndex, *, metric: str = 'log', scene: Scene | None = None, candidates: collections.abc.Sequence[str] = [], measure_speed: bool = True, threads: typing.SupportsInt | typing.SupportsIndex = 0, on_candidate: typing.Any = None) -> Selection:
+def select_representation(brdf: Brdf, max_error: typing.SupportsFloat | typing.SupportsIndex, *, metric: str = 'log', scene: Scene | None = None, candidates: collections.abc.Sequence[str] = [], measure_speed: bool = True, threads: typing.SupportsInt | typing.SupportsIndex = 0, over: str = 'grid', directions: typing.SupportsInt | typing.SupportsIndex = 262144, seed: typing.SupportsInt | typing.SupportsIndex = 1, on_candidate: typing.Any = None) -> Selection:
     """
     the smallest candidate within the budget (select.h); on_candidate(candidate, index, total) after each
     """
@@ -442,7 +450,7 @@ def tabulate(brdf: Brdf, res: tuple[typing.SupportsInt | typing.SupportsIndex, t
     """
     the Brdf evaluated on a (θh, θd, φd) Rusinkiewicz grid at bin centres, as a table
     """
-def trial(brdf: Brdf, spec: str, *, measure_speed: bool = True, max_theta: typing.SupportsFloat | typing.SupportsIndex = 80.0, threads: typing.SupportsInt | typing.SupportsIndex = 0, progress: typing.Any = None) -> Trial:
+def trial(brdf: Brdf, spec: str, *, measure_speed: bool = True, max_theta: typing.SupportsFloat | typing.SupportsIndex = 80.0, threads: typing.SupportsInt | typing.SupportsIndex = 0, over: str = 'grid', directions: typing.SupportsInt | typing.SupportsIndex = 262144, seed: typing.SupportsInt | typing.SupportsIndex = 1, progress: typing.Any = None) -> Trial:
     """
     compress(brdf, spec) and measure it: bytes, metrics, eval speed, build time
     """
@@ -450,3 +458,4 @@ def validate(brdf: Brdf, *, res: tuple[typing.SupportsInt | typing.SupportsIndex
     """
     non-negativity (a table's values, else f on the res grid), reciprocity (rtol, atol in 1/sr) and energy (reflectance <= 1 + albedo_tol at the elevations theta, degrees), as `brdfz validate`
     """
+__version__: str = '0.1.0'
