@@ -278,24 +278,20 @@ def ggx_visible_density(wo, w, ax, ay):
     return dr.select(ok & (h[2] > 0.0), ggx_aniso_d(h[0], h[1], h[2], ax, ay) / (2.0 * (wo[2] + l)), 0.0)
 
 
-class GgxSampler:
-    @staticmethod
-    def sample(p, wo, u1, u2):
-        return ggx_visible_sample(wo, p[3], p[3], u1, u2)
-
-    @staticmethod
-    def density(p, wo, w):
-        return ggx_visible_density(wo, w, p[3], p[3])
-
-
 class GgxAnisoSampler:
-    @staticmethod
-    def sample(p, wo, u1, u2):
-        return ggx_visible_sample(wo, p[3], p[4], u1, u2)
+    AX, AY = 3, 4  # where the lobe's parameters hold αx and αy
 
-    @staticmethod
-    def density(p, wo, w):
-        return ggx_visible_density(wo, w, p[3], p[4])
+    @classmethod
+    def sample(cls, p, wo, u1, u2):
+        return ggx_visible_sample(wo, p[cls.AX], p[cls.AY], u1, u2)
+
+    @classmethod
+    def density(cls, p, wo, w):
+        return ggx_visible_density(wo, w, p[cls.AX], p[cls.AY])
+
+
+class GgxSampler(GgxAnisoSampler):
+    AY = 3  # one α for both axes
 
 
 def invert_cdf(evaluate, target, lo, hi, x, label):

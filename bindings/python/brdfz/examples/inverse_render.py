@@ -28,6 +28,7 @@ import numpy as np
 
 import brdfz
 import brdfz.mitsuba
+from brdfz.examples import mitsuba_sphere
 
 GLOSSY = {"lambert.rho_r": 0.2, "lambert.rho_g": 0.3, "lambert.rho_b": 0.4, "ggx.ks_r": 1.0, "ggx.ks_g": 0.8,
           "ggx.ks_b": 0.6, "ggx.alpha": 0.15, "ggx.f0": 0.04}
@@ -44,20 +45,7 @@ def builtin() -> brdfz.Brdf:
 
 def scene(material, res: int, spp: int) -> "mi.Scene":
     """mitsuba_sphere's scene (a sphere, sun and sky) with the differentiable path tracer."""
-    return mi.load_dict({
-        "type": "scene",
-        "integrator": {"type": "prb", "max_depth": 2},
-        "sensor": {
-            "type": "perspective",
-            "fov": 35,
-            "to_world": mi.ScalarTransform4f().look_at(origin=[0, 0, 4], target=[0, 0, 0], up=[0, 1, 0]),
-            "film": {"type": "hdrfilm", "width": res, "height": res, "rfilter": {"type": "box"}},
-            "sampler": {"type": "independent", "sample_count": spp},
-        },
-        "sphere": {"type": "sphere", "bsdf": material},
-        "sun": {"type": "directional", "direction": [-1.0, -0.6, -1.0], "irradiance": {"type": "rgb", "value": 3.0}},
-        "sky": {"type": "constant", "radiance": {"type": "rgb", "value": 0.3}},
-    })
+    return mitsuba_sphere.scene(material, res, spp, integrator="prb")
 
 
 def _log_ratio(a, b) -> float:

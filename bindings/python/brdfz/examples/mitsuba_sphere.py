@@ -32,10 +32,11 @@ import brdfz
 import brdfz.mitsuba
 
 
-def scene(material, res: int, spp: int) -> "mi.Scene":
+def scene(material, res: int, spp: int, integrator: str = "path") -> "mi.Scene":
+    """A sphere lit by a sun and a sky; `integrator` "prb" makes it differentiable (inverse_render)."""
     return mi.load_dict({
         "type": "scene",
-        "integrator": {"type": "path", "max_depth": 2},
+        "integrator": {"type": integrator, "max_depth": 2},
         "sensor": {
             "type": "perspective",
             "fov": 35,
