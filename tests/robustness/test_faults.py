@@ -1,0 +1,93 @@
+"""The fault sweep on the command: writes killed with SIGKILL or SIGTERM, a full disk (a file size
+limit), the umask and a replaced file's mode, reproducible .brdfz bytes."""
+import os
+import resource
+import signal
+import stat
+import subprocess
+import time
+
+import pytest
+
+from conftest import run
+
+FORMATS = [".brdfz", ".binary", ".exr", ".bsdf"]
+
+
+def temporaries(folder):
+    return sorted(p.name for p in folder.iterdir() if ".tmp-" in p.name)
+
+
+@pytest.mark.parametrize("sig", [signal.SIGKILL, signal.SIGTERM])
+@pytest.mark.parametrize("ext", FORMATS)
+def test_killed_writes_leave_no_file_and_no_temporary(cli, demo_table, tmp_path, ext, sig):
+    """Killed at several moments of a long convert (tabulating on a fine grid, then writing): nothing is
+    left at OUT nor beside it, and an OUT that was there before is unchanged."""
+    out = tmp_path / f"OUT{ext}"
+    res = "90x90x360" if ext == ".bsdf" else "180x180x360"
+    for delay in [0.3, 1.0, 2.0]:
+        proc = subprocess.Popen([cli, "convert", str(demo_table), str(out), "--res", res],
+                                stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+        time.sleep(delay)
+        proc.send_signal(sig)
+        proc.wait(timeout=120)
+        assert temporaries(tmp_path) == [], (delay, ext)
+        if proc.returncode == 0:  # finished before the signal: a whole file
+            out.unlink()
+        assert not out.exists(), (delay, ext, proc.returncode)
+    run(cli, "convert", demo_table, out)
+    before = out.read_bytes()
+    proc = subprocess.Popen([cli, "convert", str(demo_table), str(out), "--res", res],
+                            stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    time.sleep(1.0)
+    proc.send_signal(sig)
+    proc.wait(timeout=120)
+    assert temporaries(tmp_path) == []
+    if proc.returncode != 0:
+        assert out.read_bytes() == before
+
+
+def limited(max_bytes):
+    def setup():
+        resource.setrlimit(resource.RLIMIT_FSIZE, (max_bytes, max_bytes))
+        signal.signal(signal.SIGXFSZ, signal.SIG_IGN)  # the write fails with EFBIG, as on a full disk
+    return setup
+
+
+@pytest.mark.parametrize("ext", FORMATS)
+def test_a_full_disk_is_one_line_and_no_file(cli, demo_table, tmp_path, ext):
+    out = tmp_path / f"full{ext}"
+    proc = subprocess.run([cli, "convert", str(demo_table), str(out)], capture_output=True, text=True,
+                          preexec_fn=limited(1 << 20), timeout=300)
+    assert proc.returncode == 1
+    lines = proc.stderr.strip().splitlines()
+    assert len(lines) == 1, proc.stderr
+    assert lines[0].startswith(f"brdfz: {out}: ") and "HDF5-DIAG" not in proc.stderr
+    assert not out.exists() and temporaries(tmp_path) == []
+
+
+def test_new_files_follow_the_umask_and_replaced_ones_keep_their_mode(cli, demo_table, tmp_path):
+    for ext in FORMATS:
+        out = tmp_path / f"m{ext}"
+        subprocess.run([cli, "convert", str(demo_table), str(out), "--res", "8x8x16"], check=True,
+                       capture_output=True, preexec_fn=lambda: os.umask(0o027))
+        assert stat.S_IMODE(out.stat().st_mode) == 0o640, ext
+        out.chmod(0o600)
+        run(cli, "convert", demo_table, out, "--res", "8x8x16")
+        assert stat.S_IMODE(out.stat().st_mode) == 0o600, ext
+
+
+def test_brdfz_bytes_are_reproducible_with_source_date_epoch(cli, demo_table, tmp_path):
+    env = dict(os.environ, SOURCE_DATE_EPOCH="1700000000")
+    outs = [tmp_path / "a.brdfz", tmp_path / "b.brdfz"]
+    for k, out in enumerate(outs):
+        if k:
+            time.sleep(1.1)  # object times, were they stored, would differ
+        subprocess.run([cli, "compress", str(demo_table), "-o", str(out), "--repr", "svd:rank=1,res=16x16x32"],
+                       check=True, capture_output=True, env=env)
+    assert outs[0].read_bytes() == outs[1].read_bytes()
+    assert "2023-11-14T22:13:20Z" in run(cli, "info", outs[0]).stdout
+    bad = subprocess.run([cli, "convert", str(demo_table), str(tmp_path / "c.brdfz")], capture_output=True, text=True,
+                         env=dict(os.environ, SOURCE_DATE_EPOCH="yesterday"))
+    assert bad.returncode == 1 and "SOURCE_DATE_EPOCH='yesterday'" in bad.stderr
+    assert not (tmp_path / "c.brdfz").exists()
