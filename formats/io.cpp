@@ -53,6 +53,7 @@ Loaded load_rgl(const std::string& path) {
     out.info.counts = r.counts;
     out.info.min_value = r.min_value;
     out.info.max_value = r.max_value;
+    out.info.fields = std::move(r.fields);
     out.brdf = std::move(r.brdf);
     return out;
 }

@@ -92,6 +92,13 @@ void write_source_keys(JsonWriter& j, const std::string& path, const SourceInfo&
     j.key("negative").value(info.counts.negative);
     j.key("nan").value(info.counts.nan);
     j.key("inf").value(info.counts.inf);
+    j.key("fields").begin_object();
+    for (const auto& [name, c] : info.fields) {
+        j.key(name).begin_object();
+        j.key("valid").value(c.valid).key("negative").value(c.negative).key("nan").value(c.nan).key("inf").value(c.inf);
+        j.end_object();
+    }
+    j.end_object();
 }
 
 void print_info(const std::string& path, const Loaded& loaded, bool json, std::ostream& os,
@@ -141,8 +148,12 @@ void print_info(const std::string& path, const Loaded& loaded, bool json, std::o
        << "  valid      " << info.counts.valid << "\n"
        << "  negative   " << info.counts.negative << "\n"
        << "  nan        " << info.counts.nan << "\n"
-       << "  inf        " << info.counts.inf << "\n"
-       << "  range      [" << fixed(info.min_value) << ", " << fixed(info.max_value) << "]"
+       << "  inf        " << info.counts.inf << "\n";
+    for (const auto& [name, c] : info.fields)
+        if (c.negative || c.nan || c.inf)
+            os << "  field      " << name << ": " << c.negative << " negative, " << c.nan << " NaN, " << c.inf
+               << " Inf of " << c.valid + c.negative + c.nan + c.inf << "\n";
+    os << "  range      [" << fixed(info.min_value) << ", " << fixed(info.max_value) << "]"
        << (info.format == "merl" || info.format == "exr" || info.format == "brdfz" ? " 1/sr\n" : " (stored values)\n")
        << "  albedo     theta_o      r        g        b         sampled (" << kAlbedoSamples
        << " samples)  r, g, b ± stderr\n";

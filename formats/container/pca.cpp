@@ -188,12 +188,18 @@ std::unique_ptr<Brdf> read(const h5::ReadNode& rep, const ReadContext& ctx) {
         embedded ? read_embedded(rep, grid, epsilon, k_max, hash) : read_referenced(rep, grid, hash);
     if (static_cast<std::uint64_t>(basis->k_max()) != k_max)
         bad("the basis has " + std::to_string(basis->k_max()) + " components, the file records " + std::to_string(k_max));
+    std::unique_ptr<PcaBrdf> brdf;
     try {
-        return std::make_unique<PcaBrdf>(std::move(basis), std::move(coefficients), ctx.lookup,
+        brdf = std::make_unique<PcaBrdf>(std::move(basis), std::move(coefficients), ctx.lookup,
                                          embedded ? PcaBrdf::BasisStorage::Embedded : PcaBrdf::BasisStorage::Referenced);
     } catch (const ValueError& e) {
-        throw FormatError(rep.file(), rep.path() + ": " + e.what());
+        bad(e.what());
     }
+    // As for tables: coefficients whose reconstruction overflows in every bin leave nothing to evaluate.
+    if (brdf->counts().valid == 0)
+        bad("the coefficients reconstruct no valid bin (" + std::to_string(brdf->counts().inf) +
+            " overflow the float range): nothing to evaluate");
+    return brdf;
 }
 
 }  // namespace

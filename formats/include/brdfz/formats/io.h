@@ -12,6 +12,7 @@
 #include <memory>
 #include <optional>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "brdfz/brdf.h"
@@ -32,6 +33,8 @@ struct SourceInfo {
     // class as cornell.h / alta.h define them, range of the kept samples' f_r in 1/sr.
     ValidityCounts counts;
     double min_value = 0, max_value = 0;
+    // RGL: the same counts for each float field (rgl::ReadResult::fields); empty for other formats.
+    std::vector<std::pair<std::string, ValidityCounts>> fields;
 };
 
 struct Loaded {
