@@ -1,5 +1,6 @@
 // The brdfz command. Library errors arrive as exceptions; they are printed here as one line
-// ("brdfz: FILE: reason") with a non-zero exit status.
+// ("brdfz: FILE: reason") with a non-zero exit status: 1 for any bad input or failure, 2 only when
+// compress --auto finds no candidate within the budget (compress.cpp throws CLI::RuntimeError(2)).
 #include <exception>
 #include <iostream>
 
@@ -21,7 +22,9 @@ int main(int argc, char** argv) {
     try {
         app.parse(argc, argv);
     } catch (const CLI::ParseError& e) {
-        return app.exit(e);
+        // CLI11 numbers its usage errors from 100 up; every one of them is bad input.
+        const int code = app.exit(e);
+        return code == 0 || code == 2 ? code : 1;
     } catch (const std::exception& e) {
         std::cout.flush();
         std::cerr << "brdfz: " << e.what() << "\n";

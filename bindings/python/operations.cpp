@@ -133,7 +133,7 @@ void bind_operations(py::module_& m) {
               bar.rethrow();
               return counts_dict(c);
           },
-          py::arg("brdf"), py::arg("path"), py::kw_only(), py::arg("res") = py::none(), py::arg("format") = "",
+          py::arg("brdf").none(false), py::arg("path"), py::kw_only(), py::arg("res") = py::none(), py::arg("format") = "",
           py::arg("threads") = 0, py::arg("progress") = py::none(),
           "writes atomically (format from the extension unless given); returns the written bins' counts");
 
@@ -183,7 +183,7 @@ void bind_operations(py::module_& m) {
               bar.rethrow();
               return Built{BrdfPtr(std::move(c.brdf)), c.spec, c.build_seconds, c.notes};
           },
-          py::arg("brdf"), py::arg("spec"), py::kw_only(), py::arg("threads") = 0, py::arg("progress") = py::none(),
+          py::arg("brdf").none(false), py::arg("spec"), py::kw_only(), py::arg("threads") = 0, py::arg("progress") = py::none(),
           "builds the representation SPEC names (as `brdfz compress`)");
     m.def("compress_kinds", &compress_kinds);
 
@@ -226,7 +226,7 @@ void bind_operations(py::module_& m) {
               if (const auto* set = std::get_if<MeasurementSet>(&ref)) return compare(*set, *approx, o);
               return compare(*std::get<BrdfPtr>(ref), *approx, o);
           },
-          py::arg("reference"), py::arg("approx"), py::kw_only(), py::arg("max_theta") = 80.0, py::arg("threads") = 0,
+          py::arg("reference"), py::arg("approx").none(false), py::kw_only(), py::arg("max_theta") = 80.0, py::arg("threads") = 0,
           "metrics of approx against reference (a Brdf, or a file: a BRDF or Cornell/ALTA measurements)");
 
     py::class_<FitReport>(m, "FitReport", "how a fit went (fit/fit.h)")
@@ -314,7 +314,7 @@ void bind_operations(py::module_& m) {
               bar.rethrow();
               return out;
           },
-          py::arg("brdf"), py::arg("res") = std::make_tuple(90, 90, 180), py::kw_only(), py::arg("lookup") = "linear",
+          py::arg("brdf").none(false), py::arg("res") = std::make_tuple(90, 90, 180), py::kw_only(), py::arg("lookup") = "linear",
           py::arg("negative") = "clamp", py::arg("threads") = 0, py::arg("progress") = py::none(),
           "the Brdf evaluated on a (θh, θd, φd) Rusinkiewicz grid at bin centres, as a table");
 
@@ -335,7 +335,7 @@ void bind_operations(py::module_& m) {
               }
               return out;
           },
-          py::arg("brdf"), py::arg("theta_o"),
+          py::arg("brdf").none(false), py::arg("theta_o"),
           "directional albedo (quadrature, albedo.h) at θo in radians: shape of theta_o + (3,)");
 }
 

@@ -40,6 +40,9 @@ void add_sample(Sums& s, const Rgb& ref, const Rgb& app, double cos_i) {
 
 Metrics to_metrics(const Sums& total) {
     if (total.n == 0) throw ValueError("metrics: no valid reference bin inside the angular cut-off");
+    if (total.ref_sq[0] == 0.0 && total.ref_sq[1] == 0.0 && total.ref_sq[2] == 0.0)
+        throw ValueError("metrics: the reference is zero or negative at every sample inside the angular cut-off: "
+                         "there is no reflectance to measure errors against");
     double cos_rmse[3], rel[3], log_rmse[3], cbrt_rmse[3];
     for (int c = 0; c < 3; ++c) {
         cos_rmse[c] = std::sqrt(total.sq[c] / total.n);
@@ -82,17 +85,16 @@ Metrics compare(const Brdf& reference, const Brdf& approx, const MetricOptions& 
     detail::sweep_slices(g, workers, [&](int w, int ih, std::span<const Vec3> wi, std::span<const Vec3> wo) {
         ref_f[w].resize(wi.size());
         app_f[w].resize(wi.size());
-        if (!ref_table) reference.eval(wi, wo, ref_f[w]);
+        // The reference is evaluated as the approximation is, so that a file against itself is exactly
+        // 0 (a table's bin value and its lookup at the bin's centre differ by rounding).
+        reference.eval(wi, wo, ref_f[w]);
         approx.eval(wi, wo, app_f[w]);
         Sums& s = sums[w];
         const std::size_t base = g.index(ih, 0, 0);
         for (std::size_t k = 0; k < wi.size(); ++k) {
             if (!(wi[k].z > min_cos && wo[k].z > min_cos)) continue;
-            Rgb ref = ref_f[w][k];
-            if (ref_table) {
-                if (!ref_table->table().valid(base + k)) continue;
-                for (int c = 0; c < 3; ++c) ref[c] = ref_table->table().at(base + k, c);
-            }
+            if (ref_table && !ref_table->table().valid(base + k)) continue;
+            const Rgb& ref = ref_f[w][k];
             bool finite = true;
             for (int c = 0; c < 3; ++c) finite = finite && std::isfinite(ref[c]) && std::isfinite(app_f[w][k][c]);
             if (!finite) continue;  // a reference without a value at this bin is not a sample

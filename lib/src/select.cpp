@@ -1,5 +1,6 @@
 #include "brdfz/select.h"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 
@@ -74,6 +75,12 @@ Selection select_representation(const Brdf& source, const SelectOptions& options
     const std::optional<Scene> judge =
         options.scene ? options.scene
                       : options.metric == SceneMetric::Image ? std::optional<Scene>(build_scene(default_scene())) : std::nullopt;
+    const std::vector<std::string> kinds = compress_kinds();
+    for (const std::string& spec : candidates) {
+        const std::string kind = ReprSpec::parse(spec).kind();
+        if (std::find(kinds.begin(), kinds.end(), kind) == kinds.end())
+            throw SpecError("candidate '" + spec + "': unknown representation '" + kind + "'");
+    }
     Selection out;
     for (const std::string& spec : candidates) {
         Candidate c;
@@ -93,6 +100,8 @@ Selection select_representation(const Brdf& source, const SelectOptions& options
                 c.accepted = true;
                 c.reason = "meets the budget";
             }
+        } catch (const SpecError&) {
+            throw;
         } catch (const Error& e) {
             c.trial.spec = spec;
             c.error = std::nan("");

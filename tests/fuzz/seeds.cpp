@@ -4,6 +4,8 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <iterator>
+#include <limits>
 #include <string>
 
 #include "brdfz/formats/container.h"
@@ -37,7 +39,8 @@ int main(int argc, char** argv) try {
         return 2;
     }
     const fs::path dir = argv[1];
-    for (const char* h : {"merl", "rgl", "container", "exr", "cornell", "alta", "json"}) fs::create_directories(dir / h);
+    for (const char* h : {"merl", "rgl", "container", "exr", "cornell", "alta", "json", "payload"})
+        fs::create_directories(dir / h);
 
     merl::write((dir / "merl" / "a.binary").string(), small_table({2, 2, 2}));
     merl::write((dir / "merl" / "b.binary").string(), small_table({3, 1, 5}));
@@ -77,6 +80,19 @@ int main(int argc, char** argv) try {
          "\"max_angle_deg\": 20, \"count\": 4}], \"lights\": [{\"direction\": [0, 0.1, 1], \"spread_deg\": 2, "
          "\"intensity\": 1, \"samples\": 2}], \"environment\": {\"radiance\": 0.1, \"samples\": 4}, "
          "\"pairs\": [{\"wi\": [0, 0.5, 1], \"wo\": [0, -0.5, 1], \"weight\": 2}]}\n");
+
+    // Payloads (payload_fuzz.cpp): a kind byte, then values; plausible ones and each hostile value.
+    const float hostile[] = {0.5f, std::numeric_limits<float>::infinity(), -std::numeric_limits<float>::infinity(),
+                             std::numeric_limits<float>::quiet_NaN(), -1.0f, 3e38f, 0.0f, 1e-30f};
+    for (unsigned char kind = 0; kind < 5; ++kind)
+        for (std::size_t h = 0; h < std::size(hostile); ++h) {
+            std::string bytes(1, static_cast<char>(kind));
+            for (int k = 0; k < 300; ++k) {
+                const float v = k % 37 == 5 ? hostile[h] : 0.25f + 0.01f * static_cast<float>(k % 11);
+                bytes.append(reinterpret_cast<const char*>(&v), sizeof v);
+            }
+            std::ofstream(dir / "payload" / ("k" + std::to_string(kind) + "-" + std::to_string(h)), std::ios::binary) << bytes;
+        }
     return 0;
 } catch (const std::exception& e) {
     std::fprintf(stderr, "fuzz_seeds: %s\n", e.what());

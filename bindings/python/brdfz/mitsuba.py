@@ -172,6 +172,9 @@ def register(name: str = "brdfz") -> None:
 
 def bsdf(brdf: Brdf, incident: str = "camera") -> "mi.BSDF":
     """A Mitsuba BSDF backed by `brdf` (any representation), to place in a scene dictionary;
-    `incident` says which side brdfz's wi is evaluated at (module docstring)."""
+    `incident` says which side brdfz's wi is evaluated at (module docstring). TypeError for anything
+    but a Brdf."""
+    if not isinstance(brdf, Brdf):
+        raise TypeError(f"brdfz.mitsuba.bsdf: expected a brdfz.Brdf, got {type(brdf).__name__}")
     _use_wavefront_mode()
     return _class()(mi.Properties(), brdf, incident)

@@ -1,7 +1,8 @@
 // Error metrics between two BRDFs over the valid bins of a reference grid.
 //
 // Samples are the bins of the reference's own grid when it is a TabularBrdf (its invalid bins are
-// skipped), otherwise of MetricOptions::grid; bins with θi or θo >= max_theta_deg, or beyond the
+// skipped; both BRDFs are evaluated at the bins' sample directions, so a table against itself is
+// exactly 0), otherwise of MetricOptions::grid; bins with θi or θo >= max_theta_deg, or beyond the
 // reference's measured_theta_max() (extrapolated, brdf.h), are left out.
 // Each bin counts once (the MERL literature's convention, e.g. Ngan et al. 2005, Löw et al. 2012).
 // With x = max(f_ref, 0)·cosθi and y = max(f_approx, 0)·cosθi per channel (negative values, noise in
@@ -10,7 +11,8 @@
 //   cos_rmse_rel = sqrt(Σ (x − y)² / Σ x²)
 //   log_rmse     = sqrt(mean (ln(1 + x) − ln(1 + y))²)
 //   cbrt_rmse    = sqrt(mean (∛x − ∛y)²)
-// `mean` is the average of the three channel values.
+// `mean` is the average of the three channel values. ValueError when no sample is inside the
+// cut-off, or when the reference is zero or negative at every one (no scale for cos_rmse_rel).
 #pragma once
 
 #include <cstddef>

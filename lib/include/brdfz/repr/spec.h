@@ -15,28 +15,32 @@ namespace brdfz {
 
 class ReprSpec {
 public:
-    // Throws ValueError naming the spec when it is malformed (empty kind, "key" without "=", a key
-    // given twice). A part after ':' without '=' is the kind's positional argument (the analytic
-    // model string), available as positional().
+    // Throws SpecError (a ValueError) naming the spec when it is malformed (empty kind, "key" without
+    // "=", a key given twice). A part after ':' without '=' is the kind's positional argument (the
+    // analytic model string), available as positional(); finish() refuses it when nobody asked for it.
     static ReprSpec parse(const std::string& text);
 
     const std::string& kind() const { return kind_; }
-    const std::string& positional() const { return positional_; }
+    const std::string& positional() const {
+        positional_used_ = true;
+        return positional_;
+    }
     std::string str() const;  // canonical text, options in the order given
 
-    // Typed getters: the value of KEY, or the fallback when absent. ValueError on a value that does
+    // Typed getters: the value of KEY, or the fallback when absent. SpecError on a value that does
     // not parse ("rank=four") or is out of the given range.
     int get_int(const std::string& key, int fallback, int min_value, int max_value) const;
     double get_double(const std::string& key, double fallback) const;
     std::string get_string(const std::string& key, const std::string& fallback) const;
-    // One of `choices`; ValueError listing them otherwise.
+    // One of `choices`; SpecError listing them otherwise.
     std::string get_choice(const std::string& key, const std::string& fallback,
                            const std::vector<std::string>& choices) const;
     // "AxBxC" with `n` positive parts, e.g. res=45x45x90 (n = 3) or res=90x90 (n = 2).
     std::vector<int> get_dims(const std::string& key, const std::vector<int>& fallback) const;
     bool has(const std::string& key) const;
 
-    // ValueError naming every option no getter asked for (a misspelt key).
+    // SpecError naming every option no getter asked for (a misspelt key, or a positional argument the
+    // kind does not take).
     void finish() const;
 
 private:
@@ -46,6 +50,7 @@ private:
     std::string positional_;
     std::vector<std::pair<std::string, std::string>> options_;
     mutable std::vector<bool> used_;
+    mutable bool positional_used_ = false;
 };
 
 }  // namespace brdfz
