@@ -4,7 +4,6 @@
 // analytic original; then every setting of the compression benchmark is built from the table and
 // measured (table printed, CSV written for scripts/demo's charts: python -m brdfz.bench --from-csv).
 // Exit status 1 when a representation could not be built (after the table and the CSV are written).
-#include <algorithm>
 #include <chrono>
 #include <cstdio>
 #include <filesystem>
@@ -32,13 +31,8 @@ void add_demo(CLI::App& app) {
     cmd->add_option("--repr", *specs, "a representation to build and measure (repeatable; default: every setting of "
                                       "the compression benchmark)");
     cmd->callback([out_dir, specs] {
-        // A representation asked for by an unknown name is refused before the work starts.
-        const std::vector<std::string> kinds = compress_kinds();
-        for (const std::string& spec : *specs) {
-            const std::string kind = ReprSpec::parse(spec).kind();
-            if (std::find(kinds.begin(), kinds.end(), kind) == kinds.end())
-                throw SpecError("--repr " + spec + ": unknown representation '" + kind + "'");
-        }
+        // A misspelt representation is refused before the work starts.
+        for (const std::string& spec : *specs) check_spec(spec);
         using clock = std::chrono::steady_clock;
         const CoatedDiffuse material;
         std::cout << "material: " << material.describe() << "\n\n";

@@ -1,6 +1,5 @@
 #include "brdfz/select.h"
 
-#include <algorithm>
 #include <cmath>
 #include <cstdio>
 
@@ -75,12 +74,7 @@ Selection select_representation(const Brdf& source, const SelectOptions& options
     const std::optional<Scene> judge =
         options.scene ? options.scene
                       : options.metric == SceneMetric::Image ? std::optional<Scene>(build_scene(default_scene())) : std::nullopt;
-    const std::vector<std::string> kinds = compress_kinds();
-    for (const std::string& spec : candidates) {
-        const std::string kind = ReprSpec::parse(spec).kind();
-        if (std::find(kinds.begin(), kinds.end(), kind) == kinds.end())
-            throw SpecError("candidate '" + spec + "': unknown representation '" + kind + "'");
-    }
+    for (const std::string& spec : candidates) check_spec(spec);
     Selection out;
     for (const std::string& spec : candidates) {
         Candidate c;

@@ -60,15 +60,21 @@ TEST_CASE("robustness: grids beyond 2^26 bins are refused before allocating, wit
 }
 
 TEST_CASE("robustness: a bare word in a spec is refused as a misspelt key is", "[robustness][spec]") {
-    for (const char* spec : {"tabular:wibble", "tabular:res", "svd:foo", "bivariate:dtype", "nmf:rank"}) {
+    for (const char* spec : {"tabular:wibble", "svd:foo", "bivariate:dtypes"}) {
         INFO(spec);
         const std::string kind = ReprSpec::parse(spec).kind(), word = std::string(spec).substr(kind.size() + 1);
-        CHECK_THROWS_AS(compress(material(), spec), SpecError);
+        CHECK_THROWS_AS(check_spec(spec), SpecError);
         CHECK_THROWS_WITH(compress(material(), spec), kind + ": unknown option(s) " + word);
+        CHECK_THROWS_WITH(compress(material(), kind + ":" + word + "=1"), kind + ": unknown option(s) " + word);
     }
-    CHECK_THROWS_WITH(compress(material(), "tabular:wibble=1"), "tabular: unknown option(s) wibble");
-    CHECK_THROWS_WITH(compress(material(), "tabular:res=8x8x16,wibble"), Catch::Contains("expected KEY=VALUE"));
-    CHECK_NOTHROW(compress(material(), "analytic:lambert,starts=1"));  // the one kind with a positional part
+    for (const char* spec : {"tabular:res", "nmf:rank"}) {  // a key without its value
+        const std::string kind = ReprSpec::parse(spec).kind(), key = std::string(spec).substr(kind.size() + 1);
+        CHECK_THROWS_WITH(compress(material(), spec), kind + ": option " + key + " needs a value (" + key + "=...)");
+    }
+    CHECK_THROWS_WITH(check_spec("tabular:res=8x8x16,wibble"), Catch::Contains("expected KEY=VALUE"));
+    CHECK_THROWS_WITH(check_spec("tabular:res=8x8x16,rse=2"), "tabular: unknown option(s) rse");
+    CHECK_NOTHROW(check_spec("analytic:lambert,starts=1"));  // the one kind with a positional part
+    CHECK_NOTHROW(check_spec("tabular:res=0x1x1"));           // values are the builder's to check
 }
 
 TEST_CASE("robustness: a misspelt candidate is an error, not a rejected candidate", "[robustness][select]") {
@@ -79,9 +85,12 @@ TEST_CASE("robustness: a misspelt candidate is an error, not a rejected candidat
     o.on_candidate = [&](const Candidate&) { ++tried; };
     o.candidates = {"tabular:res=4x4x8", "bogus:res=4x4x8"};
     CHECK_THROWS_AS(select_representation(table, o), SpecError);
-    CHECK(tried == 0);  // an unknown kind is found before anything is built
     o.candidates = {"tabular:res=4x4x8", "tabular:rse=4x4x8"};
     CHECK_THROWS_WITH(select_representation(table, o), "tabular: unknown option(s) rse");
+    CHECK(tried == 0);  // found before anything is built
+    o.candidates = {"tabular:res=4x4x8", "tabular:res=0x4x8"};  // a value: refused by its builder
+    CHECK_THROWS_AS(select_representation(table, o), SpecError);
+    CHECK(tried == 1);
     o.candidates = {"tabular:res=4x4x8"};
     CHECK_FALSE(select_representation(table, o).best());  // over budget: a result, not an error
 }

@@ -88,26 +88,30 @@ TEST_CASE("robustness: float32 table payloads: +Inf, negatives and all-NaN are r
     test::write_float32_table(p.string(), 2, 3, 4, v);
     CHECK_THAT(load_error(p), Catch::Contains("0 infinite and 1 negative values"));
     test::write_float32_table(p.string(), 2, 3, 4, std::vector<float>(72, kNaN));
-    CHECK_THAT(load_error(p), Catch::Contains("no valid bin"));
+    CHECK_THAT(load_error(p), Catch::Contains("holds no value (every entry is NaN)"));
+    std::vector<float> one(72, kNaN);
+    one[40] = 0.25f;  // a single value: a table, if a poor one
+    test::write_float32_table(p.string(), 2, 3, 4, one);
+    REQUIRE(load_error(p) == "loaded");
     test::write_float32_table(p.string(), 2, 3, 4, std::vector<float>(72, 3e38f));  // large but finite: a value
     REQUIRE(load_error(p) == "loaded");
     check_evaluates(*load(p.string()).brdf);
 }
 
-TEST_CASE("robustness: compact tables without a valid bin are refused", "[robustness][container][compact]") {
+TEST_CASE("robustness: compact tables without a value are refused", "[robustness][container][compact]") {
     const test::TempDir dir;
     const fs::path p = dir.path / "c.brdfz";
     const GridSpec g{2, 3, 4};
     std::vector<std::uint8_t> half(2 * 3 * g.bins());
     for (std::size_t i = 0; i < 3 * g.bins(); ++i) std::memcpy(half.data() + 2 * i, &CompactTable::kInvalidF16, 2);
     container::write(p.string(), CompactTableBrdf(CompactTable(g, TableDtype::F16, half, {}), Lookup::Linear));
-    CHECK_THAT(load_error(p), Catch::Contains("no valid bin"));
+    CHECK_THAT(load_error(p), Catch::Contains("holds no value"));
     std::array<ChannelCodec, 3> codecs;
     for (ChannelCodec& c : codecs) c = {1.0, 0.0, 0.01};
     container::write(p.string(), CompactTableBrdf(CompactTable(g, TableDtype::U8Log,
                                                                std::vector<std::uint8_t>(3 * g.bins(), 255), codecs),
                                                   Lookup::Linear));
-    CHECK_THAT(load_error(p), Catch::Contains("no valid bin"));
+    CHECK_THAT(load_error(p), Catch::Contains("holds no value"));
 }
 
 TEST_CASE("robustness: factors that would overflow (3e38) are refused; large sane ones load", "[robustness][container][factored]") {
@@ -136,7 +140,7 @@ TEST_CASE("robustness: factors that would overflow (3e38) are refused; large san
     CHECK_THROWS_WITH(FactoredBrdf(f), Catch::Contains("beyond the float range"));
 }
 
-TEST_CASE("robustness: PCA coefficients that reconstruct nothing are refused", "[robustness][container][pca]") {
+TEST_CASE("robustness: PCA coefficients that reconstruct beyond the float range are refused", "[robustness][container][pca]") {
     const test::TempDir dir;
     const GridSpec g{8, 8, 16};
     std::vector<Table> tables;
@@ -154,8 +158,10 @@ TEST_CASE("robustness: PCA coefficients that reconstruct nothing are refused", "
                                          PcaBrdf::BasisStorage::Embedded));
     REQUIRE(load_error(p) == "loaded");
     check_evaluates(*load(p.string()).brdf);
-    container::write(p.string(), PcaBrdf(basis, {3e38f, -3e38f}, Lookup::Linear, PcaBrdf::BasisStorage::Embedded));
-    CHECK_THAT(load_error(p), Catch::Contains("reconstruct no valid bin"));
+    for (const std::vector<float>& c : {std::vector<float>{3e38f, -3e38f}, std::vector<float>{1e6f, 0.0f}}) {
+        container::write(p.string(), PcaBrdf(basis, c, Lookup::Linear, PcaBrdf::BasisStorage::Embedded));
+        CHECK_THAT(load_error(p), Catch::Contains("beyond the float range"));
+    }
 }
 
 TEST_CASE("robustness: analytic parameters outside their bounds are refused; at the bounds they evaluate",

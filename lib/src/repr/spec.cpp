@@ -2,6 +2,7 @@
 
 #include <charconv>
 #include <cmath>
+#include <stdexcept>
 
 #include "brdfz/errors.h"
 
@@ -58,7 +59,29 @@ std::string ReprSpec::str() const {
     return out;
 }
 
+void ReprSpec::declare(const std::vector<SpecKey>& keys, bool takes_positional) {
+    declared_ = &keys;
+    if (!positional_.empty() && !takes_positional) {
+        for (const SpecKey& k : keys)
+            if (k.name == positional_)
+                throw SpecError(kind_ + ": option " + positional_ + " needs a value (" + positional_ + "=...)");
+        throw SpecError(kind_ + ": unknown option(s) " + positional_);
+    }
+    std::string unknown;
+    for (const auto& option : options_) {
+        bool known = false;
+        for (const SpecKey& k : keys) known = known || k.name == option.first;
+        if (!known) unknown += (unknown.empty() ? "" : ", ") + option.first;
+    }
+    if (!unknown.empty()) throw SpecError(kind_ + ": unknown option(s) " + unknown);
+}
+
 const std::string* ReprSpec::find(const std::string& key) const {
+    if (declared_) {
+        bool known = false;
+        for (const SpecKey& k : *declared_) known = known || k.name == key;
+        if (!known) throw std::logic_error(kind_ + ": the builder reads key '" + key + "', which the kind does not declare");
+    }
     for (std::size_t i = 0; i < options_.size(); ++i)
         if (options_[i].first == key) {
             if (i < used_.size()) used_[i] = true;
@@ -127,8 +150,6 @@ void ReprSpec::finish() const {
     std::string unknown;
     for (std::size_t i = 0; i < options_.size(); ++i)
         if (!used_[i]) unknown += (unknown.empty() ? "" : ", ") + options_[i].first;
-    // A bare word nobody asked for (tabular:wibble, svd:foo, tabular:res) is misspelt as much as a key.
-    if (!positional_.empty() && !positional_used_) unknown = positional_ + (unknown.empty() ? "" : ", ") + unknown;
     if (!unknown.empty()) throw SpecError(kind_ + ": unknown option(s) " + unknown);
 }
 

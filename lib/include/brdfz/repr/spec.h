@@ -2,8 +2,11 @@
 // container metadata spell it: "KIND[:KEY=VALUE,KEY=VALUE...]", e.g. "svd:rank=4,space=log",
 // "tabular:res=45x45x90,dtype=f16", "analytic:lambert+ggx".
 //
-// A kind's options struct reads its keys with the typed getters below and then calls
-// finish(), which rejects any key nobody asked for, so a misspelt option is an error, not a default.
+// A kind's builder reads its keys with the typed getters below and then calls finish(), which rejects
+// any key nobody asked for, so a misspelt option is an error, not a default. compress() first declares
+// the keys the kind registered (compress.h): a builder reading a key it did not declare is a bug
+// (std::logic_error), so the registry, `brdfz representations` and docs/repr-specs.md cannot drift
+// from what the builders read.
 #pragma once
 
 #include <array>
@@ -13,18 +16,23 @@
 
 namespace brdfz {
 
+// One key a representation kind takes: its name, its default as text (what the builder uses when the
+// key is absent; may say how it depends on other keys) and a one-line help.
+struct SpecKey {
+    std::string name;
+    std::string default_value;
+    std::string help;
+};
+
 class ReprSpec {
 public:
     // Throws SpecError (a ValueError) naming the spec when it is malformed (empty kind, "key" without
     // "=", a key given twice). A part after ':' without '=' is the kind's positional argument (the
-    // analytic model string), available as positional(); finish() refuses it when nobody asked for it.
+    // analytic model string), available as positional().
     static ReprSpec parse(const std::string& text);
 
     const std::string& kind() const { return kind_; }
-    const std::string& positional() const {
-        positional_used_ = true;
-        return positional_;
-    }
+    const std::string& positional() const { return positional_; }
     std::string str() const;  // canonical text, options in the order given
 
     // Typed getters: the value of KEY, or the fallback when absent. SpecError on a value that does
@@ -39,8 +47,13 @@ public:
     std::vector<int> get_dims(const std::string& key, const std::vector<int>& fallback) const;
     bool has(const std::string& key) const;
 
-    // SpecError naming every option no getter asked for (a misspelt key, or a positional argument the
-    // kind does not take).
+    // The keys the kind takes and whether it takes a positional argument: a positional part given to a
+    // kind that takes none, a declared key given without a value, or a key not declared is a SpecError
+    // naming it (so a misspelt key is found before any work); a getter asking for an undeclared key is
+    // std::logic_error.
+    void declare(const std::vector<SpecKey>& keys, bool takes_positional);
+
+    // SpecError naming every option no getter asked for (a misspelt key).
     void finish() const;
 
 private:
@@ -50,7 +63,7 @@ private:
     std::string positional_;
     std::vector<std::pair<std::string, std::string>> options_;
     mutable std::vector<bool> used_;
-    mutable bool positional_used_ = false;
+    const std::vector<SpecKey>* declared_ = nullptr;
 };
 
 }  // namespace brdfz

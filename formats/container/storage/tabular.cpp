@@ -3,11 +3,14 @@
 // memory layout of Table and CompactTable, so reading is a single read into the table. Element types:
 // float32 (TabularBrdf; invalid entries NaN as the table holds them), float16 and uint8 log-quantised
 // codes (CompactTableBrdf) with their per-channel decoding parameters as attributes (formats/SPEC.md).
+#include <algorithm>
 #include <cmath>
+#include <limits>
 
 #include "brdfz/errors.h"
 #include "brdfz/repr/compact_table.h"
-#include "storage.h"
+#include "container/storage.h"
+#include "detail/table_io.h"
 
 namespace brdfz::container::detail {
 namespace {
@@ -113,17 +116,18 @@ std::unique_ptr<Brdf> read(const h5::ReadNode& rep, const ReadContext& ctx) {
         values.read(table.data());
         // The float16 and uint8 rules (CompactTable): NaN is the invalid marker, and nothing else may
         // be outside [0, FLT_MAX].
-        std::size_t inf = 0, negative = 0;
+        std::size_t inf = 0, negative = 0, nan = 0;
         for (std::size_t k = 0; k < 3 * grid.bins(); ++k) {
             const float v = table.data()[k];
             inf += std::isinf(v);
+            nan += std::isnan(v);
             negative += v < 0.0f && !std::isinf(v);
         }
         if (inf || negative)
             bad("dataset 'values' holds " + std::to_string(inf) + " infinite and " + std::to_string(negative) +
                 " negative values (of " + std::to_string(3 * grid.bins()) + "); a table holds values >= 0 and NaN "
                 "for unmeasured entries");
-        if (table.valid_bins() == 0) bad("dataset 'values' has no valid bin (every bin holds a NaN): nothing to evaluate");
+        if (nan == 3 * grid.bins()) bad("dataset 'values' holds no value (every entry is NaN): nothing to evaluate");
         return std::make_unique<TabularBrdf>(std::move(table), ctx.lookup);
     }
     std::array<ChannelCodec, 3> codecs;
@@ -146,8 +150,33 @@ std::unique_ptr<Brdf> read(const h5::ReadNode& rep, const ReadContext& ctx) {
     } catch (const ValueError& e) {
         bad(e.what());
     }
-    if (brdf->table().valid_bins() == 0) bad("dataset 'values' has no valid bin (every bin is invalid): nothing to evaluate");
+    bool any = false;
+    for (std::size_t k = 0; k < grid.bins() && !any; ++k)
+        for (int ch = 0; ch < 3; ++ch) any = any || !std::isnan(brdf->table().at(k, ch));
+    if (!any) bad("dataset 'values' holds no value (every entry is the invalid code): nothing to evaluate");
     return brdf;
+}
+
+// A compact table's range is that of its decoded values.
+void source_info(const Brdf& brdf, SourceInfo& info) {
+    if (const Table* t = brdf.stored_table()) {
+        info = brdfz::detail::table_info(info.format, *t, info.counts);
+        return;
+    }
+    const CompactTable& c = dynamic_cast<const CompactTableBrdf&>(brdf).table();
+    const GridSpec& g = c.grid();
+    info.dims = {static_cast<std::size_t>(g.n_theta_h), static_cast<std::size_t>(g.n_theta_d),
+                 static_cast<std::size_t>(g.n_phi_d)};
+    double lo = std::numeric_limits<double>::infinity(), hi = -lo;
+    for (std::size_t k = 0; k < g.bins(); ++k)
+        for (int ch = 0; ch < 3; ++ch) {
+            const float v = c.at(k, ch);
+            if (std::isnan(v)) continue;
+            lo = std::min<double>(lo, v);
+            hi = std::max<double>(hi, v);
+        }
+    info.min_value = lo <= hi ? lo : 0.0;
+    info.max_value = lo <= hi ? hi : 0.0;
 }
 
 }  // namespace
@@ -168,9 +197,9 @@ double read_theta_d_warp(const h5::ReadNode& rep) {
     return warp;
 }
 
-const StorageModule& tabular_storage() {
-    static const StorageModule m{"tabular", {kTabular, kFloat32, kFloat16, kUint8Log, kWarpedThetaD}, &needs, &write, &read};
-    return m;
+void register_tabular(std::vector<const StorageModule*>& out) {
+    static const StorageModule m{"tabular", {kTabular, kFloat32, kFloat16, kUint8Log, kWarpedThetaD}, &needs, &write, &read, &source_info};
+    out.push_back(&m);
 }
 
 }  // namespace brdfz::container::detail
