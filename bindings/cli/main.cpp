@@ -4,11 +4,16 @@
 #include <exception>
 #include <iostream>
 
+#include "brdfz/errors.h"
 #include "commands.h"
 
 int main(int argc, char** argv) {
     CLI::App app{"brdfz: measured BRDFs, compactly stored"};
     app.require_subcommand(1);
+    // Usage errors are one line too.
+    app.failure_message([](const CLI::App*, const CLI::Error& e) {
+        return "brdfz: " + brdfz::printable(e.what()) + " (brdfz --help)\n";
+    });
     brdfz::cli::add_info(app);
     brdfz::cli::add_convert(app);
     brdfz::cli::add_eval(app);
@@ -29,7 +34,7 @@ int main(int argc, char** argv) {
         return code == 0 || code == 2 ? code : 1;
     } catch (const std::exception& e) {
         std::cout.flush();
-        std::cerr << "brdfz: " << e.what() << "\n";
+        std::cerr << "brdfz: " << brdfz::printable(e.what()) << "\n";
         return 1;
     }
     return 0;

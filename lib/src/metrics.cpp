@@ -80,7 +80,9 @@ Metrics compare(const Brdf& reference, const Brdf& approx, const MetricOptions& 
     g.validate();
 
     const int workers = detail::resolve_threads(options.threads);
-    std::vector<Sums> sums(workers);
+    // One sum per θh slice, added in slice order: the same result whatever the threads did (so that
+    // metrics stored in a container are the same bytes from run to run).
+    std::vector<Sums> sums(static_cast<std::size_t>(g.n_theta_h));
     std::vector<std::vector<Rgb>> ref_f(workers), app_f(workers);
     detail::sweep_slices(g, workers, [&](int w, int ih, std::span<const Vec3> wi, std::span<const Vec3> wo) {
         ref_f[w].resize(wi.size());
@@ -89,7 +91,7 @@ Metrics compare(const Brdf& reference, const Brdf& approx, const MetricOptions& 
         // 0 (a table's bin value and its lookup at the bin's centre differ by rounding).
         reference.eval(wi, wo, ref_f[w]);
         approx.eval(wi, wo, app_f[w]);
-        Sums& s = sums[w];
+        Sums& s = sums[static_cast<std::size_t>(ih)];
         const std::size_t base = g.index(ih, 0, 0);
         for (std::size_t k = 0; k < wi.size(); ++k) {
             if (!(wi[k].z > min_cos && wo[k].z > min_cos)) continue;
