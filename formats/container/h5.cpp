@@ -254,26 +254,30 @@ namespace {
 // The core driver's memory comes from these callbacks, so that the file it holds when it closes (the
 // superblock and metadata as H5Fclose finished them) is kept rather than freed. H5Fget_file_image is
 // no substitute: in HDF5 1.10 its copy of a file with a user block has a wrong superblock checksum.
+// Only the buffer the file grew into is kept; anything else HDF5 allocates through them is freed.
 H5FD_file_image_callbacks_t image_callbacks(Writer::Image* image) {
     H5FD_file_image_callbacks_t c{};
-    c.image_malloc = [](std::size_t size, H5FD_file_image_op_t, void* udata) -> void* {
-        auto* im = static_cast<Writer::Image*>(udata);
-        im->capacity = size;
-        return std::malloc(size);
-    };
+    c.image_malloc = [](std::size_t size, H5FD_file_image_op_t, void*) -> void* { return std::malloc(size); };
     c.image_memcpy = [](void* dest, const void* src, std::size_t size, H5FD_file_image_op_t, void*) -> void* {
         return std::memcpy(dest, src, size);
     };
     c.image_realloc = [](void* ptr, std::size_t size, H5FD_file_image_op_t, void* udata) -> void* {
+        auto* im = static_cast<Writer::Image*>(udata);
         void* grown = std::realloc(ptr, size);
-        if (grown) static_cast<Writer::Image*>(udata)->capacity = size;
+        if (grown && (ptr == im->bytes || !im->bytes)) {
+            im->bytes = static_cast<unsigned char*>(grown);
+            im->capacity = size;
+        }
         return grown;
     };
     c.image_free = [](void* ptr, H5FD_file_image_op_t op, void* udata) -> herr_t {
-        if (op == H5FD_FILE_IMAGE_OP_FILE_CLOSE)
-            static_cast<Writer::Image*>(udata)->bytes = static_cast<unsigned char*>(ptr);
-        else
-            std::free(ptr);
+        auto* im = static_cast<Writer::Image*>(udata);
+        if (ptr && ptr == im->bytes && op == H5FD_FILE_IMAGE_OP_FILE_CLOSE) {
+            im->closed = true;
+            return 0;
+        }
+        if (ptr == im->bytes) im->bytes = nullptr;
+        std::free(ptr);
         return 0;
     };
     c.udata_copy = [](void* udata) -> void* { return udata; };
@@ -293,13 +297,16 @@ Writer::Writer(std::string path) : path_(std::move(path)) {
     H5Pset_fapl_core(fapl.get(), 1 << 20, false);  // in memory, nothing backed by a file
     H5FD_file_image_callbacks_t callbacks = image_callbacks(&image_);
     H5Pset_file_image_callbacks(fapl.get(), &callbacks);
-    file_ = Id(H5Fcreate(path_.c_str(), H5F_ACC_TRUNC, fcpl.get(), fapl.get()), &H5Fclose);
+    // HDF5 first opens an existing file of the name it is given (it reads it whole with this driver,
+    // and would block on a FIFO): the name is one no file system has, unique to this writer.
+    const std::string name = "/proc/self/fd/-1/brdfz-writer-" + std::to_string(reinterpret_cast<std::uintptr_t>(this));
+    file_ = Id(H5Fcreate(name.c_str(), H5F_ACC_TRUNC, fcpl.get(), fapl.get()), &H5Fclose);
     if (file_.get() < 0) throw IoError(path_, "cannot create HDF5 file" + hdf5_message());
 }
 
 Writer::~Writer() {
     file_.reset();
-    std::free(image_.bytes);
+    if (image_.closed) std::free(image_.bytes);
 }
 
 void Writer::close() {
@@ -307,7 +314,7 @@ void Writer::close() {
     // The file's extent, from the superblock (where the user block ends) to its end, once flushed.
     const ssize_t size =
         H5Fflush(file_.get(), H5F_SCOPE_GLOBAL) < 0 ? -1 : H5Fget_file_image(file_.get(), nullptr, 0);
-    if (size <= 0 || !file_.reset() || !image_.bytes || kHeaderSize + static_cast<std::size_t>(size) > image_.capacity)
+    if (size <= 0 || !file_.reset() || !image_.closed || kHeaderSize + static_cast<std::size_t>(size) > image_.capacity)
         throw IoError(path_, "cannot complete HDF5 write" + hdf5_message());
     const std::span<unsigned char> image(image_.bytes, kHeaderSize + static_cast<std::size_t>(size));
     std::sort(extents_.begin(), extents_.end(), [](const Extent& a, const Extent& b) { return a.offset < b.offset; });

@@ -117,6 +117,7 @@ public:
     struct Image {
         unsigned char* bytes = nullptr;
         std::size_t capacity = 0;
+        bool closed = false;  // HDF5 is done with bytes: they are the finished file, the Writer's to free
     };
 
 private:

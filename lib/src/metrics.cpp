@@ -83,24 +83,31 @@ Metrics compare(const Brdf& reference, const Brdf& approx, const MetricOptions& 
     // One sum per θh slice, added in slice order: the same result whatever the threads did (so that
     // metrics stored in a container are the same bytes from run to run).
     std::vector<Sums> sums(static_cast<std::size_t>(g.n_theta_h));
+    // An approximation that stores a table on the same grid is read at the bins as the reference is:
+    // its stored values, so that a table against itself (whatever either's lookup) is exactly 0.
+    const Table* app_table = approx.stored_table();
+    const bool same_bins = ref_table && app_table && app_table->grid() == ref_table->grid();
     std::vector<std::vector<Rgb>> ref_f(workers), app_f(workers);
     detail::sweep_slices(g, workers, [&](int w, int ih, std::span<const Vec3> wi, std::span<const Vec3> wo) {
         ref_f[w].resize(wi.size());
         app_f[w].resize(wi.size());
-        // The reference is evaluated as the approximation is, so that a file against itself is exactly
-        // 0 (a table's bin value and its lookup at the bin's centre differ by rounding).
-        reference.eval(wi, wo, ref_f[w]);
+        if (!ref_table) reference.eval(wi, wo, ref_f[w]);
         approx.eval(wi, wo, app_f[w]);
         Sums& s = sums[static_cast<std::size_t>(ih)];
         const std::size_t base = g.index(ih, 0, 0);
         for (std::size_t k = 0; k < wi.size(); ++k) {
             if (!(wi[k].z > min_cos && wo[k].z > min_cos)) continue;
-            if (ref_table && !ref_table->valid(base + k)) continue;
-            const Rgb& ref = ref_f[w][k];
+            Rgb ref = ref_f[w][k], app = app_f[w][k];
+            if (ref_table) {
+                if (!ref_table->valid(base + k)) continue;
+                for (int c = 0; c < 3; ++c) ref[c] = ref_table->at(base + k, c);
+                if (same_bins && app_table->valid(base + k))
+                    for (int c = 0; c < 3; ++c) app[c] = app_table->at(base + k, c);
+            }
             bool finite = true;
-            for (int c = 0; c < 3; ++c) finite = finite && std::isfinite(ref[c]) && std::isfinite(app_f[w][k][c]);
+            for (int c = 0; c < 3; ++c) finite = finite && std::isfinite(ref[c]) && std::isfinite(app[c]);
             if (!finite) continue;  // a reference without a value at this bin is not a sample
-            add_sample(s, ref, app_f[w][k], wi[k].z);
+            add_sample(s, ref, app, wi[k].z);
         }
     });
 

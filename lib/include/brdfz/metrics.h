@@ -1,9 +1,9 @@
 // Error metrics between two BRDFs over the valid bins of a reference grid.
 //
-// Samples are the bins of the reference's own grid when it is a TabularBrdf (its invalid bins are
-// skipped; both BRDFs are evaluated at the bins' sample directions, so a table against itself is
-// exactly 0), otherwise of MetricOptions::grid; bins with θi or θo >= max_theta_deg, or beyond the
-// reference's measured_theta_max() (extrapolated, brdf.h), are left out.
+// Samples are the bins of the reference's own grid when it stores a table (its invalid bins are
+// skipped; an approximation storing a table on the same grid is read at its stored values too, so a
+// table against itself is exactly 0), otherwise of MetricOptions::grid; bins with θi or θo >=
+// max_theta_deg, or beyond the reference's measured_theta_max() (extrapolated, brdf.h), are left out.
 // Each bin counts once (the MERL literature's convention, e.g. Ngan et al. 2005, Löw et al. 2012).
 // With x = max(f_ref, 0)·cosθi and y = max(f_approx, 0)·cosθi per channel (negative values, noise in
 // some measurements, enter as 0 and are counted):
