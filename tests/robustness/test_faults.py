@@ -1,6 +1,7 @@
 """The fault sweep on the command: writes killed with SIGKILL or SIGTERM, a full disk (a file size
 limit), the umask and a replaced file's mode, reproducible .brdfz bytes."""
 import os
+import re
 import resource
 import signal
 import stat
@@ -18,33 +19,51 @@ def temporaries(folder):
     return sorted(p.name for p in folder.iterdir() if ".tmp-" in p.name)
 
 
+def signal_mid_write(cmd, sig, after_bytes=64 << 10):
+    """Runs cmd and sends sig once it has written after_bytes (its write counter in /proc), so the
+    signal lands while the output is being written; returns the exit status."""
+    proc = subprocess.Popen(cmd, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    while proc.poll() is None:
+        try:
+            with open(f"/proc/{proc.pid}/io") as f:
+                written = int(re.search(r"^wchar: (\d+)", f.read(), re.M).group(1))
+        except (OSError, AttributeError):
+            break
+        if written > after_bytes:
+            proc.send_signal(sig)
+            break
+        time.sleep(0.001)
+    return proc.wait(timeout=300)
+
+
 @pytest.mark.parametrize("sig", [signal.SIGKILL, signal.SIGTERM])
 @pytest.mark.parametrize("ext", FORMATS)
 def test_killed_writes_leave_no_file_and_no_temporary(cli, demo_table, tmp_path, ext, sig):
-    """Killed at several moments of a long convert (tabulating on a fine grid, then writing): nothing is
-    left at OUT nor beside it, and an OUT that was there before is unchanged."""
+    """Signalled while writing (and, earlier, while still tabulating): nothing is left at OUT nor
+    beside it, and an OUT that was there before is unchanged."""
+    if not os.path.exists(f"/proc/{os.getpid()}/io"):
+        pytest.skip("no /proc/PID/io to see when the output is being written")
     out = tmp_path / f"OUT{ext}"
-    res = "90x90x360" if ext == ".bsdf" else "180x180x360"
-    for delay in [0.3, 1.0, 2.0]:
-        proc = subprocess.Popen([cli, "convert", str(demo_table), str(out), "--res", res],
-                                stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
-        time.sleep(delay)
-        proc.send_signal(sig)
-        proc.wait(timeout=120)
-        assert temporaries(tmp_path) == [], (delay, ext)
-        if proc.returncode == 0:  # finished before the signal: a whole file
+    cmd = [cli, "convert", str(demo_table), str(out), "--res", "90x90x360" if ext == ".bsdf" else "180x180x360"]
+    killed = 0
+    for attempt in range(3):
+        status = signal_mid_write(cmd, sig)
+        assert temporaries(tmp_path) == [], (attempt, ext)
+        if status == 0:  # it finished before the signal: a whole file
             out.unlink()
-        assert not out.exists(), (delay, ext, proc.returncode)
+        killed += status == -sig
+        assert not out.exists(), (attempt, ext, status)
+    assert killed > 0, "never signalled mid-write"
+    proc = subprocess.Popen(cmd, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    time.sleep(0.3)  # while tabulating, unless it is done already
+    proc.send_signal(sig)
+    assert temporaries(tmp_path) == [] and out.exists() == (proc.wait(timeout=300) == 0)
+    out.unlink(missing_ok=True)
     run(cli, "convert", demo_table, out)
     before = out.read_bytes()
-    proc = subprocess.Popen([cli, "convert", str(demo_table), str(out), "--res", res],
-                            stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
-    time.sleep(1.0)
-    proc.send_signal(sig)
-    proc.wait(timeout=120)
+    status = signal_mid_write(cmd, sig, after_bytes=(64 << 10) + len(before))
     assert temporaries(tmp_path) == []
-    if proc.returncode != 0:
-        assert out.read_bytes() == before
+    assert out.read_bytes() == before if status != 0 else out.exists()
 
 
 def limited(max_bytes):
