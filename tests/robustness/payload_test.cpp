@@ -11,6 +11,7 @@
 
 #include "brdfz/errors.h"
 #include "brdfz/formats/container.h"
+#include "brdfz/formats/exr.h"
 #include "brdfz/formats/io.h"
 #include "brdfz/formats/rgl.h"
 #include "brdfz/formats/rgl_writer.h"
@@ -324,4 +325,25 @@ TEST_CASE("robustness: RGL rgb all NaN or all Inf is refused in .bsdf and .brdfz
     t.vndf.values[4] = -0.25f;
     test::write_bsdf(bsdf.string(), t);
     CHECK_THAT(load_error(bsdf), Catch::Contains("field 'vndf' holds 1 negative of 48 values"));
+}
+
+TEST_CASE("robustness: EXR tables: negative and infinite channels are invalid and counted; none valid is refused",
+          "[robustness][exr]") {
+    const test::TempDir dir;
+    const fs::path p = dir.path / "t.exr";
+    Table t(GridSpec{2, 3, 4});
+    for (std::size_t b = 0; b < t.bins(); ++b) t.set(b, {0.2, 0.3, 0.4});
+    t.data()[0] = kInf;
+    t.data()[4] = -0.5f;
+    t.data()[8] = kNaN;
+    exr::write(p.string(), t);  // the writer stores what it is given
+    const Loaded l = load(p.string());
+    CHECK(l.info.counts.valid == 21);
+    CHECK(l.info.counts.inf == 1);
+    CHECK(l.info.counts.negative == 1);
+    CHECK(l.info.counts.nan == 1);
+    check_evaluates(*l.brdf);
+    for (std::size_t k = 0; k < 3 * t.bins(); ++k) t.data()[k] = k % 2 ? -1.0f : kInf;
+    exr::write(p.string(), t);
+    CHECK_THAT(load_error(p), Catch::Contains("no valid value in the table"));
 }
