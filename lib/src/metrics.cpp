@@ -166,7 +166,9 @@ void direction_pairs(std::uint64_t first, std::uint64_t seed, double theta_i_max
 Metrics compare(const Brdf& reference, const Brdf& approx, const MetricOptions& options) {
     const int workers = detail::resolve_threads(options.threads);
     if (options.over == Over::Directions) {
-        const auto [theta_i, theta_o] = direction_cutoffs(reference, options);
+        // Named copies: clang before 16 cannot capture structured bindings in the lambda below.
+        const std::pair<double, double> cutoffs = direction_cutoffs(reference, options);
+        const double theta_i = cutoffs.first, theta_o = cutoffs.second;
         const std::size_t n = options.directions, blocks = (n + kDirectionBlock - 1) / kDirectionBlock;
         std::vector<Sums> sums(blocks);
         struct Buffers {
