@@ -332,7 +332,7 @@ void bind_operations(py::module_& m) {
               }
               return py::make_tuple(to_rows(s.wi), to_rows(s.wo), to_rows(s.reference));
           },
-          py::arg("reference"), py::kw_only(), py::arg("max_theta") = 80.0, py::arg("threads") = 0,
+          py::arg("reference").none(false), py::kw_only(), py::arg("max_theta") = 80.0, py::arg("threads") = 0,
           py::arg("over") = "grid", py::arg("directions") = MetricOptions{}.directions, py::arg("seed") = MetricOptions{}.seed,
           "(wi, wo, f_reference): the samples metrics() takes against reference");
     m.def("metrics_at", [](const py::object& wi_obj, const py::object& ref_obj, const py::object& app_obj) {
@@ -499,7 +499,7 @@ void bind_operations(py::module_& m) {
               py::gil_scoped_release release;
               return validate(*brdf, o);
           },
-          py::arg("brdf"), py::kw_only(), py::arg("res") = std::make_tuple(90, 90, 180),
+          py::arg("brdf").none(false), py::kw_only(), py::arg("res") = std::make_tuple(90, 90, 180),
           py::arg("theta") = ValidateOptions{}.theta_deg, py::arg("rtol") = 0.05, py::arg("atol") = 1e-3,
           py::arg("albedo_tol") = 0.01,
           "non-negativity (a table's values, else f on the res grid), reciprocity (rtol, atol in 1/sr) and "

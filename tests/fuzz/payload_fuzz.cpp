@@ -1,8 +1,8 @@
 // libFuzzer harness: hostile values inside valid envelopes. The byte flips of the other harnesses
 // rarely get past the container's checksums, so here the input is the payload itself: its first byte
 // picks what it fills (a float32 table, SVD factors, analytic parameters, RGL tensors in a container
-// or in a .bsdf), the rest are that payload's float32 (or float64) values, written with correct
-// checksums and shapes (tests/robustness/envelope.h). A file must then be refused, or load and give
+// or in a .bsdf, a PCA material with its basis embedded), the rest are that payload's float32 (or
+// float64) values, written with correct checksums, hashes and shapes (tests/robustness/envelope.h). A file must then be refused, or load and give
 // finite results: eval >= 0 (RGL data may hold negative reflectance, which Mitsuba renders too), pdf
 // finite and >= 0, sampled weights finite. Anything else aborts.
 #include <cmath>
@@ -14,6 +14,8 @@
 #include "brdfz/errors.h"
 #include "brdfz/formats/io.h"
 #include "brdfz/repr/analytic/model.h"
+#include "brdfz/repr/pca.h"
+#include "brdfz/tabulate.h"
 #include "fuzz_util.h"
 #include "robustness/envelope.h"
 
@@ -56,6 +58,39 @@ rgl::Tensors tensors(const std::uint8_t* data, std::size_t size) {
     return t;
 }
 
+// A PCA material whose basis parts and coefficients are the input's values, laid over a basis trained
+// on three analytic tables: the bins that basis drops (below the horizon) stay dropped, since a basis
+// that keeps them is refused whatever its values.
+test::PcaParts pca_parts(const std::uint8_t* data, std::size_t size) {
+    static const test::PcaParts trained = [] {
+        const GridSpec g{2, 3, 4};
+        std::vector<Table> tables;
+        for (double alpha : {0.1, 0.3}) {
+            TabulateOptions o;
+            o.grid = g;
+            tables.push_back(tabulate(AnalyticBrdf("lambert+ggx", {0.3, 0.4, 0.5, 0.5, 0.5, 0.5, alpha, 0.04}), o).table);
+        }
+        const std::vector<const Table*> ptrs{&tables[0], &tables[1]};
+        PcaTrainOptions o;
+        o.k_max = 2;
+        const PcaBasis b = train_pca_basis(ptrs, o);
+        return test::PcaParts{2, 3, 4, b.epsilon(), {b.median().begin(), b.median().end()},
+                              {b.mean().begin(), b.mean().end()}, {b.components().begin(), b.components().end()},
+                              std::vector<float>(2, 0.0f), {b.variances().begin(), b.variances().end()}};
+    }();
+    test::PcaParts p = trained;
+    const std::vector<float> v = values<float>(data, size, 72 + 72 + 144 + 2 + 2, 0.5f);
+    auto at = v.begin();
+    for (float& m : p.median) {
+        if (!std::isnan(m)) m = *at;
+        ++at;
+    }
+    for (std::vector<float>* part : {&p.mean, &p.components, &p.coefficients})
+        for (float& x : *part) x = *at++;
+    for (double& x : p.variances) x = *at++;
+    return p;
+}
+
 void check(const Brdf& b, bool non_negative) {
     const Vec3 dirs[] = {{0, 0, 1}, {0.6, 0, 0.8}, {-0.3, 0.4, 0.866}, {0.99, 0.1, 0.0999}, {0, -0.999, 0.0447}};
     for (const Vec3& a : dirs)
@@ -76,7 +111,7 @@ void check(const Brdf& b, bool non_negative) {
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
     if (size == 0) return 0;
-    const int kind = data[0] % 5;
+    const int kind = data[0] % 6;
     ++data, --size;
     static const std::string base = fuzz::input_file(nullptr, 0, ".payload");
     const std::string path = base + (kind == 4 ? ".bsdf" : ".brdfz");
@@ -96,14 +131,15 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
                 break;
             }
             case 3: test::write_rgl_container(path, tensors(data, size)); break;
-            default: test::write_bsdf(path, tensors(data, size)); break;
+            case 4: test::write_bsdf(path, tensors(data, size)); break;
+            default: test::write_pca(path, pca_parts(data, size)); break;
         }
     } catch (const Error&) {
         std::abort();  // the envelope itself must always be writable
     }
     try {
         const Loaded l = load(path);
-        check(*l.brdf, kind < 3);
+        check(*l.brdf, kind < 3 || kind == 5);
     } catch (const Error&) {
     }
     return 0;

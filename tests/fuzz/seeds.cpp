@@ -43,7 +43,7 @@ int main(int argc, char** argv) try {
     fs::create_directories(dir / "payload");
     const float hostile[] = {0.5f, std::numeric_limits<float>::infinity(), -std::numeric_limits<float>::infinity(),
                              std::numeric_limits<float>::quiet_NaN(), -1.0f, 3e38f, 0.0f, 1e-30f};
-    for (unsigned char kind = 0; kind < 5; ++kind)
+    for (unsigned char kind = 0; kind < 6; ++kind)
         for (std::size_t h = 0; h < std::size(hostile); ++h) {
             std::string bytes(1, static_cast<char>(kind));
             for (int k = 0; k < 300; ++k) {

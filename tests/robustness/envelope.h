@@ -10,11 +10,13 @@
 #include <string>
 #include <vector>
 
+#include <cstdio>
 #include <cstring>
 #include <fstream>
 
 #include "brdfz/formats/container.h"
 #include "brdfz/formats/rgl.h"
+#include "container/checksum.h"
 #include "container/h5.h"
 
 namespace brdfz::test {
@@ -96,6 +98,49 @@ inline void write_analytic(const std::string& path, const std::string& model, co
         rep.attr("model", model);
         rep.attr("param_names", std::span<const std::string>(names));
         rep.dataset("params", container::h5::DType::F64, {params.size()}, params.data());
+    });
+}
+
+// The parts of a PCA material with its basis embedded (formats/SPEC.md, "pca"), on an nh x nd x np
+// grid with centre bins: median and mean of 3 values per bin, components [k_max, bins, 3], variances
+// [k_max], k coefficients. The basis's content hash is computed as the spec defines it, so that it
+// matches whatever the values are.
+struct PcaParts {
+    std::uint64_t nh = 0, nd = 0, np = 0;
+    double epsilon = 1e-3;
+    std::vector<float> median, mean, components, coefficients;
+    std::vector<double> variances;
+};
+
+inline void write_pca(const std::string& path, const PcaParts& p) {
+    char record[256];
+    std::snprintf(record, sizeof record,
+                  "brdfz pca basis 1\ngrid %llux%llux%llu centre\ntransform log-cosine-median %.17g\nk_max %zu\n",
+                  static_cast<unsigned long long>(p.nh), static_cast<unsigned long long>(p.nd),
+                  static_cast<unsigned long long>(p.np), p.epsilon, p.variances.size());
+    static_assert(std::endian::native == std::endian::little, "the hash covers little-endian values");
+    container::Sha256 h;
+    h.update(record, std::strlen(record));
+    for (const std::vector<float>* part : {&p.median, &p.mean, &p.components})
+        h.update(part->data(), part->size() * sizeof(float));
+    h.update(p.variances.data(), p.variances.size() * sizeof(double));
+    const std::string hash = container::hex(h.finish());
+    write_envelope(path, "pca", [&](container::h5::WriteNode& rep) {
+        grid_attrs(rep, p.nh, p.nd, p.np);
+        const std::uint64_t k_max = p.variances.size();
+        const std::vector<std::uint64_t> table{p.nh, p.nd, p.np, 3};
+        rep.attr("transform", std::string("log-cosine-median"));
+        rep.attr("epsilon", p.epsilon);
+        rep.attr("k", std::uint64_t{p.coefficients.size()});
+        rep.attr("k_max", k_max);
+        rep.attr("basis_storage", std::string("embedded"));
+        rep.attr("basis_sha256", hash);
+        if (!p.coefficients.empty())
+            rep.dataset("coefficients", container::h5::DType::F32, {p.coefficients.size()}, p.coefficients.data());
+        rep.dataset("median", container::h5::DType::F32, table, p.median.data());
+        rep.dataset("mean", container::h5::DType::F32, table, p.mean.data());
+        rep.dataset("components", container::h5::DType::F32, {k_max, p.nh, p.nd, p.np, 3}, p.components.data());
+        rep.dataset("variances", container::h5::DType::F64, {k_max}, p.variances.data());
     });
 }
 

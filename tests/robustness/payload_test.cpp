@@ -3,6 +3,7 @@
 #include <catch2/catch.hpp>
 
 #include <cmath>
+#include <functional>
 #include <cstring>
 #include <limits>
 #include <random>
@@ -162,6 +163,64 @@ TEST_CASE("robustness: PCA coefficients that reconstruct beyond the float range 
     for (const std::vector<float>& c : {std::vector<float>{3e38f, -3e38f}, std::vector<float>{1e6f, 0.0f}}) {
         container::write(p.string(), PcaBrdf(basis, c, Lookup::Linear, PcaBrdf::BasisStorage::Embedded));
         CHECK_THAT(load_error(p), Catch::Contains("beyond the float range"));
+    }
+}
+
+TEST_CASE("robustness: PCA bases with values that are not finite, or negative medians, are refused at load",
+          "[robustness][container][pca]") {
+    const test::TempDir dir;
+    const GridSpec g{4, 4, 8};
+    std::vector<Table> tables;
+    for (double alpha : {0.1, 0.2, 0.4}) {
+        TabulateOptions o;
+        o.grid = g;
+        tables.push_back(tabulate(AnalyticBrdf("lambert+ggx", {0.3, 0.4, 0.5, 0.5, 0.5, 0.5, alpha, 0.04}), o).table);
+    }
+    PcaTrainOptions o;
+    o.k_max = 2;
+    const std::vector<const Table*> ptrs{&tables[0], &tables[1], &tables[2]};
+    const PcaBasis basis = train_pca_basis(ptrs, o);
+    test::PcaParts good{4, 4, 8, basis.epsilon(), {basis.median().begin(), basis.median().end()},
+                        {basis.mean().begin(), basis.mean().end()},
+                        {basis.components().begin(), basis.components().end()}, {},
+                        {basis.variances().begin(), basis.variances().end()}};
+    const auto shared = std::make_shared<const PcaBasis>(basis);
+    good.coefficients = shared->project(tables[1], 2);
+    const fs::path p = dir.path / "p.brdfz";
+    // The envelope itself is valid: the same parts load and evaluate as the library's own file does.
+    test::write_pca(p.string(), good);
+    REQUIRE(load_error(p) == "loaded");
+    const auto loaded = load(p.string()).brdf;
+    check_evaluates(*loaded);
+    const PcaBrdf direct(shared, good.coefficients, Lookup::Linear, PcaBrdf::BasisStorage::Embedded);
+    const Vec3 wi = normalize(Vec3{0.3, 0.1, 0.9}), wo = normalize(Vec3{-0.2, 0.4, 0.8});
+    CHECK(loaded->eval(wi, wo)[1] == Approx(direct.eval(wi, wo)[1]).epsilon(1e-6));
+
+    std::size_t kept = 0;  // a bin the basis keeps (its median is a number)
+    while (std::isnan(good.median[3 * kept])) ++kept;
+    struct Case {
+        const char* what;
+        std::function<void(test::PcaParts&)> spoil;
+        const char* message;
+    };
+    const std::vector<Case> cases{
+        {"mean +Inf", [](test::PcaParts& q) { q.mean[5] = kInf; }, "the mean has a value that is not finite"},
+        {"mean NaN", [](test::PcaParts& q) { q.mean[0] = kNaN; }, "the mean has a value that is not finite"},
+        {"component -Inf", [](test::PcaParts& q) { q.components[7] = -kInf; }, "a component has a value that is not finite"},
+        {"variance NaN", [](test::PcaParts& q) { q.variances[1] = std::nan(""); }, "variance is not finite and >= 0"},
+        {"variance < 0", [](test::PcaParts& q) { q.variances[0] = -1.0; }, "variance is not finite and >= 0"},
+        {"median < 0", [&](test::PcaParts& q) { q.median[3 * kept + 1] = -0.5f; }, "has a median that is not finite and >= 0"},
+        {"median +Inf", [&](test::PcaParts& q) { q.median[3 * kept] = kInf; }, "has a median that is not finite and >= 0"},
+        {"components 3e38", [](test::PcaParts& q) { std::fill(q.components.begin(), q.components.end(), 3e38f); },
+         "beyond the float range"},
+        {"epsilon 0", [](test::PcaParts& q) { q.epsilon = 0.0; }, "epsilon"},
+    };
+    for (const Case& c : cases) {
+        INFO(c.what);
+        test::PcaParts bad = good;
+        c.spoil(bad);
+        test::write_pca(p.string(), bad);
+        CHECK_THAT(load_error(p), Catch::Contains(c.message));
     }
 }
 

@@ -230,3 +230,49 @@ def test_diff_against_a_reference_without_reflectance_is_an_error(cli, demo_tabl
     proc = run(cli, "diff", alta, demo_table, check=False)
     assert proc.returncode == 1 and "inf" not in proc.stdout
     assert "zero or negative at every sample" in one_error_line(proc)
+
+
+def info_lines(cli, path):
+    """info's text lines as key -> rest ("dims", "valid", "range", ...)."""
+    out = {}
+    for line in run(cli, "info", path).stdout.splitlines()[1:]:
+        key, _, rest = line.strip().partition(" ")
+        out.setdefault(key, rest.strip())
+    return out
+
+
+def test_info_and_convert_say_what_a_stored_representation_holds(cli, demo_table, tmp_path):
+    """svd factors, analytic parameters and RGL tensors in a container: their grid, parameters or
+    tensor and how many entries are valid, not "dims -, valid 0, range [0, 0]"."""
+    svd = tmp_path / "s.brdfz"
+    run(cli, "compress", demo_table, "-o", svd, "--repr", "svd:rank=2,res=16x16x32")
+    model = tmp_path / "lambert.json"
+    model.write_text('{"format": "brdfz-analytic", "version": 1, "model": "lambert", "parameters": '
+                     '{"lambert.rho_r": 0.3, "lambert.rho_g": 0.4, "lambert.rho_b": 0.5}}')
+    bsdf = tmp_path / "r.bsdf"
+    run(cli, "convert", demo_table, bsdf, "--res", "8x8x16")
+    converted = {}
+    for name, src in [("svd", svd), ("analytic", model), ("rgl", bsdf)]:
+        out = tmp_path / f"{name}-copy.brdfz"
+        converted[name] = (out, run(cli, "convert", src, out).stdout.strip())
+    info = {name: info_lines(cli, out) for name, (out, _) in converted.items()}
+
+    assert info["svd"]["dims"] == "16x16x32 (grid of the rank-2 svd factors)"
+    assert info["svd"]["valid"] == "8192" and info["svd"]["range"] == "- (nothing stored is a value of f_r)"
+    assert converted["svd"][1].endswith(": 8192 valid entries")
+    assert info["analytic"]["dims"] == "3 (parameters)" and info["analytic"]["valid"] == "3"
+    assert info["analytic"]["range"] == "[0.3, 0.5] (parameter values)"
+    assert converted["analytic"][1].endswith(": 3 valid entries")
+    assert info["rgl"]["dims"].endswith("(rgb tensor of the RGL file)")
+    valid = int(info["rgl"]["valid"])
+    assert valid > 0 and converted["rgl"][1].endswith(f": {valid} valid entries")
+    low, high = info["rgl"]["range"].removesuffix(" (stored values)").strip("[]").split(", ")
+    assert float(low) >= 0 and float(high) > 0
+
+
+def test_an_unknown_output_extension_lists_the_writable_formats(cli, demo_table, tmp_path):
+    proc = run(cli, "compress", demo_table, "-o", tmp_path / "x.xyz", "--repr", "tabular:res=4x4x8", check=False)
+    assert proc.returncode == 1 and not (tmp_path / "x.xyz").exists()
+    message = one_error_line(proc)
+    assert "unknown file extension '.xyz'" in message and ".exr" in message and ".brdfz" in message
+    assert ".dat" not in message and ".brdf," not in message  # ALTA and Cornell are read-only

@@ -30,6 +30,8 @@ def m(brdfz, tmp_path_factory):
     lambda b, m, p: b.albedo(None, [0.1]),
     lambda b, m, p: b.save(None, p / "x.binary"),
     lambda b, m, p: b.fit(None, "lambert"),
+    lambda b, m, p: b.metric_samples(None),
+    lambda b, m, p: b.validate(None),
 ])
 def test_none_for_a_brdf_is_a_type_error(brdfz, m, tmp_path, call):
     with pytest.raises(TypeError):
