@@ -12,7 +12,7 @@ import pytest
 
 from conftest import run
 
-FORMATS = [".brdfz", ".binary", ".exr", ".bsdf"]
+FORMATS = [".brdfz", ".binary", ".exr", ".bsdf", ".npy"]
 
 
 def temporaries(folder):
@@ -86,13 +86,16 @@ def test_a_full_disk_is_one_line_and_no_file(cli, demo_table, tmp_path, ext):
 
 
 def test_new_files_follow_the_umask_and_replaced_ones_keep_their_mode(cli, demo_table, tmp_path):
-    for ext in FORMATS:
+    model = tmp_path / "lambert.json"  # the analytic model writer, from a model
+    model.write_text('{"format": "brdfz-analytic", "version": 1, "model": "lambert", "parameters": '
+                     '{"lambert.rho_r": 0.3, "lambert.rho_g": 0.4, "lambert.rho_b": 0.5}}')
+    for ext, src in [(ext, demo_table) for ext in FORMATS] + [(".json", model)]:
         out = tmp_path / f"m{ext}"
-        subprocess.run([cli, "convert", str(demo_table), str(out), "--res", "8x8x16"], check=True,
+        subprocess.run([cli, "convert", str(src), str(out), "--res", "8x8x16"], check=True,
                        capture_output=True, preexec_fn=lambda: os.umask(0o027))
         assert stat.S_IMODE(out.stat().st_mode) == 0o640, ext
         out.chmod(0o600)
-        run(cli, "convert", demo_table, out, "--res", "8x8x16")
+        run(cli, "convert", src, out, "--res", "8x8x16")
         assert stat.S_IMODE(out.stat().st_mode) == 0o600, ext
 
 
