@@ -123,7 +123,8 @@ void add_compress(CLI::App& app) {
         if (!args->automatic && args->repr.empty()) throw ValueError("compress: give --repr SPEC or --auto --max-error E");
         if (args->automatic && !(args->max_error > 0.0)) throw ValueError("compress --auto: give --max-error E > 0");
         // Check what can be checked before spending time on loading and building.
-        if (!args->automatic) ReprSpec::parse(args->repr);
+        if (!args->automatic) check_spec(args->repr);
+        for (const std::string& c : args->candidates) check_spec(c);
         format_of(args->out, Access::Write);
         SelectOptions select;
         if (args->automatic) {

@@ -3,12 +3,14 @@
 // written as a MERL table, read back (checked bit-identical), reported, and compared with the
 // analytic original; then every setting of the compression benchmark is built from the table and
 // measured (table printed, CSV written for scripts/demo's charts: python -m brdfz.bench --from-csv).
+// Exit status 1 when a representation could not be built (after the table and the CSV are written).
 #include <chrono>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <iostream>
 
+#include "brdfz/compress.h"
 #include "brdfz/errors.h"
 #include "brdfz/formats/merl.h"
 #include "brdfz/metrics.h"
@@ -29,6 +31,8 @@ void add_demo(CLI::App& app) {
     cmd->add_option("--repr", *specs, "a representation to build and measure (repeatable; default: every setting of "
                                       "the compression benchmark)");
     cmd->callback([out_dir, specs] {
+        // A misspelt representation is refused before the work starts.
+        for (const std::string& spec : *specs) check_spec(spec);
         using clock = std::chrono::steady_clock;
         const CoatedDiffuse material;
         std::cout << "material: " << material.describe() << "\n\n";
@@ -69,7 +73,9 @@ void add_demo(CLI::App& app) {
         std::ofstream csv(csv_path);
         csv << kSweepCsvHeader << "\n";
         const auto input_bytes = std::filesystem::file_size(path);
-        for (const std::string& spec : specs->empty() ? benchmark_specs() : *specs) {
+        const std::vector<std::string> built = specs->empty() ? benchmark_specs() : *specs;
+        std::size_t failed = 0;
+        for (const std::string& spec : built) {
             std::snprintf(line, sizeof line, "   %-34s ", spec.c_str());
             std::cout << line << std::flush;  // the fits take seconds: show what is being built
             try {
@@ -82,11 +88,15 @@ void add_demo(CLI::App& app) {
             } catch (const Error& e) {
                 csv << sweep_csv_row("coated-diffuse", "merl", spec, input_bytes, nullptr, e.what()) << "\n";
                 std::cout << "failed: " << e.what() << "\n";
+                ++failed;
             }
         }
         csv.close();
         if (!csv) throw IoError(csv_path, "cannot write");
         std::cout << "   wrote " << csv_path << "\n";
+        if (failed)
+            throw Error("demo: " + std::to_string(failed) + " of " + std::to_string(built.size()) +
+                        " representations could not be built (their rows above say why)");
         std::cout << "\noutputs are in " << std::filesystem::absolute(*out_dir).string() << "\n";
     });
 }

@@ -1,6 +1,8 @@
 // brdfz eval FILE --wi x,y,z --wo x,y,z | --pairs PAIRS.csv
 // Prints f (no cosine) as one "r,g,b" row per pair, full precision, in input order. All input is
 // parsed before anything is printed, so a bad row produces an error and no partial output.
+#include <cstdlib>
+#include <cstring>
 #include <fstream>
 #include <iostream>
 #include <sstream>
@@ -12,18 +14,40 @@
 namespace brdfz::cli {
 namespace {
 
+// A header is a first row without a single numeric field ("wix,wiy,..."); a row with one (7 or 5
+// columns, ';' separators, an empty cell, "1e") is a malformed data row, refused so that output rows
+// stay in line with input rows.
+bool is_header(const std::string& line) {
+    const char* p = line.c_str();
+    while (*p) {
+        p += std::strspn(p, ",; \t\r");
+        if (!*p) break;
+        char* end = nullptr;
+        std::strtod(p, &end);
+        if (end != p) return false;
+        p += std::strcspn(p, ",; \t\r");
+    }
+    return true;
+}
+
 void read_pairs(const std::string& path, std::vector<Vec3>& wi, std::vector<Vec3>& wo) {
     std::ifstream in(path);
     if (!in) throw IoError(path, "cannot open");
     std::string line;
+    bool first = true;
     for (int lineno = 1; std::getline(in, line); ++lineno) {
+        if (lineno == 1 && line.starts_with("\xEF\xBB\xBF")) line.erase(0, 3);  // a UTF-8 byte order mark
         if (line.find_first_not_of(" \t\r") == std::string::npos) continue;
+        const std::string where = path + ":" + std::to_string(lineno);
         double v[6];
         if (!parse_numbers(line, v, 6)) {
-            if (lineno == 1) continue;  // a header line
-            throw FormatError(path + ":" + std::to_string(lineno), "expected 6 numbers wix,wiy,wiz,wox,woy,woz");
+            if (first && is_header(line)) {
+                first = false;
+                continue;
+            }
+            throw FormatError(where, "expected 6 comma-separated numbers wix,wiy,wiz,wox,woy,woz");
         }
-        const std::string where = path + ":" + std::to_string(lineno);
+        first = false;
         wi.push_back(unit_direction(v, where));
         wo.push_back(unit_direction(v + 3, where));
     }

@@ -2,12 +2,13 @@
 // Fits an analytic model (a sum of lobes) to any BRDF file or scattered measurements (Cornell, ALTA),
 // prints the fit report and writes the model: OUT.json (docs/model-json.md, with the fit's provenance)
 // or OUT.brdfz store it as parameters; table formats (.binary, .exr) tabulate it. Exit status: 0 when the fit converged (possibly with
-// parameters on their bounds, or poor: the status line says "but poor fit" and a warning why), 2 when
+// parameters on their bounds, or poor: the status line says "but poor fit" and a warning why), 1 when
 // it did not (no_convergence: the best parameters are still written; insufficient_data: nothing is
-// written).
+// written), with one line on stderr saying which.
 #include <cstdio>
 #include <iostream>
 
+#include "brdfz/errors.h"
 #include "brdfz/fit/fit.h"
 #include "brdfz/formats/model_json.h"
 #include "commands.h"
@@ -82,7 +83,8 @@ void print_report(const std::string& in, const FitResult& r, RobustLoss robust, 
        << p.excluded_invalid << " without a finite value";
     if (p.grid_bins) os << " (drawn from " << p.grid_bins << " grid bins inside the cut-off)";
     os << "\n"
-       << "  starts       " << p.starts << ", best #" << p.best_start << ", subset costs";
+       << "  starts       " << p.starts << ", "
+       << (p.best_start < 0 ? std::string("none usable") : "best #" + std::to_string(p.best_start)) << ", subset costs";
     for (double c : p.start_costs) os << " " << fmt("%.4g", c);
     os << "\n  iterations   " << p.iterations << " for the kept start (" << p.total_iterations << " in all), "
        << (p.termination.empty() ? "no solve" : p.termination) << "\n"
@@ -116,13 +118,17 @@ void add_fit(CLI::App& app) {
     };
     auto args = std::make_shared<Args>();
     CLI::App* cmd = app.add_subcommand("fit", "fit an analytic model (e.g. lambert+ggx) to a BRDF or measurements; "
-                                              "exit 2 when the fit did not converge");
+                                              "exit 1 when the fit did not converge");
     cmd->add_option("IN", args->in, "BRDF file or measurements (.brdf, .dat)")->required();
     cmd->add_option("--model", args->model, "lobes joined by '+': " + lobe_family_names())->required();
     cmd->add_option("-o,--out", args->out, "output: .json or .brdfz keep the model, .binary/.exr tabulate it")->required();
     cmd->add_option("--loss", args->loss, "cos (cosine-weighted L2), log (ln(1+f cos)) or cbrt")->capture_default_str();
-    cmd->add_option("--starts", args->fit.starts, "seeded starts; the best is refined")->capture_default_str();
-    cmd->add_option("--seed", args->fit.seed, "seed of the starts and the sample subset")->capture_default_str();
+    cmd->add_option("--starts", args->fit.starts, "seeded starts; the best is refined")
+        ->capture_default_str()
+        ->check(CLI::Range(1, FitOptions::kMaxStarts));
+    cmd->add_option("--seed", args->fit.seed, "seed of the starts and the sample subset")
+        ->capture_default_str()
+        ->check(unsigned_integer());
     cmd->add_option("--robust", args->robust, "robust loss: none, huber or cauchy")->capture_default_str();
     cmd->add_option("--robust-scale", args->fit.robust_scale, "residual where the robust loss bends")->capture_default_str();
     cmd->add_option("--max-theta", args->fit.max_theta_deg, "leave out theta_i or theta_o at or above (degrees)")
@@ -168,7 +174,10 @@ void add_fit(CLI::App& app) {
             written = args->out;
         }
         print_report(args->in, r, o.robust, written, args->json, std::cout);
-        if (p.status == FitStatus::NoConvergence || p.status == FitStatus::InsufficientData) throw CLI::RuntimeError(2);
+        if (p.status == FitStatus::InsufficientData)
+            throw Error(args->in + ": insufficient data to fit " + p.model + "; nothing written");
+        if (p.status == FitStatus::NoConvergence)
+            throw Error(args->in + ": the fit did not converge; its best parameters were written to " + args->out);
     });
 }
 

@@ -2,7 +2,9 @@
 
 #include <unistd.h>
 
+#include <charconv>
 #include <cmath>
+#include <cstdint>
 #include <cstdio>
 #include <cstdlib>
 #include <iostream>
@@ -82,6 +84,18 @@ Vec3 parse_direction(const std::string& text, const std::string& option) {
     double v[3];
     if (!parse_numbers(text, v, 3)) throw ValueError(option + ": expected x,y,z");
     return unit_direction(v, option);
+}
+
+CLI::Validator unsigned_integer() {
+    return CLI::Validator(
+        [](std::string& text) -> std::string {
+            std::uint64_t v = 0;
+            const auto [end, ec] = std::from_chars(text.data(), text.data() + text.size(), v);
+            if (text.empty() || ec != std::errc() || end != text.data() + text.size())
+                return "'" + text + "' is not an integer in [0, " + std::to_string(UINT64_MAX) + "]";
+            return {};
+        },
+        "UINT");
 }
 
 GridSpec parse_resolution(const std::string& text) {

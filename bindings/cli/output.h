@@ -38,6 +38,10 @@ Vec3 unit_direction(const double* v, const std::string& where);
 // "x,y,z" -> unit direction; ValueError naming the option otherwise.
 Vec3 parse_direction(const std::string& text, const std::string& option);
 
+// A check for unsigned integer options (seeds): plain decimal digits within uint64_t. CLI11 alone wraps
+// "-1" round to 2^64 - 1 and saturates values past the range.
+CLI::Validator unsigned_integer();
+
 // "90x90x180" -> GridSpec; ValueError otherwise.
 GridSpec parse_resolution(const std::string& text);
 

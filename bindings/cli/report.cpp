@@ -102,6 +102,13 @@ void write_source_keys(JsonWriter& j, const std::string& path, const SourceInfo&
     j.key("negative").value(info.counts.negative);
     j.key("nan").value(info.counts.nan);
     j.key("inf").value(info.counts.inf);
+    j.key("fields").begin_object();
+    for (const auto& [name, c] : info.fields) {
+        j.key(name).begin_object();
+        j.key("valid").value(c.valid).key("negative").value(c.negative).key("nan").value(c.nan).key("inf").value(c.inf);
+        j.end_object();
+    }
+    j.end_object();
 }
 
 void print_source_lines(std::ostream& os, const std::string& path, const SourceInfo& info, const std::string& describe,
@@ -118,6 +125,10 @@ void print_source_lines(std::ostream& os, const std::string& path, const SourceI
        << "  negative   " << info.counts.negative << notes.negative << "\n"
        << "  nan        " << info.counts.nan << notes.nan << "\n"
        << "  inf        " << info.counts.inf << notes.inf << "\n";
+    for (const auto& [name, c] : info.fields)
+        if (c.negative || c.nan || c.inf)
+            os << "  field      " << name << ": " << c.negative << " negative, " << c.nan << " NaN, " << c.inf
+               << " Inf of " << c.valid + c.negative + c.nan + c.inf << "\n";
 }
 
 void print_info(const std::string& path, const Loaded& loaded, bool json, std::ostream& os,

@@ -105,12 +105,17 @@ void directions(const Rows& rows, std::size_t begin, std::span<Vec3> out, const 
         normalise(rows.data<double>(), begin, out, name);
 }
 
-// Rows [begin, begin + out.size()) of an (N, 2) array.
-void pairs(const Rows& rows, std::size_t begin, std::span<std::array<double, 2>> out) {
+// Rows [begin, begin + out.size()) of an (N, 2) array of random numbers; ValueError naming the row
+// for one outside [0, 1) or NaN (the samplers would return a null sample for it, silently).
+void pairs(const Rows& rows, std::size_t begin, std::span<std::array<double, 2>> out, const char* name) {
     for (std::size_t k = 0; k < out.size(); ++k) {
         const std::size_t j = 2 * (begin + k);
         out[k] = rows.f32 ? std::array<double, 2>{rows.data<float>()[j], rows.data<float>()[j + 1]}
                           : std::array<double, 2>{rows.data<double>()[j], rows.data<double>()[j + 1]};
+        for (double u : out[k])
+            if (!(u >= 0.0 && u < 1.0))
+                throw ValueError(std::string(name) + "[" + std::to_string(begin + k) + "]: " + std::to_string(u) +
+                                 " is outside [0, 1)");
     }
 }
 
@@ -174,7 +179,7 @@ std::tuple<Array, Array, Array> sample(const Brdf& brdf, const ArrayArg& wo_obj,
         for (std::size_t begin = 0; begin < n; begin += kBlock) {
             const std::size_t m = std::min(kBlock, n - begin);
             directions(wo_rows, begin, std::span(wo.data(), m), "wo");
-            pairs(u_rows, begin, std::span(u.data(), m));
+            pairs(u_rows, begin, std::span(u.data(), m), "u");
             brdf.sample(std::span(wo.data(), m), std::span(u.data(), m), std::span(samples.data(), m));
             for (std::size_t k = 0; k < m; ++k) {
                 const BrdfSample& s = samples[k];
@@ -219,7 +224,7 @@ void bind_brdf(py::module_& m) {
         .def("eval_cos", &eval<true>, py::arg("wi"), py::arg("wo"), "f_r·cosθi at direction pairs -> (N, 3) float64")
         .def("pdf", &pdf, py::arg("wo"), py::arg("wi"), "density of sample(wo, ·) at wi per unit solid angle -> (N,)")
         .def("sample", &sample, py::arg("wo"), py::arg("u"),
-             "draws wi for each wo from u in [0, 1)^2 of shape (N, 2) -> (wi (N, 3), pdf (N,), weight (N, 3)); "
+             "draws wi for each wo from u in [0, 1)^2 of shape (N, 2) (ValueError naming a row outside it) -> (wi (N, 3), pdf (N,), weight (N, 3)); "
              "weight = f·cosθi/pdf, failed samples have pdf 0 and weight 0")
         .def_property_readonly("channels", &Brdf::channels, "1 (monochrome, repeated in r, g, b) or 3")
         .def_property_readonly("nbytes", &Brdf::nbytes, "exact size of the stored parameters in bytes")

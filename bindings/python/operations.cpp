@@ -203,7 +203,7 @@ void bind_operations(py::module_& m) {
               if (!source_metrics.is_none()) o.source_metrics = source_metrics.cast<Metrics>();
               return save_counts(*brdf, path, o, std::move(progress));
           },
-          py::arg("brdf"), py::arg("path"), py::kw_only(), py::arg("res") = py::none(), py::arg("format") = "",
+          py::arg("brdf").none(false), py::arg("path"), py::kw_only(), py::arg("res") = py::none(), py::arg("format") = "",
           py::arg("threads") = 0, py::arg("progress") = py::none(), py::arg("build_spec") = "",
           py::arg("source") = py::none(), py::arg("source_metrics") = py::none(),
           "writes atomically (format from the extension unless given); returns the written bins' counts. .brdfz "
@@ -253,7 +253,7 @@ void bind_operations(py::module_& m) {
               bar.rethrow();
               return Built{BrdfPtr(std::move(c.brdf)), c.spec, c.build_seconds, c.notes};
           },
-          py::arg("brdf"), py::arg("spec"), py::kw_only(), py::arg("threads") = 0, py::arg("progress") = py::none(),
+          py::arg("brdf").none(false), py::arg("spec"), py::kw_only(), py::arg("threads") = 0, py::arg("progress") = py::none(),
           "builds the representation SPEC names (as `brdfz compress`)");
     m.def("compress_kinds", &compress_kinds);
     m.def("representations", [] {
@@ -319,7 +319,7 @@ void bind_operations(py::module_& m) {
               if (const auto* set = std::get_if<MeasurementSet>(&ref)) return compare(*set, *approx, o);
               return compare(*std::get<BrdfPtr>(ref), *approx, o);
           },
-          py::arg("reference"), py::arg("approx"), py::kw_only(), py::arg("max_theta") = 80.0, py::arg("threads") = 0,
+          py::arg("reference"), py::arg("approx").none(false), py::kw_only(), py::arg("max_theta") = 80.0, py::arg("threads") = 0,
           py::arg("over") = "grid", py::arg("directions") = MetricOptions{}.directions, py::arg("seed") = MetricOptions{}.seed,
           "metrics of approx against reference (a Brdf, or a file: a BRDF or Cornell/ALTA measurements)");
     m.def("metric_samples", [](const BrdfPtr& reference, double max_theta, int threads, const std::string& over,
@@ -332,7 +332,7 @@ void bind_operations(py::module_& m) {
               }
               return py::make_tuple(to_rows(s.wi), to_rows(s.wo), to_rows(s.reference));
           },
-          py::arg("reference"), py::kw_only(), py::arg("max_theta") = 80.0, py::arg("threads") = 0,
+          py::arg("reference").none(false), py::kw_only(), py::arg("max_theta") = 80.0, py::arg("threads") = 0,
           py::arg("over") = "grid", py::arg("directions") = MetricOptions{}.directions, py::arg("seed") = MetricOptions{}.seed,
           "(wi, wo, f_reference): the samples metrics() takes against reference");
     m.def("metrics_at", [](const py::object& wi_obj, const py::object& ref_obj, const py::object& app_obj) {
@@ -434,7 +434,7 @@ void bind_operations(py::module_& m) {
               bar.rethrow();
               return out;
           },
-          py::arg("brdf"), py::arg("res") = std::make_tuple(90, 90, 180), py::kw_only(), py::arg("lookup") = "linear",
+          py::arg("brdf").none(false), py::arg("res") = std::make_tuple(90, 90, 180), py::kw_only(), py::arg("lookup") = "linear",
           py::arg("negative") = "clamp", py::arg("threads") = 0, py::arg("progress") = py::none(),
           "the Brdf evaluated on a (θh, θd, φd) Rusinkiewicz grid at bin centres, as a table");
 
@@ -455,7 +455,7 @@ void bind_operations(py::module_& m) {
               }
               return out;
           },
-          py::arg("brdf"), py::arg("theta_o"),
+          py::arg("brdf").none(false), py::arg("theta_o"),
           "directional albedo (quadrature, albedo.h) at θo in radians: shape of theta_o + (3,)");
 
     py::class_<ValidationCheck>(m, "ValidationCheck", "one plausibility check (validate.h)")
@@ -499,7 +499,7 @@ void bind_operations(py::module_& m) {
               py::gil_scoped_release release;
               return validate(*brdf, o);
           },
-          py::arg("brdf"), py::kw_only(), py::arg("res") = std::make_tuple(90, 90, 180),
+          py::arg("brdf").none(false), py::kw_only(), py::arg("res") = std::make_tuple(90, 90, 180),
           py::arg("theta") = ValidateOptions{}.theta_deg, py::arg("rtol") = 0.05, py::arg("atol") = 1e-3,
           py::arg("albedo_tol") = 0.01,
           "non-negativity (a table's values, else f on the res grid), reciprocity (rtol, atol in 1/sr) and "

@@ -121,7 +121,7 @@ void bind_select(py::module_& m) {
               r.brdf = BrdfPtr(std::move(t->brdf));
               return r;
           },
-          py::arg("brdf"), py::arg("spec"), py::kw_only(), py::arg("measure_speed") = true, py::arg("max_theta") = 80.0,
+          py::arg("brdf").none(false), py::arg("spec"), py::kw_only(), py::arg("measure_speed") = true, py::arg("max_theta") = 80.0,
           py::arg("threads") = 0, py::arg("over") = "grid", py::arg("directions") = MetricOptions{}.directions,
           py::arg("seed") = MetricOptions{}.seed, py::arg("progress") = py::none(),
           "compress(brdf, spec) and measure it: bytes, metrics, eval speed, build time");
@@ -166,7 +166,7 @@ void bind_select(py::module_& m) {
               if (out.chosen >= 0) out.brdf = out.candidates[static_cast<std::size_t>(out.chosen)].brdf;
               return out;
           },
-          py::arg("brdf"), py::arg("max_error"), py::kw_only(), py::arg("metric") = "log", py::arg("scene") = py::none(),
+          py::arg("brdf").none(false), py::arg("max_error"), py::kw_only(), py::arg("metric") = "log", py::arg("scene") = py::none(),
           py::arg("candidates") = std::vector<std::string>{}, py::arg("measure_speed") = true, py::arg("threads") = 0,
           py::arg("over") = "grid", py::arg("directions") = MetricOptions{}.directions,
           py::arg("seed") = MetricOptions{}.seed, py::arg("on_candidate") = py::none(),

@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cerrno>
 #include <cstdio>
+#include <cstdlib>
 #include <cstring>
 #include <filesystem>
 #include <limits>
@@ -12,6 +13,7 @@
 
 #include "brdfz/errors.h"
 #include "checksum.h"
+#include "detail/atomic_file.h"
 
 namespace brdfz::container::h5 {
 namespace {
@@ -88,16 +90,16 @@ std::uint64_t get64(const unsigned char* p) {
 }
 
 // CRC-32C of every byte from the end of the header to `size` that no extent covers (the extents are
-// sorted and disjoint). False when the file cannot be read to `size`.
-bool structure_crc(std::FILE* f, std::uint64_t size, const std::vector<Extent>& extents, std::uint32_t* crc) {
+// sorted and disjoint); read(pos, n, out) fetches n bytes at pos. False when a read fails.
+template <typename Read>
+bool structure_crc(std::uint64_t size, const std::vector<Extent>& extents, Read read, std::uint32_t* crc) {
     std::vector<unsigned char> chunk(1 << 16);
     std::uint32_t c = 0;
     std::uint64_t pos = kHeaderSize;
     const auto gap = [&](std::uint64_t end) {
-        if (std::fseek(f, static_cast<long>(pos), SEEK_SET) != 0) return false;
         while (pos < end) {
             const std::size_t n = static_cast<std::size_t>(std::min<std::uint64_t>(chunk.size(), end - pos));
-            if (std::fread(chunk.data(), 1, n, f) != n) return false;
+            if (!read(pos, n, chunk.data())) return false;
             c = crc32c(chunk.data(), n, c);
             pos += n;
         }
@@ -114,10 +116,12 @@ bool structure_crc(std::FILE* f, std::uint64_t size, const std::vector<Extent>& 
 
 // Creation properties shared by the root group and every group and dataset: attributes and links
 // are kept in the object header (compact storage), which HDF5's checksum covers; the dense storage
-// it switches to by default beyond 8 of them (a fractal heap) is not checksummed.
+// it switches to by default beyond 8 of them (a fractal heap) is not checksummed. No object times:
+// the same content gives the same bytes.
 void keep_compact(hid_t plist, bool links) {
     H5Pset_attr_phase_change(plist, 1024, 0);
     if (links) H5Pset_link_phase_change(plist, 1024, 0);
+    H5Pset_obj_track_times(plist, false);
 }
 
 }  // namespace
@@ -170,7 +174,7 @@ Quiet::~Quiet() { H5Eset_auto2(H5E_DEFAULT, func_, data_); }
 // ---- writing ----
 
 void WriteNode::fail(const std::string& what) const {
-    throw IoError(writer_->display_path(), "cannot write " + display(path_) + ": " + what + hdf5_message());
+    throw IoError(writer_->path(), "cannot write " + display(path_) + ": " + what + hdf5_message());
 }
 
 WriteNode WriteNode::group(const std::string& name) {
@@ -245,33 +249,89 @@ void WriteNode::dataset(const std::string& name, DType type, const std::vector<s
     node.attr("crc32c", std::uint64_t{crc32c(data, count * dtype_size(type))});
 }
 
-Writer::Writer(std::string display_path, std::string tmp_path)
-    : display_path_(std::move(display_path)), tmp_path_(std::move(tmp_path)) {
+namespace {
+
+// The core driver's memory comes from these callbacks, so that the file it holds when it closes (the
+// superblock and metadata as H5Fclose finished them) is kept rather than freed. H5Fget_file_image is
+// no substitute: in HDF5 1.10 its copy of a file with a user block has a wrong superblock checksum.
+// Only the buffer the file grew into is kept; anything else HDF5 allocates through them is freed.
+H5FD_file_image_callbacks_t image_callbacks(Writer::Image* image) {
+    H5FD_file_image_callbacks_t c{};
+    c.image_malloc = [](std::size_t size, H5FD_file_image_op_t, void*) -> void* { return std::malloc(size); };
+    c.image_memcpy = [](void* dest, const void* src, std::size_t size, H5FD_file_image_op_t, void*) -> void* {
+        return std::memcpy(dest, src, size);
+    };
+    c.image_realloc = [](void* ptr, std::size_t size, H5FD_file_image_op_t, void* udata) -> void* {
+        auto* im = static_cast<Writer::Image*>(udata);
+        void* grown = std::realloc(ptr, size);
+        if (grown && (ptr == im->bytes || !im->bytes)) {
+            im->bytes = static_cast<unsigned char*>(grown);
+            im->capacity = size;
+        }
+        return grown;
+    };
+    c.image_free = [](void* ptr, H5FD_file_image_op_t op, void* udata) -> herr_t {
+        auto* im = static_cast<Writer::Image*>(udata);
+        if (ptr && ptr == im->bytes && op == H5FD_FILE_IMAGE_OP_FILE_CLOSE) {
+            im->closed = true;
+            return 0;
+        }
+        if (ptr == im->bytes) im->bytes = nullptr;
+        std::free(ptr);
+        return 0;
+    };
+    c.udata_copy = [](void* udata) -> void* { return udata; };
+    c.udata_free = [](void*) -> herr_t { return 0; };
+    c.udata = image;
+    return c;
+}
+
+}  // namespace
+
+Writer::Writer(std::string path) : path_(std::move(path)) {
     Id fcpl(H5Pcreate(H5P_FILE_CREATE), &H5Pclose);
     keep_compact(fcpl.get(), true);
     H5Pset_userblock(fcpl.get(), kHeaderSize);
     Id fapl(H5Pcreate(H5P_FILE_ACCESS), &H5Pclose);
     H5Pset_libver_bounds(fapl.get(), H5F_LIBVER_V18, H5F_LIBVER_V18);
-    file_ = Id(H5Fcreate(tmp_path_.c_str(), H5F_ACC_TRUNC, fcpl.get(), fapl.get()), &H5Fclose);
-    if (file_.get() < 0) throw IoError(display_path_, "cannot create HDF5 file" + hdf5_message());
+    H5Pset_fapl_core(fapl.get(), 1 << 20, false);  // in memory, nothing backed by a file
+    H5FD_file_image_callbacks_t callbacks = image_callbacks(&image_);
+    H5Pset_file_image_callbacks(fapl.get(), &callbacks);
+    // HDF5 first opens an existing file of the name it is given (it reads it whole with this driver,
+    // and would block on a FIFO): the name is one no file system has, unique to this writer.
+    const std::string name = "/proc/self/fd/-1/brdfz-writer-" + std::to_string(reinterpret_cast<std::uintptr_t>(this));
+    file_ = Id(H5Fcreate(name.c_str(), H5F_ACC_TRUNC, fcpl.get(), fapl.get()), &H5Fclose);
+    if (file_.get() < 0) throw IoError(path_, "cannot create HDF5 file" + hdf5_message());
+}
+
+Writer::~Writer() {
+    file_.reset();
+    if (image_.closed) std::free(image_.bytes);
 }
 
 void Writer::close() {
-    if (!file_.reset()) throw IoError(display_path_, "cannot complete HDF5 write" + hdf5_message());
-    if (extents_.size() > kMaxExtents) throw IoError(display_path_, "too many datasets for the header");
+    if (extents_.size() > kMaxExtents) throw IoError(path_, "too many datasets for the header");
+    // The file's extent, from the superblock (where the user block ends) to its end, once flushed.
+    const ssize_t size =
+        H5Fflush(file_.get(), H5F_SCOPE_GLOBAL) < 0 ? -1 : H5Fget_file_image(file_.get(), nullptr, 0);
+    if (size <= 0 || !file_.reset() || !image_.closed || kHeaderSize + static_cast<std::size_t>(size) > image_.capacity)
+        throw IoError(path_, "cannot complete HDF5 write" + hdf5_message());
+    const std::span<unsigned char> image(image_.bytes, kHeaderSize + static_cast<std::size_t>(size));
     std::sort(extents_.begin(), extents_.end(), [](const Extent& a, const Extent& b) { return a.offset < b.offset; });
 
-    File f(std::fopen(tmp_path_.c_str(), "r+b"), &std::fclose);
-    std::error_code ec;
-    const std::uint64_t size = std::filesystem::file_size(tmp_path_, ec);
     std::uint32_t crc = 0;
-    if (!f || ec || !structure_crc(f.get(), size, extents_, &crc))
-        throw IoError(display_path_, "cannot read back the written file");
-    unsigned char header[kHeaderSize] = {};
+    const auto from_image = [&](std::uint64_t pos, std::size_t n, unsigned char* out) {
+        if (pos > image.size() || n > image.size() - pos) return false;
+        std::memcpy(out, image.data() + pos, n);
+        return true;
+    };
+    if (!structure_crc(image.size(), extents_, from_image, &crc)) throw IoError(path_, "dataset extents outside the file");
+    unsigned char* header = image.data();
+    std::memset(header, 0, kHeaderSize);
     std::memcpy(header, kMagic, sizeof kMagic);
     put32(header + 8, kHeaderVersion);
     put32(header + 12, static_cast<std::uint32_t>(extents_.size()));
-    put64(header + 16, size);
+    put64(header + 16, image.size());
     put32(header + 24, crc);
     unsigned char* p = header + 32;
     for (const Extent& e : extents_) {
@@ -280,9 +340,9 @@ void Writer::close() {
         p += 16;
     }
     put32(header + kHeaderSize - 4, crc32c(header, kHeaderSize - 4));
-    if (std::fseek(f.get(), 0, SEEK_SET) != 0 || std::fwrite(header, 1, sizeof header, f.get()) != sizeof header ||
-        std::fclose(f.release()) != 0)
-        throw IoError(display_path_, "cannot write the header");
+    brdfz::detail::AtomicFile out(path_);
+    out.write(image.data(), image.size());
+    out.commit();
 }
 
 // ---- reading ----
@@ -325,7 +385,10 @@ Reader::Reader(std::string path) : path_(std::move(path)) {
         extents_.push_back(e);
     }
     std::uint32_t crc = 0;
-    if (!structure_crc(f.get(), size_, extents_, &crc)) throw IoError(path_, "read failed (file changed while reading?)");
+    const auto from_file = [&](std::uint64_t pos, std::size_t n, unsigned char* out) {
+        return std::fseek(f.get(), static_cast<long>(pos), SEEK_SET) == 0 && std::fread(out, 1, n, f.get()) == n;
+    };
+    if (!structure_crc(size_, extents_, from_file, &crc)) throw IoError(path_, "read failed (file changed while reading?)");
     if (crc != get32(header + 24))
         throw FormatError(path_, "corrupt: the HDF5 structure (metadata and attributes, outside the datasets) does "
                                  "not match its CRC-32C");

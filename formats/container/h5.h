@@ -97,25 +97,39 @@ private:
     std::string path_;
 };
 
-// Creates an HDF5 file at `tmp_path` (messages name `display_path`) in the HDF5 1.8 file format,
-// whose superblock and object headers also carry HDF5's own checksums, after the brdfz header's room.
+// Builds an HDF5 file for `path` in memory (HDF5's core driver), in the HDF5 1.8 file format, whose
+// superblock and object headers also carry HDF5's own checksums, after the brdfz header's room. Only
+// close() writes, through formats/detail/atomic_file.h: HDF5 never opens a file by name, so a killed
+// write leaves nothing, as for the other formats, and a write error is the AtomicFile's one line.
 class Writer {
 public:
-    Writer(std::string display_path, std::string tmp_path);
+    explicit Writer(std::string path);
+    ~Writer();
+    Writer(const Writer&) = delete;
+    Writer& operator=(const Writer&) = delete;
     WriteNode root() { return WriteNode(*this, Id(file_.get(), nullptr), ""); }
-    // Closes the file and writes the brdfz header; IoError on failure. Nodes must be destroyed first.
+    // Closes the file, puts the brdfz header in front and writes it to path() atomically; IoError on
+    // failure. Nodes must be destroyed first.
     void close();
-    const std::string& display_path() const { return display_path_; }
+    const std::string& path() const { return path_; }
+
+    // The core driver's memory, which HDF5 hands to image_free when the file closes (h5.cpp).
+    struct Image {
+        unsigned char* bytes = nullptr;
+        std::size_t capacity = 0;
+        bool closed = false;  // HDF5 is done with bytes: they are the finished file, the Writer's to free
+    };
 
 private:
     friend class WriteNode;
     Quiet quiet_;
-    std::string display_path_, tmp_path_;
+    std::string path_;
+    Image image_;  // declared before file_: filled when file_ closes
     Id file_;
     std::vector<Extent> extents_;
 };
 
-inline const std::string& WriteNode::file() const { return writer_->display_path(); }
+inline const std::string& WriteNode::file() const { return writer_->path(); }
 
 class Dataset {
 public:

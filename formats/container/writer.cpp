@@ -1,11 +1,14 @@
+#include <charconv>
+#include <cstdint>
+#include <cstdlib>
 #include <ctime>
 #include <filesystem>
+#include <string_view>
 
 #include "brdfz/errors.h"
 #include "brdfz/repr/compact_table.h"
 #include "brdfz/tabulate.h"
 #include "checksum.h"
-#include "detail/atomic_path.h"
 #include "storage.h"
 
 #ifndef BRDFZ_VERSION
@@ -15,8 +18,18 @@
 namespace brdfz::container {
 namespace {
 
-std::string utc_now() {
-    const std::time_t now = std::time(nullptr);
+// The `created` time: now, or SOURCE_DATE_EPOCH (reproducible-builds.org) when it is set, so that two
+// runs write identical bytes.
+std::string created_time() {
+    std::time_t now = std::time(nullptr);
+    if (const char* epoch = std::getenv("SOURCE_DATE_EPOCH")) {
+        const std::string_view text(epoch);
+        std::int64_t seconds = -1;
+        const auto [end, ec] = std::from_chars(text.data(), text.data() + text.size(), seconds);
+        if (text.empty() || ec != std::errc() || end != text.data() + text.size() || seconds < 0)
+            throw ValueError("SOURCE_DATE_EPOCH='" + std::string(text) + "' is not a number of seconds since 1970");
+        now = static_cast<std::time_t>(seconds);
+    }
     std::tm tm{};
     gmtime_r(&now, &tm);
     char buf[32];
@@ -111,9 +124,8 @@ Achieved write(const std::string& path, const Brdf& brdf, const WriteOptions& op
         source.sha256 = sha256_file(options.source);
     }
 
-    brdfz::detail::AtomicPath out(path);
     {
-        h5::Writer w(path, out.tmp_path());
+        h5::Writer w(path);
         {
             h5::WriteNode root = w.root();
             root.attr("format", std::string("brdfz"));
@@ -122,7 +134,7 @@ Achieved write(const std::string& path, const Brdf& brdf, const WriteOptions& op
             root.attr("features", std::span<const std::string>(names));
             root.attr("feature_versions", std::span<const std::uint64_t>(since));
             root.attr("library_version", std::string(BRDFZ_VERSION));
-            root.attr("created", utc_now());
+            root.attr("created", created_time());
             root.attr("source_file", source.file);
             root.attr("source_format", source.format);
             root.attr("source_sha256", source.sha256);
@@ -140,7 +152,6 @@ Achieved write(const std::string& path, const Brdf& brdf, const WriteOptions& op
         }
         w.close();
     }
-    out.commit();
     return achieved;
 }
 

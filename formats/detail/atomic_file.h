@@ -1,6 +1,12 @@
-// Write-then-rename output file: bytes go to NAME.tmp-XXXXXX beside NAME, which replaces NAME only in
-// commit(). A failed, thrown-through or killed write leaves no file at NAME (and no temporary either,
-// except after SIGKILL).
+// Atomic output files, for every writer. The bytes go to an unnamed file in the output's folder
+// (O_TMPFILE), which becomes NAME only in commit(): a failed, thrown-through or killed write (SIGKILL
+// included) leaves neither NAME nor a temporary. Where the file system has no O_TMPFILE (or /proc is
+// not mounted), a named NAME.tmp-XXXXXX beside NAME is written instead, locked (flock) while it is
+// open; a killed write leaves it behind, and the next write of NAME removes every unlocked one.
+// Writers that stream bytes call write() (the container writes the image HDF5 built in memory); a
+// library that opens the output by name (OpenEXR) writes to open_path(), a name of the same file, and
+// must have closed it before commit().
+// Modes: a new file gets 0666 less the umask, as open(2) gives; a replaced one keeps its mode.
 #pragma once
 
 #include <cstddef>
@@ -11,17 +17,38 @@ namespace brdfz::detail {
 
 class AtomicFile {
 public:
-    explicit AtomicFile(std::string path);
+    // Named: always the NAME.tmp-XXXXXX fallback (what a file system without O_TMPFILE gets).
+    enum class Temporary { Unnamed, Named };
+
+    // IoError naming `path` when the temporary cannot be created (missing folder, permissions).
+    explicit AtomicFile(std::string path, Temporary kind = Temporary::Unnamed);
     ~AtomicFile();
     AtomicFile(const AtomicFile&) = delete;
     AtomicFile& operator=(const AtomicFile&) = delete;
 
+    const std::string& path() const { return path_; }
+    // Where a library that opens files by name writes the bytes: /proc/self/fd/N of the unnamed file,
+    // or the temporary's name (HDF5 cannot take the first: it resolves the link's target by name).
+    const std::string& open_path() const { return open_path_; }
+    bool unnamed() const { return tmp_path_.empty(); }
+
     void write(const void* data, std::size_t bytes);  // IoError on failure
-    void commit();                                    // flush, fsync, rename onto the final path
+    // Flushes and fsyncs the bytes, gives them the mode (a replaced file's, or the umask's) and puts
+    // them at path() in one step (link or rename); IoError otherwise, and then nothing is at path()
+    // that was not there before.
+    void commit();
 
 private:
-    std::string path_, tmp_path_;
-    std::FILE* file_ = nullptr;
+    void open_named();
+
+    std::string path_, dir_, open_path_, tmp_path_;
+    int fd_ = -1;
+    std::FILE* stream_ = nullptr;  // write()'s buffer over fd_, opened on first use
+    bool committed_ = false;
 };
+
+// Removes the NAME.tmp-XXXXXX files that killed writes of `path` left beside it: those of this user
+// that no live writer holds locked. Called by every AtomicFile; returns how many it removed.
+int remove_stale_temporaries(const std::string& path);
 
 }  // namespace brdfz::detail

@@ -4,6 +4,7 @@
 #include <cmath>
 #include <limits>
 
+#include "brdfz/errors.h"
 #include "brdfz/tabulate.h"
 
 namespace brdfz::detail {
@@ -25,6 +26,29 @@ SourceInfo table_info(const std::string& format, const Table& t, const ValidityC
     info.min_value = lo <= hi ? lo : 0.0;
     info.max_value = lo <= hi ? hi : 0.0;
     return info;
+}
+
+ValidityCounts invalidate_out_of_range(const std::string& path, Table& table) {
+    ValidityCounts counts;
+    std::size_t values = 0;  // valid channels: a bin with one of them still has something to evaluate
+    float* v = table.data();
+    for (std::size_t b = 0; b < table.bins(); ++b) {
+        bool neg = false, nan = false, inf = false;
+        for (int c = 0; c < 3; ++c) {
+            float& x = v[3 * b + c];
+            nan = nan || std::isnan(x);
+            inf = inf || std::isinf(x);
+            neg = neg || (x < 0.0f && !std::isinf(x));
+            if (std::isinf(x) || x < 0.0f) x = std::numeric_limits<float>::quiet_NaN();
+            values += !std::isnan(x);
+        }
+        counts.valid += !neg && !nan && !inf;
+        counts.negative += neg;
+        counts.nan += nan;
+        counts.inf += inf;
+    }
+    if (values == 0) throw FormatError(path, "no valid value in the table (every entry is negative, NaN or Inf)");
+    return counts;
 }
 
 // MERL and EXR files know only the linear θd axis, so a warped table is tabulated too.

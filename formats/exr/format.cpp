@@ -11,8 +11,7 @@ namespace {
 
 Loaded read(const std::string& path, const LoadOptions& options) {
     Table t = exr::read(path);
-    ValidityCounts counts;
-    counts.valid = t.valid_bins();
+    const ValidityCounts counts = detail::invalidate_out_of_range(path, t);
     Loaded out;
     out.info = detail::table_info("exr", t, counts);
     out.brdf = std::make_unique<TabularBrdf>(std::move(t), options.lookup);

@@ -6,11 +6,12 @@
 #include <OpenEXR/ImfStringAttribute.h>
 
 #include <cmath>
+#include <string>
 #include <vector>
 
 #include "brdfz/errors.h"
 #include "brdfz/formats/exr.h"
-#include "detail/atomic_path.h"
+#include "detail/atomic_file.h"
 
 namespace brdfz::exr {
 
@@ -33,7 +34,7 @@ void write(const std::string& path, const Table& table) {
             }
     }
 
-    brdfz::detail::AtomicPath out(path);
+    brdfz::detail::AtomicFile out(path);
     try {
         Imf::Header header(width, height);
         header.compression() = Imf::ZIP_COMPRESSION;
@@ -50,11 +51,16 @@ void write(const std::string& path, const Table& table) {
             fb.insert(kNames[c], Imf::Slice(Imf::FLOAT, reinterpret_cast<char*>(planes.data() + c * plane),
                                             sizeof(float), sizeof(float) * static_cast<std::size_t>(width)));
         }
-        Imf::OutputFile file(out.tmp_path().c_str(), header);
+        Imf::OutputFile file(out.open_path().c_str(), header);
         file.setFrameBuffer(fb);
         file.writePixels(height);
     } catch (const std::exception& e) {
-        throw IoError(path, std::string("cannot write OpenEXR image: ") + e.what());
+        // OpenEXR names the file it was given: the output's, not the name of its temporary.
+        std::string what = e.what();
+        for (std::size_t at = what.find(out.open_path()); at != std::string::npos;
+             at = what.find(out.open_path(), at + path.size()))
+            what.replace(at, out.open_path().size(), path);
+        throw IoError(path, "cannot write OpenEXR image: " + what);
     }
     out.commit();
 }

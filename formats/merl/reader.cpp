@@ -41,6 +41,11 @@ ReadResult read(const std::string& path, BinPosition position) {
                                         std::to_string(GridSpec::kMaxAxis) + ")");
 
     const GridSpec grid{dims[0], dims[1], dims[2], position};
+    try {
+        grid.validate();
+    } catch (const ValueError& e) {
+        throw FormatError(path, std::string("MERL dimensions: ") + e.what());
+    }
     const std::uintmax_t n = grid.bins();
     const std::uintmax_t expected = kHeader + 3 * n * sizeof(double);
     if (size != expected)

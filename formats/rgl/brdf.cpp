@@ -1,5 +1,6 @@
 // RglBrdf: evaluation and sampling of the Dupuy-Jakob parameterisation the way Mitsuba 3's
 // `measured` plugin does them (see rgl.h for the direction mapping, the cosine and the sampler).
+#include <algorithm>
 #include <cmath>
 #include <numbers>
 
@@ -82,9 +83,19 @@ RglBrdf::RglBrdf(Tensors tensors) : tensors_(std::move(tensors)) {
         if (t.luminance.rows != t.rgb.rows || t.luminance.cols != t.rgb.cols)
             throw ValueError("rgl: luminance grid is not shaped like the rgb grid");
         check_finite("luminance", t.luminance.values);
-        luminance_ = std::make_unique<const detail::Marginal2D>("rgl: luminance", t.luminance.values,
-                                                                t.luminance.slices, t.luminance.rows,
-                                                                t.luminance.cols);
+        // Real files hold slightly negative luminance (noise; Mitsuba renders them): it is only the
+        // sampler's first warp, so it is sampled as max(v, 0), and not at all when a slice has no mass.
+        std::vector<float> density(t.luminance.values.size());
+        std::transform(t.luminance.values.begin(), t.luminance.values.end(), density.begin(),
+                       [](float v) { return std::fmax(v, 0.0f); });
+        const std::size_t plane = t.luminance.rows * t.luminance.cols;
+        bool every_slice = true;
+        for (std::size_t k = 0; k < t.luminance.slices; ++k)
+            every_slice = every_slice && std::any_of(density.begin() + k * plane, density.begin() + (k + 1) * plane,
+                                                     [](float v) { return v > 0.0f; });
+        if (every_slice)
+            luminance_ = std::make_unique<const detail::Marginal2D>("rgl: luminance", density, t.luminance.slices,
+                                                                    t.luminance.rows, t.luminance.cols);
     }
     // Mitsuba would return NaN wherever such a value contributes; 0 keeps eval finite.
     for (float& v : t.rgb.values)

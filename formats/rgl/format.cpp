@@ -15,6 +15,7 @@ Loaded read(const std::string& path, const LoadOptions&) {
     out.info.counts = r.counts;
     out.info.min_value = r.min_value;
     out.info.max_value = r.max_value;
+    out.info.fields = std::move(r.fields);
     out.brdf = std::move(r.brdf);
     return out;
 }

@@ -1,3 +1,4 @@
+#include <algorithm>
 #include <cmath>
 #include <limits>
 
@@ -47,7 +48,50 @@ Grids read_grids(const TensorFile& tf, const Field& f) {
     return g;
 }
 
+std::string counts_str(const ValidityCounts& c, std::size_t total) {
+    std::string s;
+    const auto part = [&](std::size_t n, const char* what) {
+        if (n) s += (s.empty() ? "" : ", ") + std::to_string(n) + " " + what;
+    };
+    part(c.negative, "negative");
+    part(c.nan, "NaN");
+    part(c.inf, "Inf");
+    return s + " of " + std::to_string(total) + " values";
+}
+
 }  // namespace
+
+ValidityCounts count_values(const std::vector<float>& values) {
+    ValidityCounts c;
+    for (float v : values) {
+        if (std::isnan(v)) ++c.nan;
+        else if (std::isinf(v)) ++c.inf;
+        else ++(v < 0.0f ? c.negative : c.valid);
+    }
+    return c;
+}
+
+void check_renderable(const std::string& path, const Tensors& t) {
+    const auto finite = [&](const char* field, const std::vector<float>& v, bool negatives_allowed, const char* why) {
+        const ValidityCounts c = count_values(v);
+        if (c.nan || c.inf || (c.negative && !negatives_allowed))
+            throw FormatError(path, std::string("field '") + field + "' holds " + counts_str(c, v.size()) + ": " + why);
+    };
+    finite("ndf", t.ndf.values, false, "a microfacet density is finite and >= 0");
+    finite("sigma", t.sigma.values, false, "a projected area is finite and > 0");
+    const auto zeros = static_cast<std::size_t>(std::count(t.sigma.values.begin(), t.sigma.values.end(), 0.0f));
+    if (zeros)
+        throw FormatError(path, "field 'sigma' holds " + std::to_string(zeros) + " values of 0 (of " +
+                                    std::to_string(t.sigma.values.size()) +
+                                    "): f divides by the projected area, which must be > 0");
+    finite("vndf", t.vndf.values, false, "a visible-normal density is finite and >= 0");
+    finite("luminance", t.luminance.values, true, "the sampling density must be finite");
+    const ValidityCounts rgb = count_values(t.rgb.values);
+    if (rgb.valid == 0)
+        throw FormatError(path, "field 'rgb' has no finite value >= 0 (" + std::to_string(rgb.negative) + " negative, " +
+                                    std::to_string(rgb.nan) + " NaN, " + std::to_string(rgb.inf) + " Inf of " +
+                                    std::to_string(t.rgb.values.size()) + "): nothing to render");
+}
 
 ReadResult read(const std::string& path) {
     const TensorFile tf(path);
@@ -103,20 +147,19 @@ ReadResult read(const std::string& path) {
     t.jacobian = tf.read_u8(jacobian)[0] != 0;
 
     double lo = std::numeric_limits<double>::infinity(), hi = -lo;
-    for (float v : t.rgb.values) {
-        ValidityCounts& c = result.counts;
-        if (std::isnan(v)) {
-            ++c.nan;
-        } else if (std::isinf(v)) {
-            ++c.inf;
-        } else {
-            ++(v < 0.0f ? c.negative : c.valid);
+    for (float v : t.rgb.values)
+        if (std::isfinite(v)) {
             lo = std::min<double>(lo, v);
             hi = std::max<double>(hi, v);
         }
-    }
     result.min_value = lo <= hi ? lo : 0.0;
     result.max_value = lo <= hi ? hi : 0.0;
+    result.counts = count_values(t.rgb.values);
+    result.fields = {{"ndf", count_values(t.ndf.values)}, {"sigma", count_values(t.sigma.values)},
+                     {"vndf", count_values(t.vndf.values)}};
+    if (!t.luminance.values.empty()) result.fields.emplace_back("luminance", count_values(t.luminance.values));
+    result.fields.emplace_back("rgb", result.counts);
+    check_renderable(path, t);
 
     try {
         result.brdf = std::make_unique<RglBrdf>(std::move(t));

@@ -22,13 +22,13 @@ Compressed timed(const ReprSpec& spec, Build build) {
     return out;
 }
 
-// The kind a spec names, its keys declared on the spec; ValueError naming the known kinds otherwise.
+// The kind a spec names, its keys declared on the spec; SpecError naming the known kinds otherwise.
 const ReprKind& kind_of(ReprSpec& spec) {
     const ReprKind* kind = find_representation_kind(spec.kind());
     if (!kind) {
         std::string known;
         for (const std::string& name : compress_kinds()) known += (known.empty() ? "" : ", ") + name;
-        throw ValueError("unknown representation '" + spec.kind() + "' (known: " + known + ")");
+        throw SpecError("unknown representation '" + spec.kind() + "' (known: " + known + ")");
     }
     spec.declare(kind->keys, !kind->positional.empty());
     return *kind;
@@ -56,6 +56,11 @@ std::vector<std::string> compress_kinds() {
     std::vector<std::string> out;
     for (const ReprKind& kind : representation_kinds()) out.push_back(kind.name);
     return out;
+}
+
+void check_spec(const std::string& text) {
+    ReprSpec spec = ReprSpec::parse(text);
+    kind_of(spec);
 }
 
 Compressed compress(const Brdf& source, const std::string& text, const CompressOptions& options) {

@@ -41,6 +41,9 @@ void add_sample(Sums& s, const Rgb& ref, const Rgb& app, double cos_i) {
 
 Metrics to_metrics(const Sums& total) {
     if (total.n == 0) throw ValueError("metrics: no valid reference bin inside the angular cut-off");
+    if (total.ref_sq[0] == 0.0 && total.ref_sq[1] == 0.0 && total.ref_sq[2] == 0.0)
+        throw ValueError("metrics: the reference is zero or negative at every sample inside the angular cut-off: "
+                         "there is no reflectance to measure errors against");
     double cos_rmse[3], rel[3], log_rmse[3], cbrt_rmse[3];
     for (int c = 0; c < 3; ++c) {
         cos_rmse[c] = std::sqrt(total.sq[c] / total.n);
@@ -190,7 +193,13 @@ Metrics compare(const Brdf& reference, const Brdf& approx, const MetricOptions& 
     }
 
     // Sums per θh slice, added in order: the result does not depend on the thread count.
-    std::vector<Sums> sums(static_cast<std::size_t>(metric_grid(reference, options).n_theta_h));
+    const GridSpec g = metric_grid(reference, options);
+    std::vector<Sums> sums(static_cast<std::size_t>(g.n_theta_h));
+    // An approximation storing a table on the reference's grid is read at the bins as the reference
+    // is, its stored values: a table against itself is exactly 0, whatever either's lookup.
+    const Table* ref_table = reference.stored_table();
+    const Table* app_table = approx.stored_table();
+    const bool same_bins = ref_table && app_table && app_table->grid() == ref_table->grid();
     std::vector<std::vector<Rgb>> app_f(workers);
     visit_grid(
         reference, options, workers,
@@ -199,7 +208,11 @@ Metrics compare(const Brdf& reference, const Brdf& approx, const MetricOptions& 
             approx.eval(wi, wo, app_f[w]);
         },
         [&](int w, int ih, std::size_t k, const Vec3& wi, const Vec3&, const Rgb& ref) {
-            if (finite(app_f[w][k])) add_sample(sums[static_cast<std::size_t>(ih)], ref, app_f[w][k], wi.z);
+            Rgb app = app_f[w][k];
+            const std::size_t bin = g.index(ih, 0, 0) + k;
+            if (same_bins && app_table->valid(bin))
+                for (int c = 0; c < 3; ++c) app[c] = app_table->at(bin, c);
+            if (finite(app)) add_sample(sums[static_cast<std::size_t>(ih)], ref, app, wi.z);
         });
     Sums total;
     for (const Sums& s : sums) merge(total, s);

@@ -74,6 +74,7 @@ Selection select_representation(const Brdf& source, const SelectOptions& options
     const std::optional<Scene> judge =
         options.scene ? options.scene
                       : options.metric == SceneMetric::Image ? std::optional<Scene>(build_scene(default_scene())) : std::nullopt;
+    for (const std::string& spec : candidates) check_spec(spec);
     Selection out;
     for (const std::string& spec : candidates) {
         Candidate c;
@@ -93,6 +94,8 @@ Selection select_representation(const Brdf& source, const SelectOptions& options
                 c.accepted = true;
                 c.reason = "meets the budget";
             }
+        } catch (const SpecError&) {
+            throw;
         } catch (const Error& e) {
             c.trial.spec = spec;
             c.error = std::nan("");

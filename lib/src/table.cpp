@@ -16,6 +16,10 @@ void GridSpec::validate() const {
     for (int n : {n_theta_h, n_theta_d, n_phi_d})
         if (n < 1 || n > kMaxAxis)
             throw ValueError("grid " + str() + ": every axis must be in [1, " + std::to_string(kMaxAxis) + "]");
+    if (bins() > kMaxBins)
+        throw ValueError("grid " + str() + ": " + std::to_string(bins()) + " bins, a float32 table of " +
+                         std::to_string(3 * sizeof(float) * bins()) + " bytes, over the limit of " +
+                         std::to_string(kMaxBins) + " bins (" + std::to_string(3 * sizeof(float) * kMaxBins) + " bytes)");
     if (!(theta_d_warp >= 0.0 && theta_d_warp <= kMaxWarp))
         throw ValueError("grid " + str() + ": theta_d warp " + std::to_string(theta_d_warp) + " outside [0, 0.95]");
 }

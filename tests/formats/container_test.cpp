@@ -425,7 +425,7 @@ TEST_CASE("Analytic models round-trip through .brdfz bit for bit", "[container][
     // A model from a newer brdfz (a lobe family this one does not know) is refused by name.
     {
         const std::string display = p.string();
-        container::h5::Writer w(display, p.string());
+        container::h5::Writer w(display);
         {
             container::h5::WriteNode root = w.root();
             const std::vector<std::string> features{"core", "analytic"};
@@ -542,7 +542,7 @@ TEST_CASE("Files needing unknown features are refused, naming the feature", "[co
                             std::uint64_t min_reader) {
         const fs::path p = dir.path / "future.brdfz";
         const std::string display = p.string();
-        container::h5::Writer w(display, p.string());
+        container::h5::Writer w(display);
         {
             container::h5::WriteNode root = w.root();
             root.attr("format", std::string("brdfz"));

@@ -115,7 +115,7 @@ TEST_CASE("bad MERL files are rejected with the file name and the reason", "[mer
     write_raw(dir.path / "huge_dims.binary", {2147483647, 2147483647, 2147483647}, payload(2, 2, 2, 1.0));
     rejects("huge_dims.binary", "out of range");
     write_raw(dir.path / "big_dims.binary", {4096, 4096, 4096}, payload(2, 2, 2, 1.0));
-    rejects("big_dims.binary", "truncated");
+    rejects("big_dims.binary", "over the limit of 67108864 bins");
     write_raw(dir.path / "all_nan.binary", {2, 2, 4}, payload(2, 2, 4, std::nan("")));
     rejects("all_nan.binary", "no valid");
     write_raw(dir.path / "all_unmeasured.binary", {2, 2, 4}, payload(2, 2, 4, -1.0));

@@ -252,15 +252,16 @@ TEST_CASE("rgl: invalid files are rejected with FormatError or IoError", "[rgl]"
     field(edited, "ndf").data = f32({1, 1, 1, 1, 1, 1, 1, std::numeric_limits<float>::quiet_NaN()});
     rejects("NaN in ndf", serialize(edited).bytes);
 
+    // Negative luminance (noise in real files, which Mitsuba renders) and a luminance without mass
+    // load: the sampler takes them as 0, or samples the VNDF alone (tests/robustness/payload_test.cpp).
     edited = fields;
     auto negative = filled(32, 1.0f);
     negative[5] = -0.5f;
     field(edited, "luminance").data = f32(negative);
-    rejects("negative luminance (no density)", serialize(edited).bytes);
-
+    CHECK_NOTHROW(rgl::read(dir.write("negative-luminance.bsdf", serialize(edited).bytes)));
     edited = fields;
     field(edited, "luminance").data = f32(filled(32, 0.0f));
-    rejects("luminance integrating to 0", serialize(edited).bytes);
+    CHECK_NOTHROW(rgl::read(dir.write("zero-luminance.bsdf", serialize(edited).bytes)));
 
     edited = fields;
     field(edited, "luminance").shape = {1, 2, 2, 8};

@@ -1,10 +1,13 @@
 // The fuzz harnesses' seed corpus and their list: small valid files of every registered format, made
 // by each format's Format::examples (no shared data is used or committed).
 //   fuzz_seeds --list   the harness runs: one line "format NAME" per format, then the other harnesses
+//                       (payload: a kind byte and the values payload_fuzz.cpp puts in valid envelopes)
 //   fuzz_seeds DIR      DIR/<run>/<seed files> for each
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <iterator>
+#include <limits>
 #include <string>
 
 #include "brdfz/formats/registry.h"
@@ -19,7 +22,7 @@ int main(int argc, char** argv) try {
     }
     if (std::string(argv[1]) == "--list") {
         for (const Format& f : all_formats()) std::printf("format %s\n", f.name.c_str());
-        std::printf("scene\nmetadata\n");
+        std::printf("scene\nmetadata\npayload\n");
         return 0;
     }
     const fs::path dir = argv[1];
@@ -35,6 +38,21 @@ int main(int argc, char** argv) try {
            "\"max_angle_deg\": 20, \"count\": 4}], \"lights\": [{\"direction\": [0, 0.1, 1], \"spread_deg\": 2, "
            "\"intensity\": 1, \"samples\": 2}], \"environment\": {\"radiance\": 0.1, \"samples\": 4}, "
            "\"pairs\": [{\"wi\": [0, 0.5, 1], \"wo\": [0, -0.5, 1], \"weight\": 2}]}\n";
+
+    // Payloads (payload_fuzz.cpp): a kind byte, then values; plausible ones around each hostile value.
+    fs::create_directories(dir / "payload");
+    const float hostile[] = {0.5f, std::numeric_limits<float>::infinity(), -std::numeric_limits<float>::infinity(),
+                             std::numeric_limits<float>::quiet_NaN(), -1.0f, 3e38f, 0.0f, 1e-30f};
+    for (unsigned char kind = 0; kind < 6; ++kind)
+        for (std::size_t h = 0; h < std::size(hostile); ++h) {
+            std::string bytes(1, static_cast<char>(kind));
+            for (int k = 0; k < 300; ++k) {
+                const float v = k % 37 == 5 ? hostile[h] : 0.25f + 0.01f * static_cast<float>(k % 11);
+                bytes.append(reinterpret_cast<const char*>(&v), sizeof v);
+            }
+            std::ofstream(dir / "payload" / ("k" + std::to_string(kind) + "-" + std::to_string(h)), std::ios::binary)
+                << bytes;
+        }
     return 0;
 } catch (const std::exception& e) {
     std::fprintf(stderr, "fuzz_seeds: %s\n", e.what());

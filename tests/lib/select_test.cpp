@@ -101,8 +101,9 @@ TEST_CASE("selection keeps the cheapest candidate inside the budget and reports 
     CHECK(s.best()->trial.brdf);
     CHECK_THAT(s.tried[0].reason, Catch::StartsWith("error"));
 
-    // A failing candidate is reported and skipped, not thrown.
-    o.candidates = {"tabular:res=0x8x8", "tabular:res=90x90x180"};
+    // A candidate that fails to build is reported and skipped, not thrown (a misspelt one is thrown:
+    // tests/robustness/limits_test.cpp).
+    o.candidates = {"pca:basis=no-such-basis.brdfz,k=2", "tabular:res=90x90x180"};
     const Selection f = select_representation(source, o);
     REQUIRE(f.tried.size() == 2);
     CHECK_THAT(f.tried[0].reason, Catch::StartsWith("failed: "));

@@ -161,23 +161,25 @@ def test_missing_and_unknown_files(cli, tmp_path):
 
 def test_demo_runs_without_data(cli, tmp_path):
     proc = subprocess_in(cli, tmp_path)
-    assert proc.returncode == 0, proc.stderr
+    # One representation cannot be built (its basis file is missing): reported, then exit status 1.
+    assert proc.returncode == 1, proc.stderr
+    assert proc.stderr.strip() == "brdfz: demo: 1 of 2 representations could not be built (their rows above say why)"
     assert "bit-identical" in proc.stdout
     assert (tmp_path / "brdfz-demo" / "coated-diffuse.binary").stat().st_size == 12 + 24 * BINS
     # Step 5: each representation measured, a failed one reported as such, the table written as CSV.
     assert re.search(r"tabular:res=8x8x16 +12288 ", proc.stdout)
-    assert re.search(r"nosuch:x=1 +failed: unknown representation 'nosuch'", proc.stdout)
+    assert re.search(r"pca:basis=no-such-basis.brdfz,k=2 +failed: ", proc.stdout)
     rows = (tmp_path / "brdfz-demo" / "representations.csv").read_text().splitlines()
     assert rows[0].startswith("material,format,repr,describe,bytes,input_bytes,ratio,") and len(rows) == 3
     assert rows[1].startswith("coated-diffuse,merl,tabular:res=8x8x16,") and rows[1].endswith(",ok")
-    assert rows[2].startswith("coated-diffuse,merl,nosuch:x=1,,,") and "error: unknown representation" in rows[2]
+    assert rows[2].startswith('coated-diffuse,merl,"pca:basis=no-such-basis.brdfz,k=2",,,') and "error: " in rows[2]
 
 
 def subprocess_in(cli, cwd):
     import subprocess
     env = {k: v for k, v in os.environ.items() if k != "BRDFZ_MERL_DIR"}
-    return subprocess.run([cli, "demo", "--repr", "tabular:res=8x8x16", "--repr", "nosuch:x=1"], cwd=cwd, env=env,
-                          capture_output=True, text=True, timeout=300)
+    return subprocess.run([cli, "demo", "--repr", "tabular:res=8x8x16", "--repr", "pca:basis=no-such-basis.brdfz,k=2"],
+                          cwd=cwd, env=env, capture_output=True, text=True, timeout=300)
 
 
 def test_real_merl_tables(cli, merl_tables):

@@ -46,7 +46,7 @@ def test_fit_that_converges_to_a_poor_model_says_so(cli, demo_table, tmp_path):
     assert "but poor fit" in text and "warning: poor fit" in text
 
 
-def test_fit_without_usable_data_exits_2_and_writes_nothing(cli, tmp_path):
+def test_fit_without_usable_data_exits_1_and_writes_nothing(cli, tmp_path):
     # A MERL table with a single measured bin (all others negative = unmeasured).
     n = 90 * 90 * 180
     values = [-1.0] * n
@@ -55,8 +55,9 @@ def test_fit_without_usable_data_exits_2_and_writes_nothing(cli, tmp_path):
     table.write_bytes(struct.pack("<3i", 90, 90, 180) + struct.pack(f"<{3 * n}d", *(values * 3)))
     out = tmp_path / "never.json"
     proc = run(cli, "fit", table, "--model", "lambert+ggx", "-o", out, check=False)
-    assert proc.returncode == 2
-    assert "insufficient_data" in proc.stdout
+    assert proc.returncode == 1
+    assert "insufficient_data" in proc.stdout and "best #" not in proc.stdout
+    assert proc.stderr.strip() == f"brdfz: {table}: insufficient data to fit lambert+ggx; nothing written"
     assert not out.exists()
 
 

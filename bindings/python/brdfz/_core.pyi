@@ -40,7 +40,7 @@ class Brdf:
         """
     def sample(self, wo: numpy.typing.NDArray[numpy.floating], u: numpy.typing.NDArray[numpy.floating]) -> tuple[numpy.typing.NDArray[numpy.float64], numpy.typing.NDArray[numpy.float64], numpy.typing.NDArray[numpy.float64]]:
         """
-        draws wi for each wo from u in [0, 1)^2 of shape (N, 2) -> (wi (N, 3), pdf (N,), weight (N, 3)); weight = f·cosθi/pdf, failed samples have pdf 0 and weight 0
+        draws wi for each wo from u in [0, 1)^2 of shape (N, 2) (ValueError naming a row outside it) -> (wi (N, 3), pdf (N,), weight (N, 3)); weight = f·cosθi/pdf, failed samples have pdf 0 and weight 0
         """
     def sampler_parts(self) -> dict | None:
         """

@@ -218,5 +218,7 @@ def bsdf(brdf: Brdf, incident: str = "camera", native: Optional[bool] = None) ->
     """A Mitsuba BSDF backed by `brdf` (any representation), to place in a scene dictionary;
     `incident` says which side brdfz's wi is evaluated at (module docstring). native=None: Dr.Jit code
     where the kind and variant allow, the wavefront bridge otherwise; True: native or ValueError;
-    False: the wavefront bridge."""
+    False: the wavefront bridge. TypeError for anything but a Brdf."""
+    if not isinstance(brdf, Brdf):
+        raise TypeError(f"brdfz.mitsuba.bsdf: expected a brdfz.Brdf, got {type(brdf).__name__}")
     return _make(brdf, incident, native)

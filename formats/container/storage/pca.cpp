@@ -188,12 +188,18 @@ std::unique_ptr<Brdf> read(const h5::ReadNode& rep, const ReadContext& ctx) {
         embedded ? read_embedded(rep, grid, epsilon, k_max, hash) : read_referenced(rep, grid, hash);
     if (static_cast<std::uint64_t>(basis->k_max()) != k_max)
         bad("the basis has " + std::to_string(basis->k_max()) + " components, the file records " + std::to_string(k_max));
+    std::unique_ptr<PcaBrdf> brdf;
     try {
-        return std::make_unique<PcaBrdf>(std::move(basis), std::move(coefficients), ctx.lookup,
+        brdf = std::make_unique<PcaBrdf>(std::move(basis), std::move(coefficients), ctx.lookup,
                                          embedded ? PcaBrdf::BasisStorage::Embedded : PcaBrdf::BasisStorage::Referenced);
     } catch (const ValueError& e) {
-        throw FormatError(rep.file(), rep.path() + ": " + e.what());
+        bad(e.what());
     }
+    // Stored coefficients far outside the basis's range overflow where they are reconstructed.
+    if (brdf->counts().inf > 0)
+        bad("the coefficients reconstruct " + std::to_string(brdf->counts().inf) +
+            " bins beyond the float range (a coefficient vector far outside the basis's training set)");
+    return brdf;
 }
 
 // The range and validity of the reconstruction, which the object holds.

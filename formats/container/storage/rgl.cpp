@@ -72,6 +72,7 @@ std::unique_ptr<Brdf> read(const h5::ReadNode& rep, const ReadContext&) {
     t.vndf = read_grids(rep, "vndf", 3, {n});
     t.rgb = read_grids(rep, "rgb", 4, {n, 3});
     if (rep.has("luminance")) t.luminance = read_grids(rep, "luminance", 3, {n});
+    rgl::check_renderable(rep.file(), t);
     try {
         return std::make_unique<rgl::RglBrdf>(std::move(t));
     } catch (const ValueError& e) {

@@ -114,6 +114,20 @@ std::unique_ptr<Brdf> read(const h5::ReadNode& rep, const ReadContext& ctx) {
     if (type == h5::DType::F32) {
         Table table(grid, Table::Uninitialized{});
         values.read(table.data());
+        // The float16 and uint8 rules (CompactTable): NaN is the invalid marker, and nothing else may
+        // be outside [0, FLT_MAX].
+        std::size_t inf = 0, negative = 0, nan = 0;
+        for (std::size_t k = 0; k < 3 * grid.bins(); ++k) {
+            const float v = table.data()[k];
+            inf += std::isinf(v);
+            nan += std::isnan(v);
+            negative += v < 0.0f && !std::isinf(v);
+        }
+        if (inf || negative)
+            bad("dataset 'values' holds " + std::to_string(inf) + " infinite and " + std::to_string(negative) +
+                " negative values (of " + std::to_string(3 * grid.bins()) + "); a table holds values >= 0 and NaN "
+                "for unmeasured entries");
+        if (nan == 3 * grid.bins()) bad("dataset 'values' holds no value (every entry is NaN): nothing to evaluate");
         return std::make_unique<TabularBrdf>(std::move(table), ctx.lookup);
     }
     std::array<ChannelCodec, 3> codecs;
@@ -128,13 +142,19 @@ std::unique_ptr<Brdf> read(const h5::ReadNode& rep, const ReadContext& ctx) {
     }
     std::vector<std::uint8_t> codes(values.nbytes());
     values.read(codes.data());
+    std::unique_ptr<CompactTableBrdf> brdf;
     try {
-        return std::make_unique<CompactTableBrdf>(
+        brdf = std::make_unique<CompactTableBrdf>(
             CompactTable(grid, dtype == "float16" ? TableDtype::F16 : TableDtype::U8Log, std::move(codes), codecs),
             ctx.lookup);
     } catch (const ValueError& e) {
-        throw FormatError(rep.file(), rep.path() + ": " + e.what());
+        bad(e.what());
     }
+    bool any = false;
+    for (std::size_t k = 0; k < grid.bins() && !any; ++k)
+        for (int ch = 0; ch < 3; ++ch) any = any || !std::isnan(brdf->table().at(k, ch));
+    if (!any) bad("dataset 'values' holds no value (every entry is the invalid code): nothing to evaluate");
+    return brdf;
 }
 
 // A compact table's range is that of its decoded values.

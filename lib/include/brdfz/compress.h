@@ -34,8 +34,13 @@ struct Compressed {
     std::vector<std::string> notes; // what the builder wants the user to know (fit status, clamping)
 };
 
-// ValueError for an unknown kind or a bad option (naming it); the builders' own errors pass through.
+// SpecError (a ValueError) for an unknown kind or a bad option (naming it); the builders' own errors
+// pass through.
 Compressed compress(const Brdf& source, const std::string& spec, const CompressOptions& options = {});
+
+// SpecError, without building anything, for a spec that does not parse, names an unknown kind, or
+// gives a bare word or a key the kind does not take (its values are checked when it is built).
+void check_spec(const std::string& spec);
 
 // Scattered measurements (Cornell, ALTA) have no grid to factor or resample: only `analytic` fits
 // them; ValueError for any other kind.

@@ -1,8 +1,9 @@
 // Error metrics between two BRDFs, over the bins of a grid or over direction pairs.
 //
 // Over the grid (MetricOptions::over = Over::Grid, the default): samples are the bins of the
-// reference's own grid when it is a TabularBrdf (its invalid bins are skipped), otherwise of
-// MetricOptions::grid; bins with θi or θo >= max_theta_deg, or beyond the reference's
+// reference's own grid when it stores a table (its invalid bins are skipped; an approximation storing
+// a table on the same grid is read at its stored values too, so a table against itself is exactly 0),
+// otherwise of MetricOptions::grid; bins with θi or θo >= max_theta_deg, or beyond the reference's
 // measured_theta_max() (extrapolated, brdf.h), are left out. Each bin counts once (the MERL
 // literature's convention, e.g. Ngan et al. 2005, Löw et al. 2012), so the grid's square-root θh axis
 // weights near-specular half vectors more than their solid angle, and a reciprocal grid's φd ∈ [0, π)
@@ -21,7 +22,8 @@
 //   log_rmse     = sqrt(mean (ln(1 + x) − ln(1 + y))²)
 //   cbrt_rmse    = sqrt(mean (∛x − ∛y)²)
 // `mean` is the average of the three channel values. A sample where either value is not finite is
-// left out.
+// left out. ValueError when no sample is inside the cut-off, or when the reference is zero or negative
+// at every one (no scale for cos_rmse_rel).
 #pragma once
 
 #include <cstddef>

@@ -87,8 +87,10 @@ std::string sweep_csv_row(const std::string& material, const std::string& format
 // rank, compact tables, the full-resolution table.
 std::vector<std::string> default_candidates();
 
-// ValueError for a budget that is not finite and > 0, or an empty candidate list. A candidate that
-// fails to build is rejected with its error message as the reason, not thrown.
+// ValueError for a budget that is not finite and > 0, or an empty candidate list; SpecError for a
+// misspelt candidate: before anything is built when check_spec() finds it (an unknown kind or key),
+// else when its builder refuses a value. A candidate that fails to build otherwise is rejected with
+// its error message as the reason, not thrown.
 Selection select_representation(const Brdf& source, const SelectOptions& options);
 
 }  // namespace brdfz

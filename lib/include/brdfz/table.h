@@ -67,6 +67,9 @@ struct GridSpec {
     double theta_d_warp = 0.0;  // axis::theta_d_to_u's w; 0: MERL's linear θd axis
 
     static constexpr int kMaxAxis = 4096;  // bound on any axis, checked before allocating
+    // Bound on the bins of any grid, checked before allocating: 2^26 bins, a float32 RGB table of
+    // 805,306,368 bytes (MERL's 90x90x180 has 1,458,000 bins).
+    static constexpr std::size_t kMaxBins = std::size_t{1} << 26;
     static constexpr double kMaxWarp = 0.95;  // the first θd bin 11° wide at 40 bins (linear: 2.25°)
 
     std::size_t bins() const {
@@ -82,7 +85,8 @@ struct GridSpec {
     double theta_d_at(int id) const { return axis::u_to_theta_d(id + sample_offset(), n_theta_d, theta_d_warp); }
     double theta_d_to_u(double theta_d) const { return axis::theta_d_to_u(theta_d, n_theta_d, theta_d_warp); }
     double phi_d_at(int ip) const { return axis::u_to_phi_d(ip + sample_offset(), n_phi_d); }
-    // Throws ValueError unless every axis is in [1, kMaxAxis] and theta_d_warp in [0, kMaxWarp].
+    // Throws ValueError unless every axis is in [1, kMaxAxis], bins() <= kMaxBins (the message gives
+    // the table's bytes) and theta_d_warp in [0, kMaxWarp].
     void validate() const;
     std::string str() const;  // "90x90x180"
     bool operator==(const GridSpec&) const = default;

@@ -254,7 +254,9 @@ FitResult fit_samples(const MeasurementSet& data, const std::string& model_text,
                       Clock::time_point t0) {
     if (!(options.max_theta_deg > 0.0 && options.max_theta_deg <= 90.0))
         throw ValueError("fit: max_theta_deg must be in (0, 90]");
-    if (options.starts < 1) throw ValueError("fit: starts must be at least 1");
+    if (options.starts < 1 || options.starts > FitOptions::kMaxStarts)
+        throw ValueError("fit: starts=" + std::to_string(options.starts) + " is outside [1, " +
+                         std::to_string(FitOptions::kMaxStarts) + "]");
     if (options.max_iterations < 1 || options.start_iterations < 1)
         throw ValueError("fit: max_iterations and start_iterations must be at least 1");
     if (!(options.robust_scale > 0.0)) throw ValueError("fit: robust_scale must be positive");

@@ -93,6 +93,25 @@ FactoredBrdf::FactoredBrdf(Factors factors) : f_(std::move(factors)) {
     for (const std::vector<float>* values : {&f_.u, &f_.v, &f_.colour_weights})
         for (float x : *values)
             if (!std::isfinite(x)) throw ValueError("factored: a factor entry is not finite");
+    {
+        // Every reconstruction is a sum of products u·v (times a colour weight): bounded by the
+        // components' largest magnitudes, which must keep it far inside the float range so that no
+        // partial sum in the kernels overflows to Inf or NaN (a file's 3e38 entries would).
+        std::vector<double> top_u(m, 0.0), top_v(m, 0.0);
+        for (std::size_t i = 0; i < f_.u.size(); ++i) top_u[i % m] = std::max(top_u[i % m], std::fabs(double{f_.u[i]}));
+        for (std::size_t i = 0; i < f_.v.size(); ++i) top_v[i % m] = std::max(top_v[i % m], std::fabs(double{f_.v[i]}));
+        const std::size_t rank = static_cast<std::size_t>(f_.rank);
+        for (std::size_t c = 0; c < 3; ++c) {
+            double bound = 0.0;
+            for (std::size_t j = 0; j < rank; ++j)
+                bound += f_.colour == FactorColour::Shared
+                             ? std::fabs(double{f_.colour_weights[c * rank + j]}) * top_u[j] * top_v[j]
+                             : top_u[c * rank + j] * top_v[c * rank + j];
+            if (!(bound <= 0.25 * std::numeric_limits<float>::max()))
+                throw ValueError("factored: channel " + std::to_string(c) + "'s factors could reconstruct values up to " +
+                                 std::to_string(bound) + " in magnitude, beyond the float range");
+        }
+    }
     if (f_.dtype == FactorDtype::F16)
         for (std::vector<float>* values : {&f_.u, &f_.v})
             for (float& x : *values) {

@@ -26,19 +26,19 @@ ReprSpec ReprSpec::parse(const std::string& text) {
     ReprSpec spec;
     const std::size_t colon = text.find(':');
     spec.kind_ = text.substr(0, colon);
-    if (spec.kind_.empty()) throw ValueError("representation spec '" + text + "': no kind before ':'");
+    if (spec.kind_.empty()) throw SpecError("representation spec '" + text + "': no kind before ':'");
     if (colon == std::string::npos) return spec;
     for (const std::string& part : split(text.substr(colon + 1), ',')) {
         const std::size_t eq = part.find('=');
         if (eq == std::string::npos) {
             if (part.empty() || !spec.positional_.empty() || !spec.options_.empty())
-                throw ValueError("representation spec '" + text + "': expected KEY=VALUE, got '" + part + "'");
+                throw SpecError("representation spec '" + text + "': expected KEY=VALUE, got '" + part + "'");
             spec.positional_ = part;
             continue;
         }
         std::string key = part.substr(0, eq);
-        if (key.empty()) throw ValueError("representation spec '" + text + "': empty key in '" + part + "'");
-        if (spec.find(key)) throw ValueError("representation spec '" + text + "': '" + key + "' given twice");
+        if (key.empty()) throw SpecError("representation spec '" + text + "': empty key in '" + part + "'");
+        if (spec.find(key)) throw SpecError("representation spec '" + text + "': '" + key + "' given twice");
         spec.options_.emplace_back(std::move(key), part.substr(eq + 1));
     }
     spec.used_.assign(spec.options_.size(), false);
@@ -64,9 +64,16 @@ void ReprSpec::declare(const std::vector<SpecKey>& keys, bool takes_positional) 
     if (!positional_.empty() && !takes_positional) {
         for (const SpecKey& k : keys)
             if (k.name == positional_)
-                throw ValueError(kind_ + ": option " + positional_ + " needs a value (" + positional_ + "=...)");
-        throw ValueError(kind_ + ": unknown option(s) " + positional_);
+                throw SpecError(kind_ + ": option " + positional_ + " needs a value (" + positional_ + "=...)");
+        throw SpecError(kind_ + ": unknown option(s) " + positional_);
     }
+    std::string unknown;
+    for (const auto& option : options_) {
+        bool known = false;
+        for (const SpecKey& k : keys) known = known || k.name == option.first;
+        if (!known) unknown += (unknown.empty() ? "" : ", ") + option.first;
+    }
+    if (!unknown.empty()) throw SpecError(kind_ + ": unknown option(s) " + unknown);
 }
 
 const std::string* ReprSpec::find(const std::string& key) const {
@@ -91,9 +98,9 @@ int ReprSpec::get_int(const std::string& key, int fallback, int min_value, int m
     int parsed = 0;
     const auto [end, ec] = std::from_chars(value->data(), value->data() + value->size(), parsed);
     if (ec != std::errc() || end != value->data() + value->size())
-        throw ValueError(kind_ + ": " + key + "='" + *value + "' is not an integer");
+        throw SpecError(kind_ + ": " + key + "='" + *value + "' is not an integer");
     if (parsed < min_value || parsed > max_value)
-        throw ValueError(kind_ + ": " + key + "=" + *value + " is outside [" + std::to_string(min_value) + ", " +
+        throw SpecError(kind_ + ": " + key + "=" + *value + " is outside [" + std::to_string(min_value) + ", " +
                          std::to_string(max_value) + "]");
     return parsed;
 }
@@ -104,7 +111,7 @@ double ReprSpec::get_double(const std::string& key, double fallback) const {
     double parsed = 0;
     const auto [end, ec] = std::from_chars(value->data(), value->data() + value->size(), parsed);
     if (ec != std::errc() || end != value->data() + value->size() || !std::isfinite(parsed))
-        throw ValueError(kind_ + ": " + key + "='" + *value + "' is not a finite number");
+        throw SpecError(kind_ + ": " + key + "='" + *value + "' is not a finite number");
     return parsed;
 }
 
@@ -120,7 +127,7 @@ std::string ReprSpec::get_choice(const std::string& key, const std::string& fall
         if (value == choice) return value;
     std::string list;
     for (const std::string& choice : choices) list += (list.empty() ? "" : ", ") + choice;
-    throw ValueError(kind_ + ": " + key + "='" + value + "' is not one of " + list);
+    throw SpecError(kind_ + ": " + key + "='" + value + "' is not one of " + list);
 }
 
 std::vector<int> ReprSpec::get_dims(const std::string& key, const std::vector<int>& fallback) const {
@@ -131,11 +138,11 @@ std::vector<int> ReprSpec::get_dims(const std::string& key, const std::vector<in
         int n = 0;
         const auto [end, ec] = std::from_chars(part.data(), part.data() + part.size(), n);
         if (ec != std::errc() || end != part.data() + part.size() || n < 1)
-            throw ValueError(kind_ + ": " + key + "='" + *value + "' is not a list of positive sizes like 45x45x90");
+            throw SpecError(kind_ + ": " + key + "='" + *value + "' is not a list of positive sizes like 45x45x90");
         dims.push_back(n);
     }
     if (dims.size() != fallback.size())
-        throw ValueError(kind_ + ": " + key + "='" + *value + "' needs " + std::to_string(fallback.size()) + " sizes");
+        throw SpecError(kind_ + ": " + key + "='" + *value + "' needs " + std::to_string(fallback.size()) + " sizes");
     return dims;
 }
 
@@ -143,7 +150,7 @@ void ReprSpec::finish() const {
     std::string unknown;
     for (std::size_t i = 0; i < options_.size(); ++i)
         if (!used_[i]) unknown += (unknown.empty() ? "" : ", ") + options_[i].first;
-    if (!unknown.empty()) throw ValueError(kind_ + ": unknown option(s) " + unknown);
+    if (!unknown.empty()) throw SpecError(kind_ + ": unknown option(s) " + unknown);
 }
 
 }  // namespace brdfz

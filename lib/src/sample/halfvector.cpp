@@ -1,6 +1,7 @@
 #include "brdfz/sample/halfvector.h"
 
 #include <algorithm>
+#include <cfloat>
 #include <cmath>
 #include <cstdint>
 #include <limits>
@@ -342,7 +343,8 @@ HalfVectorSampler::HalfVectorSampler(const Brdf& brdf, const HalfVectorSamplerOp
                 // Non-finite or negative data gets no importance; the cosine share still covers it.
                 if (std::isfinite(mean) && mean > 0.0 && wi[i].z > 0.0) sum += mean * wi[i].z * jac[i];
             }
-            weights[cell] = std::isfinite(sum) ? static_cast<float>(sum) : 0.0f;
+            // Values near the float limit (a table may hold up to FLT_MAX) saturate rather than overflow.
+            weights[cell] = std::isfinite(sum) ? static_cast<float>(std::fmin(sum, FLT_MAX)) : 0.0f;
         }
         slices[k] = Piecewise2D(weights, R, C);
     });

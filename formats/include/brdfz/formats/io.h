@@ -7,6 +7,7 @@
 #include <memory>
 #include <optional>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "brdfz/brdf.h"
@@ -33,6 +34,8 @@ struct SourceInfo {
     std::string dims_of;
     // False when nothing stored is a value to take a range of (factors): min_value and max_value are 0.
     bool has_range = true;
+    // RGL: the same counts for each float field (rgl::ReadResult::fields); empty for other formats.
+    std::vector<std::pair<std::string, ValidityCounts>> fields;
 };
 
 struct Loaded {

@@ -40,6 +40,7 @@
 #include <cstddef>
 #include <memory>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "brdfz/brdf.h"
@@ -75,8 +76,11 @@ class RglBrdf final : public Brdf {
 public:
     // ValueError unless the shapes agree (grids at least 2×2, vndf with one slice and rgb with three
     // per θi, luminance empty or one slice per θi shaped like rgb's, theta_i strictly increasing)
-    // and theta_i, ndf, sigma, vndf and luminance are finite, vndf and luminance non-negative with
-    // every slice integrating to a positive number. Non-finite rgb values are stored as 0.
+    // and theta_i, ndf, sigma, vndf and luminance are finite, vndf non-negative with every slice
+    // integrating to a positive number. Non-finite rgb values are stored as 0. Negative luminance
+    // values (noise in real files, which Mitsuba renders) are sampled as 0; when a θi slice of it has
+    // no positive value, sampling uses the VNDF warp alone. check_renderable() holds the reader's
+    // further rules.
     explicit RglBrdf(Tensors tensors);
     ~RglBrdf() override;
     RglBrdf(const RglBrdf&) = delete;
@@ -117,7 +121,21 @@ struct ReadResult {
     ValidityCounts counts;
     double min_value = 0, max_value = 0;  // range of the rgb tensor's finite values; 0, 0 if none
     std::string description;              // the file's `description` field
+    // The same counts for every float field evaluation or sampling reads: ndf, sigma, vndf, luminance
+    // (when present) and rgb, in that order.
+    std::vector<std::pair<std::string, ValidityCounts>> fields;
 };
+
+// Counts of a field's values: valid (finite, >= 0), negative, NaN, Inf.
+ValidityCounts count_values(const std::vector<float>& values);
+
+// What Mitsuba 3's `measured` plugin cannot render (it loads anything: these give NaN, Inf or negative
+// reflectance wherever they are read), refused with FormatError naming `path`, the field and its
+// counts: rgb without a single finite value >= 0; ndf negative or not finite; sigma not positive (f
+// divides by it) or not finite; vndf negative or not finite; luminance not finite. Negative rgb and
+// luminance values are accepted (real files hold them; rgl.h above says how they are used). Both the
+// .bsdf reader and the container's RGL module check this before building an RglBrdf.
+void check_renderable(const std::string& path, const Tensors& tensors);
 
 // Checks the whole field table (bounds, overflow, required fields and shapes) before reading any
 // data. FormatError for an invalid file, UnsupportedError for a valid anisotropic or spectral one,

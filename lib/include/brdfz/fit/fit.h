@@ -52,7 +52,8 @@ const char* fit_status_name(FitStatus status);  // "converged", "hit_bounds", ..
 struct FitOptions {
     FitLoss loss = FitLoss::Log;
     double max_theta_deg = 80.0;
-    int starts = 8;
+    int starts = 8;             // 1..kMaxStarts
+    static constexpr int kMaxStarts = 1000;  // as analytic:MODEL,starts=N: each start is a solve
     std::uint64_t seed = 1;
     RobustLoss robust = RobustLoss::None;
     double robust_scale = 0.1;  // residual (in loss units) beyond which the robust loss flattens

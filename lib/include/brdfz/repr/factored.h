@@ -104,7 +104,8 @@ struct Factors {
 class FactoredBrdf final : public Brdf {
 public:
     // ValueError when the shapes disagree with the grid, layout and rank, a factor is not finite (for
-    // F16: beyond the float16 range), or a max_value is NaN or negative. F16 factors are rounded to
+    // F16: beyond the float16 range), the factors could reconstruct a value beyond a quarter of the
+    // float range (the sum over components of the largest |u|·|v|), or a max_value is NaN or negative. F16 factors are rounded to
     // float16 (round to nearest even).
     explicit FactoredBrdf(Factors factors);
     FactoredBrdf(const FactoredBrdf&) = delete;

@@ -26,21 +26,21 @@ struct SpecKey {
 
 class ReprSpec {
 public:
-    // Throws ValueError naming the spec when it is malformed (empty kind, "key" without "=", a key
-    // given twice). A part after ':' without '=' is the kind's positional argument (the analytic
-    // model string), available as positional().
+    // Throws SpecError (a ValueError) naming the spec when it is malformed (empty kind, "key" without
+    // "=", a key given twice). A part after ':' without '=' is the kind's positional argument (the
+    // analytic model string), available as positional().
     static ReprSpec parse(const std::string& text);
 
     const std::string& kind() const { return kind_; }
     const std::string& positional() const { return positional_; }
     std::string str() const;  // canonical text, options in the order given
 
-    // Typed getters: the value of KEY, or the fallback when absent. ValueError on a value that does
+    // Typed getters: the value of KEY, or the fallback when absent. SpecError on a value that does
     // not parse ("rank=four") or is out of the given range.
     int get_int(const std::string& key, int fallback, int min_value, int max_value) const;
     double get_double(const std::string& key, double fallback) const;
     std::string get_string(const std::string& key, const std::string& fallback) const;
-    // One of `choices`; ValueError listing them otherwise.
+    // One of `choices`; SpecError listing them otherwise.
     std::string get_choice(const std::string& key, const std::string& fallback,
                            const std::vector<std::string>& choices) const;
     // "AxBxC" with `n` positive parts, e.g. res=45x45x90 (n = 3) or res=90x90 (n = 2).
@@ -48,11 +48,12 @@ public:
     bool has(const std::string& key) const;
 
     // The keys the kind takes and whether it takes a positional argument: a positional part given to a
-    // kind that takes none, or a declared key given without a value, is a ValueError naming it (as a
-    // misspelt key is); a getter asking for an undeclared key is std::logic_error.
+    // kind that takes none, a declared key given without a value, or a key not declared is a SpecError
+    // naming it (so a misspelt key is found before any work); a getter asking for an undeclared key is
+    // std::logic_error.
     void declare(const std::vector<SpecKey>& keys, bool takes_positional);
 
-    // ValueError naming every option no getter asked for (a misspelt key).
+    // SpecError naming every option no getter asked for (a misspelt key).
     void finish() const;
 
 private:

@@ -12,7 +12,7 @@ FitOptions analytic_options(const ReprSpec& spec, const CompressOptions& options
         throw ValueError("analytic: name the model, e.g. analytic:lambert+ggx");
     FitOptions fit_options;
     fit_options.loss = parse_fit_loss(spec.get_choice("loss", "log", {"log", "cos", "cbrt"}));
-    fit_options.starts = spec.get_int("starts", fit_options.starts, 1, 1000);
+    fit_options.starts = spec.get_int("starts", fit_options.starts, 1, FitOptions::kMaxStarts);
     fit_options.seed = static_cast<std::uint64_t>(spec.get_int("seed", 1, 0, 1 << 30));
     spec.finish();
     fit_options.threads = options.threads;

@@ -1,0 +1,115 @@
+"""The fault sweep on the command: writes killed with SIGKILL or SIGTERM, a full disk (a file size
+limit), the umask and a replaced file's mode, reproducible .brdfz bytes."""
+import os
+import re
+import resource
+import signal
+import stat
+import subprocess
+import time
+
+import pytest
+
+from conftest import run
+
+FORMATS = [".brdfz", ".binary", ".exr", ".bsdf", ".npy"]
+
+
+def temporaries(folder):
+    return sorted(p.name for p in folder.iterdir() if ".tmp-" in p.name)
+
+
+def signal_mid_write(cmd, sig, after_bytes=64 << 10):
+    """Runs cmd and sends sig once it has written after_bytes (its write counter in /proc), so the
+    signal lands while the output is being written; returns the exit status."""
+    proc = subprocess.Popen(cmd, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    while proc.poll() is None:
+        try:
+            with open(f"/proc/{proc.pid}/io") as f:
+                written = int(re.search(r"^wchar: (\d+)", f.read(), re.M).group(1))
+        except (OSError, AttributeError):
+            break
+        if written > after_bytes:
+            proc.send_signal(sig)
+            break
+        time.sleep(0.001)
+    return proc.wait(timeout=300)
+
+
+@pytest.mark.parametrize("sig", [signal.SIGKILL, signal.SIGTERM])
+@pytest.mark.parametrize("ext", FORMATS)
+def test_killed_writes_leave_no_file_and_no_temporary(cli, demo_table, tmp_path, ext, sig):
+    """Signalled while writing (and, earlier, while still tabulating): nothing is left at OUT nor
+    beside it, and an OUT that was there before is unchanged."""
+    if not os.path.exists(f"/proc/{os.getpid()}/io"):
+        pytest.skip("no /proc/PID/io to see when the output is being written")
+    out = tmp_path / f"OUT{ext}"
+    cmd = [cli, "convert", str(demo_table), str(out), "--res", "90x90x360" if ext == ".bsdf" else "180x180x360"]
+    killed = 0
+    for attempt in range(3):
+        status = signal_mid_write(cmd, sig)
+        assert temporaries(tmp_path) == [], (attempt, ext)
+        if status == 0:  # it finished before the signal: a whole file
+            out.unlink()
+        killed += status == -sig
+        assert not out.exists(), (attempt, ext, status)
+    assert killed > 0, "never signalled mid-write"
+    proc = subprocess.Popen(cmd, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    time.sleep(0.3)  # while tabulating, unless it is done already
+    proc.send_signal(sig)
+    assert temporaries(tmp_path) == [] and out.exists() == (proc.wait(timeout=300) == 0)
+    out.unlink(missing_ok=True)
+    run(cli, "convert", demo_table, out)
+    before = out.read_bytes()
+    status = signal_mid_write(cmd, sig, after_bytes=(64 << 10) + len(before))
+    assert temporaries(tmp_path) == []
+    assert out.read_bytes() == before if status != 0 else out.exists()
+
+
+def limited(max_bytes):
+    def setup():
+        resource.setrlimit(resource.RLIMIT_FSIZE, (max_bytes, max_bytes))
+        signal.signal(signal.SIGXFSZ, signal.SIG_IGN)  # the write fails with EFBIG, as on a full disk
+    return setup
+
+
+@pytest.mark.parametrize("ext", FORMATS)
+def test_a_full_disk_is_one_line_and_no_file(cli, demo_table, tmp_path, ext):
+    out = tmp_path / f"full{ext}"
+    proc = subprocess.run([cli, "convert", str(demo_table), str(out)], capture_output=True, text=True,
+                          preexec_fn=limited(1 << 20), timeout=300)
+    assert proc.returncode == 1
+    lines = proc.stderr.strip().splitlines()
+    assert len(lines) == 1, proc.stderr
+    assert lines[0].startswith(f"brdfz: {out}: ") and "HDF5-DIAG" not in proc.stderr
+    assert not out.exists() and temporaries(tmp_path) == []
+
+
+def test_new_files_follow_the_umask_and_replaced_ones_keep_their_mode(cli, demo_table, tmp_path):
+    model = tmp_path / "lambert.json"  # the analytic model writer, from a model
+    model.write_text('{"format": "brdfz-analytic", "version": 1, "model": "lambert", "parameters": '
+                     '{"lambert.rho_r": 0.3, "lambert.rho_g": 0.4, "lambert.rho_b": 0.5}}')
+    for ext, src in [(ext, demo_table) for ext in FORMATS] + [(".json", model)]:
+        out = tmp_path / f"m{ext}"
+        subprocess.run([cli, "convert", str(src), str(out), "--res", "8x8x16"], check=True,
+                       capture_output=True, preexec_fn=lambda: os.umask(0o027))
+        assert stat.S_IMODE(out.stat().st_mode) == 0o640, ext
+        out.chmod(0o600)
+        run(cli, "convert", src, out, "--res", "8x8x16")
+        assert stat.S_IMODE(out.stat().st_mode) == 0o600, ext
+
+
+def test_brdfz_bytes_are_reproducible_with_source_date_epoch(cli, demo_table, tmp_path):
+    env = dict(os.environ, SOURCE_DATE_EPOCH="1700000000")
+    outs = [tmp_path / "a.brdfz", tmp_path / "b.brdfz"]
+    for k, out in enumerate(outs):
+        if k:
+            time.sleep(1.1)  # object times, were they stored, would differ
+        subprocess.run([cli, "compress", str(demo_table), "-o", str(out), "--repr", "svd:rank=1,res=16x16x32"],
+                       check=True, capture_output=True, env=env)
+    assert outs[0].read_bytes() == outs[1].read_bytes()
+    assert "2023-11-14T22:13:20Z" in run(cli, "info", outs[0]).stdout
+    bad = subprocess.run([cli, "convert", str(demo_table), str(tmp_path / "c.brdfz")], capture_output=True, text=True,
+                         env=dict(os.environ, SOURCE_DATE_EPOCH="yesterday"))
+    assert bad.returncode == 1 and "SOURCE_DATE_EPOCH='yesterday'" in bad.stderr
+    assert not (tmp_path / "c.brdfz").exists()
