@@ -5,6 +5,7 @@
 #include <fstream>
 
 #include "brdfz/errors.h"
+#include "detail/atomic_file.h"
 #include "brdfz/formats/pca_basis.h"
 #include "brdfz/formats/registry.h"
 
@@ -148,6 +149,12 @@ ValidityCounts convert(const std::string& in, const std::string& out, const Conv
 CompressOptions with_file_access(CompressOptions options) {
     options.load_pca_basis = [](const std::string& path) { return container::read_pca_basis(path); };
     return options;
+}
+
+void write_text(const std::string& path, std::string_view text) {
+    detail::AtomicFile file(path);
+    file.write(text.data(), text.size());
+    file.commit();
 }
 
 }  // namespace brdfz

@@ -7,8 +7,8 @@
 #include <chrono>
 #include <cstdio>
 #include <filesystem>
-#include <fstream>
 #include <iostream>
+#include <sstream>
 
 #include "brdfz/compress.h"
 #include "brdfz/errors.h"
@@ -70,7 +70,7 @@ void add_demo(CLI::App& app) {
         std::snprintf(line, sizeof line, "   %-34s %10s %10s %12s %10s %12s %8s\n", "setting", "bytes", "ratio",
                       "cos_rmse_rel", "log_rmse", "eval pairs/s", "build s");
         std::cout << line;
-        std::ofstream csv(csv_path);
+        std::ostringstream csv;  // written whole at the end, so that a killed demo leaves no partial CSV
         csv << kSweepCsvHeader << "\n";
         const auto input_bytes = std::filesystem::file_size(path);
         const std::vector<std::string> built = specs->empty() ? benchmark_specs() : *specs;
@@ -91,8 +91,7 @@ void add_demo(CLI::App& app) {
                 ++failed;
             }
         }
-        csv.close();
-        if (!csv) throw IoError(csv_path, "cannot write");
+        write_text(csv_path, csv.str());
         std::cout << "   wrote " << csv_path << "\n";
         if (failed)
             throw Error("demo: " + std::to_string(failed) + " of " + std::to_string(built.size()) +

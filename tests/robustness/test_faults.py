@@ -1,5 +1,6 @@
 """The fault sweep on the command: writes killed with SIGKILL or SIGTERM, a full disk (a file size
 limit), the umask and a replaced file's mode, reproducible .brdfz bytes."""
+import csv
 import os
 import re
 import resource
@@ -113,3 +114,23 @@ def test_brdfz_bytes_are_reproducible_with_source_date_epoch(cli, demo_table, tm
                          env=dict(os.environ, SOURCE_DATE_EPOCH="yesterday"))
     assert bad.returncode == 1 and "SOURCE_DATE_EPOCH='yesterday'" in bad.stderr
     assert not (tmp_path / "c.brdfz").exists()
+
+
+@pytest.mark.parametrize("sig", [signal.SIGKILL, signal.SIGTERM])
+def test_a_killed_demo_leaves_no_partial_csv(cli, tmp_path, sig):
+    """demo writes representations.csv whole once every setting is measured: signalled while it
+    builds them, it leaves neither the CSV nor a temporary; left alone, the CSV has a row a setting."""
+    specs = ["analytic:lambert+ggx", "tabular:res=90x90x180", "svd:rank=4,space=log"]
+    cmd = [cli, "demo", "--out", str(tmp_path)] + [a for s in specs for a in ("--repr", s)]
+    proc = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.DEVNULL, text=True)
+    for line in proc.stdout:
+        if line.lstrip().startswith("tabular:res=90x90x180"):  # the first setting is measured
+            proc.send_signal(sig)
+            break
+    proc.stdout.close()
+    assert proc.wait(timeout=300) == -sig
+    assert not (tmp_path / "representations.csv").exists() and temporaries(tmp_path) == []
+    run(cli, *cmd[1:])
+    with open(tmp_path / "representations.csv", newline="") as f:
+        rows = list(csv.DictReader(f))
+    assert [r["repr"] for r in rows] == specs and all(r["status"].startswith("ok") for r in rows)

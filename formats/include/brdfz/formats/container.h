@@ -90,7 +90,7 @@ struct WriteOptions {
     std::function<void(double)> progress;
 };
 
-// Writes atomically (NAME.tmp-XXXXXX, renamed on success). IoError when writing fails.
+// Writes atomically (formats/detail/atomic_file.h). IoError when writing fails.
 Achieved write(const std::string& path, const Brdf& brdf, const WriteOptions& options = {});
 
 struct ReadResult {

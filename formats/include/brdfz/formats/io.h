@@ -7,6 +7,7 @@
 #include <memory>
 #include <optional>
 #include <string>
+#include <string_view>
 #include <utility>
 #include <vector>
 
@@ -103,6 +104,10 @@ struct ConvertOptions {
 // load → save: any readable file into any writable format (a representation the output format
 // cannot hold is tabulated, on save.grid); returns the counts of what was written.
 ValidityCounts convert(const std::string& in, const std::string& out, const ConvertOptions& options = {});
+
+// Writes a text file (a report, a CSV) the way every format is written: atomically, with the umask's
+// mode or a replaced file's; IoError on failure.
+void write_text(const std::string& path, std::string_view text);
 
 // `options` with the file access compress() needs to resolve the files a spec names (pca:basis=FILE).
 CompressOptions with_file_access(CompressOptions options);

@@ -23,7 +23,7 @@ using Provenance = std::vector<std::pair<std::string, std::variant<std::string, 
 // IoError when it cannot be read.
 AnalyticBrdf read(const std::string& path);
 
-// Writes atomically (NAME.tmp-XXXX, then rename); parameters with 17 significant digits, so reading
+// Writes atomically (formats/detail/atomic_file.h); parameters with 17 significant digits, so reading
 // gives back the same doubles.
 void write(const std::string& path, const AnalyticBrdf& model, const Provenance& provenance = {});
 
