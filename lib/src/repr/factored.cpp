@@ -107,7 +107,7 @@ FactoredBrdf::FactoredBrdf(Factors factors) : f_(std::move(factors)) {
         ceiling_[c] = detail::to_space(f_.space, std::min(top, std::numeric_limits<float>::max()));
     }
     // The evaluation copies: rows padded to a whole number of the kernel's SIMD steps.
-    avx2_ = detail::simd_level() == detail::Simd::Avx2Fma;
+    avx2_ = detail::simd_level() >= detail::Simd::Avx2Fma;
     const std::size_t step = detail::factor_lanes(avx2_ ? detail::Simd::Avx2Fma : detail::Simd::Sse2);
     width_ = (m + step - 1) / step * step;
     // U and V each from a 64-byte boundary: a row of 16 floats (separate colour to rank 5, shared to

@@ -394,7 +394,7 @@ HalfVectorSampler::Draw HalfVectorSampler::draw(const Vec3& wo, double u1, doubl
 
 void HalfVectorSampler::draw_block(const Vec3* wo, const std::array<double, 2>* u, std::size_t n, Draws& out) const {
     const SamplerView v{options_.cosine_share, theta_o_.back(), static_cast<int>(theta_o_.size())};
-    (detail::simd_level() == detail::Simd::Avx2Fma ? draw_lanes_avx2 : draw_lanes_sse2)(
+    (detail::simd_level() >= detail::Simd::Avx2Fma ? draw_lanes_avx2 : draw_lanes_sse2)(
         v, first_, detail::half_turn_sincos(), wo, u, n, out);
 }
 
