@@ -63,7 +63,7 @@ void add_info(CLI::App& app) {
     cmd->callback([args] {
         if (holds_measurements(args->file))
             print_measurement_info(args->file, load_measurements(args->file), args->json, std::cout);
-        else if (format_of(args->file) == "brdfz") {
+        else if (detect_format(args->file) == "brdfz") {
             const container::Metadata meta = container::read_metadata(args->file);
             print_info(args->file, load(args->file, args->load), args->json, std::cout, &meta);
         } else

@@ -191,9 +191,9 @@ std::tuple<Array, Array, Array> sample(const Brdf& brdf, const ArrayArg& wo_obj,
 // A table's values as a read-only float32 view of shape (θh, θd, φd, 3) that keeps the Brdf alive;
 // invalid entries are NaN (the table's validity mask).
 std::optional<py::array_t<float>> table_view(const BrdfPtr& brdf) {
-    const auto* tabular = dynamic_cast<const TabularBrdf*>(brdf.get());
-    if (!tabular) return std::nullopt;
-    const Table& t = tabular->table();
+    const Table* stored = brdf->stored_table();
+    if (!stored) return std::nullopt;
+    const Table& t = *stored;
     const GridSpec& g = t.grid();
     const py::ssize_t f = sizeof(float);
     py::array_t<float> view({g.n_theta_h, g.n_theta_d, g.n_phi_d, 3},

@@ -14,6 +14,7 @@
 #include "brdfz/errors.h"
 #include "brdfz/fit/fit.h"
 #include "brdfz/formats/io.h"
+#include "brdfz/formats/registry.h"
 #include "brdfz/metrics.h"
 #include "brdfz/repr/analytic/model.h"
 #include "brdfz/repr/tabular.h"
@@ -55,7 +56,7 @@ BrdfPtr load_brdf(const Path& path, const std::string& format, const LoadOptions
     return reading(path, [&] {
         py::gil_scoped_release release;
         const std::string p = path.string();
-        return BrdfPtr(load_as(format.empty() ? format_of(p) : format, p, options).brdf);
+        return BrdfPtr(format.empty() ? load(p, options).brdf : load_as(format, p, options).brdf);
     });
 }
 
@@ -140,21 +141,18 @@ void bind_operations(py::module_& m) {
     m.def("convert", [](const Path& src, const Path& dst, const Resolution& res, const std::string& src_format,
                         const std::string& dst_format, const std::string& lookup, const std::string& bin_position,
                         int threads, py::object progress) {
-              const std::string from = src_format.empty() ? format_of(src.string()) : src_format;
-              const BrdfPtr in = load_brdf(src, from, load_options(lookup, bin_position));
-              SaveOptions o;
-              if (res) o.grid = grid_of(*res);
-              o.format = dst_format;
-              o.source = src.string();
-              o.source_format = from;
-              o.threads = threads;
+              ConvertOptions o;
+              o.from = src_format;
+              o.load = load_options(lookup, bin_position);
+              if (res) o.save.grid = grid_of(*res);
+              o.save.format = dst_format;
+              o.save.threads = threads;
               Progress bar(std::move(progress));
-              o.progress = bar.hook();
-              ValidityCounts c;
-              {
+              o.save.progress = bar.hook();
+              const ValidityCounts c = reading(src, [&] {
                   py::gil_scoped_release release;
-                  c = save(*in, dst.string(), o);
-              }
+                  return convert(src.string(), dst.string(), o);
+              });
               bar.rethrow();
               return counts_dict(c);
           },
@@ -171,7 +169,7 @@ void bind_operations(py::module_& m) {
             return "<brdfz.Compressed " + c.spec + ": " + c.brdf->describe() + ", " + std::to_string(c.brdf->nbytes()) + " bytes>";
         });
     m.def("compress", [](const BrdfPtr& brdf, const std::string& spec, int threads, py::object progress) {
-              CompressOptions o;
+              CompressOptions o = with_file_access({});
               o.threads = threads;
               Progress bar(std::move(progress));
               o.progress = bar.hook();
@@ -186,6 +184,30 @@ void bind_operations(py::module_& m) {
           py::arg("brdf"), py::arg("spec"), py::kw_only(), py::arg("threads") = 0, py::arg("progress") = py::none(),
           "builds the representation SPEC names (as `brdfz compress`)");
     m.def("compress_kinds", &compress_kinds);
+    m.def("representations", [] {
+              py::list out;
+              for (const ReprKind& k : representation_kinds()) {
+                  py::list keys;
+                  for (const SpecKey& key : k.keys)
+                      keys.append(py::dict(py::arg("name") = key.name, py::arg("default") = key.default_value,
+                                           py::arg("help") = key.help));
+                  out.append(py::dict(py::arg("kind") = k.name, py::arg("summary") = k.summary,
+                                      py::arg("positional") = k.positional,
+                                      py::arg("measurements") = k.build_measurements != nullptr, py::arg("keys") = keys));
+              }
+              return out;
+          },
+          "the representation kinds compress() builds, as `brdfz representations --json` lists them");
+    m.def("formats", [] {
+              py::list out;
+              for (const Format& f : all_formats())
+                  out.append(py::dict(py::arg("name") = f.name, py::arg("description") = f.description,
+                                      py::arg("extensions") = f.extensions,
+                                      py::arg("reads") = f.read ? "brdf" : f.read_measurements ? "measurements" : "",
+                                      py::arg("writes") = f.write != nullptr));
+              return out;
+          },
+          "the file formats, as `brdfz formats --json` lists them");
 
     py::class_<PerChannel>(m, "ChannelMetrics", "one metric per channel and their mean")
         .def_readonly("r", &PerChannel::r)

@@ -8,6 +8,7 @@
 
 #include "brdfz/errors.h"
 #include "brdfz/formats/rgl.h"
+#include "brdfz/simd.h"
 #include "kernels.h"
 #include "marginal2d.h"
 
@@ -114,7 +115,7 @@ Rgb RglBrdf::eval_above(const Vec3& wi, const Vec3& wo) const {
 }
 
 void RglBrdf::eval_batch(const Vec3* wi, const Vec3* wo, Rgb* out, std::size_t n) const {
-    detail::eval_pairs(::brdfz::detail::simd_level(), kernel_tables(), wi, wo, out, n);
+    detail::eval_pairs(simd_level(), kernel_tables(), wi, wo, out, n);
 }
 
 // The kernel sets the weight with the draw, so Brdf::sample does not evaluate it again.
@@ -126,7 +127,7 @@ BrdfSample RglBrdf::sample_above(const Vec3& wo, double u1, double u2) const {
 }
 
 void RglBrdf::sample_batch(const Vec3* wo, const std::array<double, 2>* u, BrdfSample* out, std::size_t n) const {
-    detail::sample_pairs(::brdfz::detail::simd_level(), kernel_tables(), wo, u, out, n);
+    detail::sample_pairs(simd_level(), kernel_tables(), wo, u, out, n);
 }
 
 double RglBrdf::pdf_above(const Vec3& wo, const Vec3& wi) const {
@@ -136,7 +137,7 @@ double RglBrdf::pdf_above(const Vec3& wo, const Vec3& wi) const {
 }
 
 void RglBrdf::pdf_batch(const Vec3* wo, const Vec3* wi, double* out, std::size_t n) const {
-    detail::pdf_pairs(::brdfz::detail::simd_level(), kernel_tables(), wo, wi, out, n);
+    detail::pdf_pairs(simd_level(), kernel_tables(), wo, wi, out, n);
 }
 
 }  // namespace brdfz::rgl

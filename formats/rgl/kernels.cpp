@@ -24,6 +24,7 @@
 #include <utility>
 
 #include "detail/fast_math.h"
+#include "detail/simd.h"
 
 // The vectors below live in always-inlined functions of one build each: none crosses a call, so the
 // ABI change GCC notes for wide vectors outside their ISA does not apply.

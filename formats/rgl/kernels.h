@@ -1,5 +1,5 @@
 // RglBrdf's batch kernels (formats/rgl/kernels.cpp): eval, pdf and sample with its weight over arrays
-// of pairs, built for SSE2, AVX2 and AVX-512 and run at the widest level the CPU has (detail/simd.h).
+// of pairs, built for SSE2, AVX2 and AVX-512 and run at the level asked for (brdfz/simd.h).
 // One call at a time runs them on one pair, so a pair's result does not depend on its batch.
 //
 // Tables blended between two θi slices store the slices innermost: entry i of slice s at i·stride + s,
@@ -12,7 +12,7 @@
 #include <vector>
 
 #include "brdfz/brdf.h"
-#include "detail/simd.h"
+#include "brdfz/simd.h"
 
 namespace brdfz::rgl::detail {
 
@@ -56,8 +56,6 @@ struct KernelTables {
     WarpTables luminance;  // data null: sampling uses the VNDF warp alone
     bool jacobian = true;
 };
-
-using ::brdfz::detail::Simd;
 
 // out[k] = f(wi[k], wo[k]) (rgl.h), 0 below the horizon and wherever it would not be finite.
 void eval_pairs(Simd simd, const KernelTables& t, const Vec3* wi, const Vec3* wo, Rgb* out, std::size_t n);

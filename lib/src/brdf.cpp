@@ -10,6 +10,8 @@
 
 namespace brdfz {
 
+Simd simd_level() { return detail::simd_level(); }
+
 const char* simd_name() {
     switch (detail::simd_level()) {
         case detail::Simd::Avx512: return "avx512";

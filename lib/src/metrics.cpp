@@ -8,7 +8,7 @@
 #include <vector>
 
 #include "brdfz/errors.h"
-#include "brdfz/repr/tabular.h"
+#include "brdfz/table.h"
 #include "detail/grid_sweep.h"
 
 namespace brdfz {
@@ -72,8 +72,8 @@ Metrics compare(const Brdf& reference, const Brdf& approx, const MetricOptions& 
     const double theta_max = reference.measured_theta_max();
     const double min_cos = theta_max < std::numbers::pi / 2 ? std::max(min_cos_of(options), std::cos(theta_max))
                                                             : min_cos_of(options);
-    const auto* ref_table = dynamic_cast<const TabularBrdf*>(&reference);
-    const GridSpec g = ref_table ? ref_table->table().grid() : options.grid;
+    const Table* ref_table = reference.stored_table();
+    const GridSpec g = ref_table ? ref_table->grid() : options.grid;
     g.validate();
 
     const int workers = detail::resolve_threads(options.threads);
@@ -90,8 +90,8 @@ Metrics compare(const Brdf& reference, const Brdf& approx, const MetricOptions& 
             if (!(wi[k].z > min_cos && wo[k].z > min_cos)) continue;
             Rgb ref = ref_f[w][k];
             if (ref_table) {
-                if (!ref_table->table().valid(base + k)) continue;
-                for (int c = 0; c < 3; ++c) ref[c] = ref_table->table().at(base + k, c);
+                if (!ref_table->valid(base + k)) continue;
+                for (int c = 0; c < 3; ++c) ref[c] = ref_table->at(base + k, c);
             }
             bool finite = true;
             for (int c = 0; c < 3; ++c) finite = finite && std::isfinite(ref[c]) && std::isfinite(app_f[w][k][c]);

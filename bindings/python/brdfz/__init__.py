@@ -42,13 +42,16 @@ from ._core import (
     compress_kinds,
     default_candidates,
     format_of,
+    formats,
     load,
+    representations,
 )
 
 __all__ = [
     "Brdf", "Candidate", "ChannelMetrics", "Compressed", "FitReport", "FitResult", "FormatError", "Metrics",
     "Scene", "Selection", "Trial", "UnsupportedError", "albedo", "benchmark_specs", "compress", "compress_kinds",
-    "convert", "default_candidates", "fit", "format_of", "load", "metrics", "read_scene", "save", "tabulate", "trial",
+    "convert", "default_candidates", "fit", "format_of", "formats", "load", "metrics", "read_scene", "representations",
+    "save", "tabulate", "trial",
 ]
 
 Path = Union[str, os.PathLike]

@@ -7,7 +7,7 @@ import numpy
 import numpy.typing
 import os
 import typing
-__all__: list[str] = ['Brdf', 'Candidate', 'ChannelMetrics', 'Compressed', 'FitReport', 'FitResult', 'FormatError', 'Metrics', 'Scene', 'Selection', 'Trial', 'UnsupportedError', 'albedo', 'benchmark_specs', 'compress', 'compress_kinds', 'convert', 'default_candidates', 'fit', 'format_of', 'load', 'metrics', 'read_scene', 'save', 'select_representation', 'tabulate', 'trial']
+__all__: list[str] = ['Brdf', 'Candidate', 'ChannelMetrics', 'Compressed', 'FitReport', 'FitResult', 'FormatError', 'Metrics', 'Scene', 'Selection', 'Trial', 'UnsupportedError', 'albedo', 'benchmark_specs', 'compress', 'compress_kinds', 'convert', 'default_candidates', 'fit', 'format_of', 'formats', 'load', 'metrics', 'read_scene', 'representations', 'save', 'select_representation', 'tabulate', 'trial']
 class FormatError(ValueError):
     pass
 class UnsupportedError(ValueError):
@@ -352,6 +352,10 @@ def format_of(path: str) -> str:
     """
     the format name of a file's extension ('merl', 'rgl', ...)
     """
+def formats() -> list:
+    """
+    the file formats, as `brdfz formats --json` lists them
+    """
 def load(path: os.PathLike | str | bytes, *, lookup: str = 'linear', bin_position: str = 'centre', format: str = '') -> Brdf:
     """
     a BRDF file (.binary, .bsdf, .brdfz, .exr, .json; format overrides the extension)
@@ -363,6 +367,10 @@ def metrics(reference: typing.Any, approx: Brdf, *, max_theta: typing.SupportsFl
 def read_scene(path: os.PathLike | str | bytes) -> Scene:
     """
     a scene file (docs/scene-json.md), its samples drawn
+    """
+def representations() -> list:
+    """
+    the representation kinds compress() builds, as `brdfz representations --json` lists them
     """
 def save(brdf: Brdf, path: os.PathLike | str | bytes, *, res: tuple[typing.SupportsInt | typing.SupportsIndex, typing.SupportsInt | typing.SupportsIndex, typing.SupportsInt | typing.SupportsIndex] | None = None, format: str = '', threads: typing.SupportsInt | typing.SupportsIndex = 0, progress: typing.Any = None) -> dict:
     """

@@ -6,14 +6,16 @@
 
 #include <atomic>
 
+#include "brdfz/simd.h"
+
 namespace brdfz::detail {
 
-enum class Simd { Sse2, Avx2Fma, Avx512 };
+using ::brdfz::Simd;
 
 // Tests lower it to run the narrower builds on a CPU that has the wider ones; Avx512 is no cap.
 inline std::atomic<Simd> simd_cap{Simd::Avx512};
 
-// The widest level both the CPU and simd_cap allow. AVX-512 means F, DQ, VL and BW (x86-64-v4).
+// The widest level both the CPU and simd_cap allow (brdfz::simd_level() for code outside the core).
 inline Simd simd_level() {
 #if defined(__x86_64__) || defined(__i386__)
     static const bool avx2_fma = __builtin_cpu_supports("avx2") && __builtin_cpu_supports("fma");

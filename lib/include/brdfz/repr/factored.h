@@ -129,6 +129,7 @@ public:
     int channels() const override { return 3; }
     std::size_t nbytes() const override;
     std::string describe() const override;
+    const GridSpec* grid() const override { return &f_.grid; }
 
 protected:
     Rgb eval_above(const Vec3& wi, const Vec3& wo) const override;

@@ -34,6 +34,8 @@ public:
     int channels() const override { return 3; }
     std::size_t nbytes() const override { return table_.bins() * 3 * sizeof(float); }
     std::string describe() const override;
+    const GridSpec* grid() const override { return &table_.grid(); }
+    const Table* stored_table() const override { return &table_; }
 
 protected:
     Rgb eval_above(const Vec3& wi, const Vec3& wo) const override;
