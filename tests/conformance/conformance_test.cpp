@@ -68,6 +68,7 @@ TEST_CASE("conformance: every representation kind", "[conformance]") {
             if (c.reciprocal) test::check_reciprocity(b);
             test::check_furnace(b, 1.0);
             test::check_sampler(b, 20000);
+            test::check_batch_sampler(b, 20000);
             LoadOptions reading;
             if (spec.find("lookup=nearest") != std::string::npos) reading.lookup = Lookup::Nearest;
             test::check_container_round_trip(b, reading);

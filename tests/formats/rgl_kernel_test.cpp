@@ -292,12 +292,7 @@ Inputs inputs(std::size_t n, std::uint64_t seed) {
     return in;
 }
 
-bool same_bits(double a, double b) { return std::memcmp(&a, &b, sizeof a) == 0; }
-bool same_bits(const BrdfSample& a, const BrdfSample& b) {
-    return same_bits(a.wi.x, b.wi.x) && same_bits(a.wi.y, b.wi.y) && same_bits(a.wi.z, b.wi.z) &&
-           same_bits(a.pdf, b.pdf) && same_bits(a.weight[0], b.weight[0]) && same_bits(a.weight[1], b.weight[1]) &&
-           same_bits(a.weight[2], b.weight[2]);
-}
+using test::same_bits;
 
 // The batch kernels against the scalar path on n random pairs and the awkward ones.
 void check_against_scalar(const rgl::RglBrdf& b, std::size_t n) {
@@ -450,4 +445,33 @@ TEST_CASE("rgl kernels: one call = batch, bit for bit, and every SIMD build give
         return;
     }
     check_builds(*rgl::read(files.front().string()).brdf, 20000);
+}
+
+TEST_CASE("rgl kernels: the batch sampler's chi-square on shared files, and batch = one call", "[rgl][kernels][sample][light]") {
+    for (int n_theta : {1, 3}) {
+        INFO(n_theta << " slices (random tables)");
+        test::check_batch_sampler(rgl::RglBrdf(random_tensors(n_theta, 9, true)), 100000);
+    }
+    const auto files = rgl_files();
+    if (files.empty()) {
+        WARN("skipped the shared files: ../shared/data/rgl missing");
+        return;
+    }
+    // Three files (Bonferroni over them and the five views; the heavy test below takes every file).
+    for (std::size_t i = 0; i < files.size(); i += 6) {
+        INFO(files[i].filename().string());
+        test::check_batch_sampler(*rgl::read(files[i].string()).brdf, 200000, test::kViewsLevel / 3);
+    }
+}
+
+TEST_CASE("rgl kernels: the batch sampler's chi-square on every shared file", "[rgl][kernels][sample][heavy]") {
+    const auto files = rgl_files();
+    if (files.empty()) {
+        WARN("skipped: ../shared/data/rgl missing");
+        return;
+    }
+    for (const auto& path : files) {
+        INFO(path.filename().string());
+        test::check_batch_sampler(*rgl::read(path.string()).brdf, 1000000, test::kViewsLevel / files.size());
+    }
 }
