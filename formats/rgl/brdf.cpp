@@ -70,15 +70,17 @@ RglBrdf::RglBrdf(Tensors tensors) : tensors_(std::move(tensors)) {
     measured_theta_max_ = t.theta_i[n_theta - (padded ? 2 : 1)];
     vndf_ = std::make_unique<const detail::Marginal2D>("rgl: vndf", t.vndf.values, t.vndf.slices, t.vndf.rows,
                                                        t.vndf.cols);
-    // Each point's R, G, B and a 0 per slice, slices innermost (kernels.h).
-    const std::size_t plane = t.rgb.rows * t.rgb.cols, stride = detail::slice_stride(n_theta);
-    if (static_cast<double>(plane) * static_cast<double>(stride) * 4.0 >= static_cast<double>(std::numeric_limits<int>::max()))
-        throw ValueError("rgl: rgb is too large");
-    rgb_.assign(plane * stride * 4, 0.0f);
-    for (std::size_t i = 0; i < plane; ++i)
-        for (std::size_t s = 0; s < stride; ++s)
-            for (std::size_t c = 0; c < 3; ++c)
-                rgb_[(i * stride + s) * 4 + c] = t.rgb.values[((s < n_theta ? s : 0) * 3 + c) * plane + i];
+    // Each point's channels, slices innermost (kernels.h): the planes (3s + c) of the tensor as 3N
+    // entries of n_theta slices.
+    const std::size_t plane = t.rgb.rows * t.rgb.cols;
+    if (static_cast<double>(3 * plane) * static_cast<double>(detail::slice_stride(n_theta)) >=
+        static_cast<double>(std::numeric_limits<int>::max()))
+        throw ValueError("rgl: rgb is too large");  // the kernels index with ints
+    std::vector<float> by_slice(n_theta * 3 * plane);
+    for (std::size_t s = 0; s < n_theta; ++s)
+        for (std::size_t i = 0; i < plane; ++i)
+            for (std::size_t c = 0; c < 3; ++c) by_slice[(s * plane + i) * 3 + c] = t.rgb.values[(s * 3 + c) * plane + i];
+    rgb_ = detail::slices_innermost(by_slice.data(), n_theta, 3 * plane);
 }
 
 RglBrdf::~RglBrdf() = default;

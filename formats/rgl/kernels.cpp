@@ -3,13 +3,12 @@
 // the table kernels do (lib/src/detail/table_lookup.h). The arithmetic passes are branch-free, without
 // libm calls, so GCC vectorises them; the table reads between them are written out as vectors of W
 // lanes (2, 4 or 8 doubles: the SSE2, AVX2 and AVX-512 builds), each lane's two θi slices of an entry
-// one 8-byte read (kernels.h), and the RGB tables' both slices and three channels of a point one 32-byte
-// read per pair.
+// one 8-byte read (kernels.h).
 //
 // Arithmetic is in double over the float32 tables, operation for operation the scalar warps' (Mitsuba's
 // Marginal2D, after Dupuy & Jakob 2018), with two substitutions that vectorise: angles by the
 // polynomial arctangent detail::atan01 (6e-11 relative) instead of asin and atan2, and the sampled
-// normal's sines and cosines from detail::half_turn_sincos (a few ulp) instead of libm's. The unit is
+// normal's sines and cosines from detail::sincos_half_turn (a few ulp) instead of libm's. The unit is
 // compiled without FMA contraction (formats/CMakeLists.txt), so every build gives the same bits, and a
 // pair's result does not depend on the batch it is in.
 #include "kernels.h"
@@ -335,7 +334,8 @@ template <int W>
 // in-range indices there.
 struct Pairs {
     double ax[kBlock], ay[kBlock], az[kBlock], bx[kBlock], by[kBlock], bz[kBlock];
-    std::int64_t ok[kBlock];  // the doubles' width: a select on bytes between doubles does not vectorise
+    double ok[kBlock];  // 1 or 0, as a double: a select on bytes or a test of 64-bit integers between
+                        // doubles does not vectorise (SSE2 has no 64-bit integer compare)
 };
 
 // m rounded up to whole vectors of W lanes.
@@ -351,11 +351,11 @@ template <int W>
         const Vec3& u = a[k];
         const Vec3& v = b[k];
         const bool ok = (u.z > 0.0) & (v.z > 0.0) & finite(u) & finite(v);
-        p.ok[k] = ok;
+        p.ok[k] = ok ? 1.0 : 0.0;
         p.ax[k] = ok ? u.x : 0.0, p.ay[k] = ok ? u.y : 0.0, p.az[k] = ok ? u.z : 1.0;
         p.bx[k] = ok ? v.x : 0.0, p.by[k] = ok ? v.y : 0.0, p.bz[k] = ok ? v.z : 1.0;
     }
-    for (int k = m; k < mw; ++k) p.ok[k] = 0, p.ax[k] = p.ay[k] = p.bx[k] = p.by[k] = 0.0, p.az[k] = p.bz[k] = 1.0;
+    for (int k = m; k < mw; ++k) p.ok[k] = 0.0, p.ax[k] = p.ay[k] = p.bx[k] = p.by[k] = 0.0, p.az[k] = p.bz[k] = 1.0;
 }
 
 // The microfacet normal between a direction a (the one the tables are conditioned on) and b, for a
@@ -385,12 +385,6 @@ struct Geometry {
     }
 }
 
-// Four doubles: a point's R, G, B (and a spare lane), per pair.
-typedef double Rgbx __attribute__((vector_size(32)));
-typedef float RgbxPair __attribute__((vector_size(32)));  // both slices' R, G, B, 0
-
-[[gnu::always_inline]] inline Rgbx lerp(Rgbx a, Rgbx b, double t) { return a * (1.0 - t) + b * t; }
-
 // f for the block's pairs (a = wi, b = wo) into r, g, b (lanes [0, m); mw the lanes the passes run): the
 // microfacet normal m = normalize(wi + wo) through the inverse of the VNDF warp at θi to a point of the
 // RGB tables, scaled by D(m) / (4σ(wi)) with the file's jacobian flag, and by 1 / cosθo (the data hold
@@ -413,26 +407,30 @@ template <int W>
         bilinear_pass<W>(t.sigma, ui_x, ui_y, mw, sigma);
         for (int k = 0; k < mw; ++k) scale[k] *= d[k] / (4.0 * sigma[k]);
     }
-    // RGB: per pair, the patch's four points, each one read of both slices' three channels.
-    const int R = t.rgb_rows, C = t.rgb_cols, S4 = 4 * t.vndf.stride;
-    for (int k = 0; k < m; ++k) {
+    // RGB: each point's three channels (kernels.h: channel by channel, slices innermost), the patch's
+    // four corners blended between the lane's slices.
+    const int R = t.rgb_rows, C = t.rgb_cols, S = t.vndf.stride;
+    int entry[kBlock];
+    double fx[kBlock], fy[kBlock], d[3][4][kBlock];
+    for (int k = 0; k < mw; ++k) {
         const Patch q = locate(pts.x[k], pts.y[k], R, C);
-        const float* base = t.rgb + (q.iy * C + q.ix) * S4 + 4 * s.lower[k];
-        const double w = s.w[k];
-        const auto at = [&](int offset) {
-            RgbxPair v;
-            std::memcpy(&v, base + offset, sizeof v);
-            // Lane by lane: one conversion each (GCC lowers __builtin_convertvector of the halves to four).
-            const Rgbx lower{v[0], v[1], v[2], v[3]}, upper{v[4], v[5], v[6], v[7]};
-            return (1.0 - w) * lower + w * upper;
-        };
-        const Rgbx f = lerp(lerp(at(0), at(S4), q.fx), lerp(at(C * S4), at((C + 1) * S4), q.fx), q.fy) * scale[k];
-        // A zero sigma, an empty VNDF row or a cosθo so small that f overflows would give Inf or NaN.
-        const bool ok = p.ok[k] != 0;
-        out_r[k] = ok & finite(f[0]) ? f[0] : 0.0;
-        out_g[k] = ok & finite(f[1]) ? f[1] : 0.0;
-        out_b[k] = ok & finite(f[2]) ? f[2] : 0.0;
+        entry[k] = (q.iy * C + q.ix) * 3, fx[k] = q.fx, fy[k] = q.fy;
     }
+    for (int c = 0; c < 3; ++c) {
+        int idx[4][kBlock];
+        for (int k = 0; k < mw; ++k) {
+            const int e = (entry[k] + c) * S + s.lower[k];
+            idx[0][k] = e, idx[1][k] = e + 3 * S, idx[2][k] = e + 3 * C * S, idx[3][k] = e + 3 * (C + 1) * S;
+        }
+        for (int j = 0; j < 4; ++j) blend_reads<W>(t.rgb, idx[j], s.w, mw, d[c][j]);
+    }
+    double* out[3] = {out_r, out_g, out_b};
+    for (int c = 0; c < 3; ++c)
+        for (int k = 0; k < m; ++k) {
+            const double v = lerp(lerp(d[c][0][k], d[c][1][k], fx[k]), lerp(d[c][2][k], d[c][3][k], fx[k]), fy[k]) * scale[k];
+            // A zero sigma, an empty VNDF row or a cosθo so small that f overflows would give Inf or NaN.
+            out[c][k] = (p.ok[k] > 0.0) & finite(v) ? v : 0.0;
+        }
 }
 
 template <int W>
@@ -478,7 +476,7 @@ template <int W>
         for (int k = 0; k < m; ++k) {
             const double jacobian = solid_angle_per_unit_square(g.um_x[k], g.sin_m[k], g.a_dot_m[k]);
             const double pdf = q.pdf[k] * lum[k] / jacobian;
-            out[start + k] = p.ok[k] & (q.pdf[k] > 0.0) & (jacobian > 0.0) & finite(pdf) ? pdf : 0.0;
+            out[start + k] = (p.ok[k] > 0.0) & (q.pdf[k] > 0.0) & (jacobian > 0.0) & finite(pdf) ? pdf : 0.0;
         }
     }
 }
@@ -489,13 +487,11 @@ template <int W>
 template <int W>
 [[gnu::always_inline]] inline void sample_passes(const KernelTables& t, const Vec3* wo, const std::array<double, 2>* u,
                                                  BrdfSample* out, std::size_t n) {
-    const ::brdfz::detail::SinCosTable& table = ::brdfz::detail::half_turn_sincos();
     Pairs p, e;
     Slices s;
     Points q;
     double theta_o[kBlock], cos_o[kBlock], sin_o[kBlock], pdf_l[kBlock];
     double r[kBlock], g[kBlock], b[kBlock], pdf[kBlock];
-    std::int64_t drawn[kBlock];
     for (std::size_t start = 0; start < n; start += kBlock) {
         const int m = static_cast<int>(std::min<std::size_t>(kBlock, n - start)), mw = whole<W>(m);
         for (int k = 0; k < m; ++k) {
@@ -503,11 +499,11 @@ template <int W>
             const double u1 = u[start + k][0], u2 = u[start + k][1];
             // Brdf::can_draw, branch-free.
             const bool ok = (w.z > 0.0) & (u1 >= 0.0) & (u1 < 1.0) & (u2 >= 0.0) & (u2 < 1.0) & finite(w);
-            p.ok[k] = ok;
+            p.ok[k] = ok ? 1.0 : 0.0;
             p.bx[k] = ok ? w.x : 0.0, p.by[k] = ok ? w.y : 0.0, p.bz[k] = ok ? w.z : 1.0;
             q.x[k] = ok ? u2 : 0.0, q.y[k] = ok ? u1 : 0.0;
         }
-        for (int k = m; k < mw; ++k) p.ok[k] = 0, p.bx[k] = p.by[k] = 0.0, p.bz[k] = 1.0, q.x[k] = q.y[k] = 0.0;
+        for (int k = m; k < mw; ++k) p.ok[k] = 0.0, p.bx[k] = p.by[k] = 0.0, p.bz[k] = 1.0, q.x[k] = q.y[k] = 0.0;
         for (int k = 0; k < mw; ++k) {
             const double x = p.bx[k], y = p.by[k], z = p.bz[k];
             const double ro = std::sqrt(x * x + y * y);
@@ -525,9 +521,9 @@ template <int W>
         sample_pass<W>(t.vndf, s, mw, q);
         for (int k = 0; k < mw; ++k) {
             // m from its unit coordinates: θm = u_θ²·π/2, azimuth (2u_φ − 1)π from wo's.
-            const ::brdfz::detail::SinCosTable::SinCos th = table(q.x[k] * q.x[k] * (kPi / 2.0));
+            const ::brdfz::detail::SinCos2 th = ::brdfz::detail::sincos_half_turn(q.x[k] * q.x[k] * (kPi / 2.0));
             const double phi = (2.0 * q.y[k] - 1.0) * kPi;
-            const ::brdfz::detail::SinCosTable::SinCos ph = table(std::fabs(phi));
+            const ::brdfz::detail::SinCos2 ph = ::brdfz::detail::sincos_half_turn(std::fabs(phi));
             const double sin_p = std::copysign(ph.s, phi);
             const double mx = th.s * (cos_o[k] * ph.c - sin_o[k] * sin_p), my = th.s * (sin_o[k] * ph.c + cos_o[k] * sin_p);
             const double mz = th.c;
@@ -537,17 +533,16 @@ template <int W>
             const double wx = 2.0 * wo_dot_m * mx - p.bx[k], wy = 2.0 * wo_dot_m * my - p.by[k],
                          wz = 2.0 * wo_dot_m * mz - p.bz[k];
             // Brdf::usable: a back-facing m reflects wo below the horizon with pdf 0.
-            const bool ok = (p.ok[k] != 0) & (wz > 0.0) & (d > 0.0) & (d < kInf);
-            drawn[k] = ok;
+            const bool ok = (p.ok[k] > 0.0) & (wz > 0.0) & (d > 0.0) & (d < kInf);
             pdf[k] = d;
             e.ax[k] = ok ? wx : 0.0, e.ay[k] = ok ? wy : 0.0, e.az[k] = ok ? wz : 1.0;
             e.bx[k] = ok ? p.bx[k] : 0.0, e.by[k] = ok ? p.by[k] : 0.0, e.bz[k] = ok ? p.bz[k] : 1.0;
-            e.ok[k] = ok;
+            e.ok[k] = ok ? 1.0 : 0.0;
         }
         eval_block<W>(t, e, m, mw, r, g, b);
         for (int k = 0; k < m; ++k) {
             BrdfSample& o = out[start + k];
-            if (!drawn[k]) {
+            if (!(e.ok[k] > 0.0)) {
                 o = {};
                 continue;
             }

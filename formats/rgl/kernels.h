@@ -48,8 +48,8 @@ struct KernelTables {
     const float* theta_i = nullptr;  // the θi the slices are tabulated at, increasing
     int n_theta = 0;
     GridTable ndf, sigma;  // one slice each
-    // rgb_rows × rgb_cols points, each slice's R, G, B and a 0 at ((i·stride + s)·4 + c), stride that of
-    // the warps: both slices of a point are one 32-byte read.
+    // rgb_rows × rgb_cols points, channel c of point i in slice s at ((3i + c)·stride + s), the warps'
+    // stride: slices innermost, as theirs.
     int rgb_rows = 0, rgb_cols = 0;
     const float* rgb = nullptr;
     WarpTables vndf;
