@@ -15,6 +15,7 @@
 #include "brdfz/repr/analytic/model.h"
 #include "brdfz/repr/tabular.h"
 #include "module.h"
+#include "rows.h"
 
 namespace brdfz::python {
 
@@ -84,34 +85,20 @@ void check_lengths(const Rows& a, const char* a_name, const Rows& b, const char*
                          " and " + std::to_string(b.size()) + ")");
 }
 
-// Rows [begin, begin + out.size()) as unit directions, normalised as the CLI does (any finite
-// non-zero vector, in double).
-template <typename T>
-void normalise(const T* xyz, std::size_t begin, std::span<Vec3> out, const char* name) {
-    for (std::size_t k = 0; k < out.size(); ++k) {
-        const T* v = xyz + 3 * (begin + k);
-        const Vec3 d{v[0], v[1], v[2]};
-        const double n = length(d);
-        if (!std::isfinite(n) || n == 0.0)
-            throw ValueError(std::string(name) + "[" + std::to_string(begin + k) + "]: direction must be a finite non-zero vector");
-        out[k] = (1.0 / n) * d;
-    }
-}
-
+// Rows [begin, begin + out.size()) as unit directions (rows.h); ValueError naming the first bad row.
 void directions(const Rows& rows, std::size_t begin, std::span<Vec3> out, const char* name) {
-    if (rows.f32)
-        normalise(rows.data<float>(), begin, out, name);
-    else
-        normalise(rows.data<double>(), begin, out, name);
+    const std::size_t bad = rows.f32 ? normalise_rows(rows.data<float>(), begin, out)
+                                     : normalise_rows(rows.data<double>(), begin, out);
+    if (bad < out.size())
+        throw ValueError(std::string(name) + "[" + std::to_string(begin + bad) + "]: direction must be a finite non-zero vector");
 }
 
 // Rows [begin, begin + out.size()) of an (N, 2) array.
 void pairs(const Rows& rows, std::size_t begin, std::span<std::array<double, 2>> out) {
-    for (std::size_t k = 0; k < out.size(); ++k) {
-        const std::size_t j = 2 * (begin + k);
-        out[k] = rows.f32 ? std::array<double, 2>{rows.data<float>()[j], rows.data<float>()[j + 1]}
-                          : std::array<double, 2>{rows.data<double>()[j], rows.data<double>()[j + 1]};
-    }
+    if (rows.f32)
+        copy_rows(rows.data<float>(), begin, out);
+    else
+        copy_rows(rows.data<double>(), begin, out);
 }
 
 Array new_rows(std::size_t n, py::ssize_t cols) {
@@ -176,13 +163,7 @@ std::tuple<Array, Array, Array> sample(const Brdf& brdf, const ArrayArg& wo_obj,
             directions(wo_rows, begin, std::span(wo.data(), m), "wo");
             pairs(u_rows, begin, std::span(u.data(), m));
             brdf.sample(std::span(wo.data(), m), std::span(u.data(), m), std::span(samples.data(), m));
-            for (std::size_t k = 0; k < m; ++k) {
-                const BrdfSample& s = samples[k];
-                const std::size_t j = begin + k;
-                wi[3 * j] = s.wi.x, wi[3 * j + 1] = s.wi.y, wi[3 * j + 2] = s.wi.z;
-                p[j] = s.pdf;
-                for (int c = 0; c < 3; ++c) weight[3 * j + c] = s.weight[c];
-            }
+            split_samples(std::span(samples.data(), m), begin, wi, p, weight);
         }
     }
     return {wi_out, pdf_out, weight_out};
