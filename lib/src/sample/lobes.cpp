@@ -7,6 +7,7 @@
 
 #include "brdfz/repr/analytic/catalogue.h"
 #include "brdfz/repr/analytic/model.h"
+#include "detail/fast_math.h"
 
 namespace brdfz {
 namespace {
@@ -14,10 +15,10 @@ namespace {
 constexpr double kPi = std::numbers::pi;
 constexpr double kInvSqrtPi = 0.56418958354775628695;  // 1/√π
 
-Vec3 reflect(const Vec3& wo, const Vec3& h) { return (2.0 * dot(wo, h)) * h - wo; }
+[[gnu::always_inline]] inline Vec3 reflect(const Vec3& wo, const Vec3& h) { return (2.0 * dot(wo, h)) * h - wo; }
 
 // Unit half vector of wo and w, or false where it is undefined (w = −wo).
-bool half_of(const Vec3& wo, const Vec3& w, Vec3& h) {
+[[gnu::always_inline]] inline bool half_of(const Vec3& wo, const Vec3& w, Vec3& h) {
     const Vec3 s = wo + w;
     const double n2 = dot(s, s);
     if (!(n2 > 1e-30)) return false;
@@ -37,15 +38,29 @@ struct Basis {
     Vec3 to_world(const Vec3& v) const { return v.x * t + v.y * b + v.z * n; }
 };
 
-Vec3 cosine_hemisphere(double u1, double u2) {
-    const double r = std::sqrt(u1), phi = 2.0 * kPi * u2;
-    return {r * std::cos(phi), r * std::sin(phi), std::sqrt(std::fmax(0.0, 1.0 - u1))};
+// sin and cos of 2πu for u in [0, 1), from the branch-free half-turn polynomial (detail/fast_math.h: a
+// few ulp of libm's), so that the samplers' loops over lanes vectorise. The helpers the samplers share
+// are always inlined for the same reason (a call stops the vectoriser).
+[[gnu::always_inline]] inline detail::SinCos2 turn(double u) {
+    const bool first = u < 0.5;
+    const detail::SinCos2 r = detail::sincos_half_turn(2.0 * kPi * (first ? u : 1.0 - u));
+    return {first ? r.s : -r.s, r.c};
+}
+
+// max(x, 0) by a select (std::fmax is a call), NaN to 0.
+[[gnu::always_inline]] inline double nonneg(double x) { return x > 0.0 ? x : 0.0; }
+
+[[gnu::always_inline]] inline Vec3 cosine_hemisphere(double u1, double u2) {
+    const double r = std::sqrt(u1);
+    const detail::SinCos2 phi = turn(u2);
+    return {r * phi.c, r * phi.s, std::sqrt(nonneg(1.0 - u1))};
 }
 
 // Direction at polar angle cosine c (around +z) and azimuth 2π u.
-Vec3 around_z(double c, double u) {
-    const double s = std::sqrt(std::fmax(0.0, 1.0 - c * c)), phi = 2.0 * kPi * u;
-    return {s * std::cos(phi), s * std::sin(phi), c};
+[[gnu::always_inline]] inline Vec3 around_z(double c, double u) {
+    const double s = std::sqrt(nonneg(1.0 - c * c));
+    const detail::SinCos2 phi = turn(u);
+    return {s * phi.c, s * phi.s, c};
 }
 
 // Half-vector samplers draw h from an isotropic (or φ → φ+π symmetric) density p_h over the upper
@@ -93,7 +108,7 @@ struct CosineSampler {
 // the stretched wo; stretching the cap point back gives h (Dupuy & Benyoub 2023). Their density is
 // D_wo(h) = G1(wo) (wo·h) D(h) / cosθo, so pdf(wi) = D_wo(h) / (4 wo·h) = D(h) / (2 (cosθo + L)),
 // L = √(cos²θo + αx² wo.x² + αy² wo.y²), with the exact Smith G1 = 2 cosθo / (cosθo + L).
-Vec3 ggx_visible_sample(const Vec3& wo, double ax, double ay, double u1, double u2) {
+[[gnu::always_inline]] inline Vec3 ggx_visible_sample(const Vec3& wo, double ax, double ay, double u1, double u2) {
     const Vec3 v = normalize({ax * wo.x, ay * wo.y, wo.z});
     const double z = (1.0 - u2) * (1.0 + v.z) - v.z;
     const Vec3 c = around_z(z, u1);
@@ -102,7 +117,7 @@ Vec3 ggx_visible_sample(const Vec3& wo, double ax, double ay, double u1, double 
     return reflect(wo, h);
 }
 
-double ggx_visible_density(const Vec3& wo, const Vec3& w, double ax, double ay) {
+[[gnu::always_inline]] inline double ggx_visible_density(const Vec3& wo, const Vec3& w, double ax, double ay) {
     Vec3 h;
     if (!half_of(wo, w, h) || !(h.z > 0.0)) return 0.0;
     const double l = std::sqrt(wo.z * wo.z + ax * ax * wo.x * wo.x + ay * ay * wo.y * wo.y);
@@ -294,9 +309,23 @@ struct SamplerOf<lobes::AshikhminShirley> : AshikhminShirleySampler {};
 template <>
 struct SamplerOf<lobes::Lafortune> : LafortuneSampler {};
 
+// The lane loops of a family's sampler (LobeSampler::sample_n, add_folded_n), its code inlined.
+template <typename S>
+void sample_lanes(const double* p, const Vec3* wo, const double* u1, const double* u2, std::size_t n, Vec3* out) {
+    for (std::size_t k = 0; k < n; ++k) out[k] = S::sample(p, wo[k], u1[k], u2[k]);
+}
+template <typename S>
+void add_folded_lanes(const double* p, const Vec3* wo, const Vec3* wi, const double* w, std::size_t n, double* pdf) {
+    for (std::size_t k = 0; k < n; ++k) {
+        const double d = S::density(p, wo[k], wi[k]) + S::density(p, wo[k], {wi[k].x, wi[k].y, -wi[k].z});
+        pdf[k] += w[k] > 0.0 ? w[k] * d : 0.0;
+    }
+}
+
 template <typename... Families>
 constexpr std::array<LobeSampler, sizeof...(Families)> samplers_of(LobeList<Families...>) {
-    return {LobeSampler{&SamplerOf<Families>::sample, &SamplerOf<Families>::density}...};
+    return {LobeSampler{&SamplerOf<Families>::sample, &SamplerOf<Families>::density,
+                        &sample_lanes<SamplerOf<Families>>, &add_folded_lanes<SamplerOf<Families>>}...};
 }
 constexpr auto kSamplers = samplers_of(AllLobes{});
 
@@ -376,24 +405,71 @@ double LobeMixture::pdf(const Vec3& wo, const Vec3& wi) const {
 }
 
 BrdfSample LobeMixture::sample(const Vec3& wo, double u1, double u2) const {
-    double w[Model::kMaxTerms];
-    Vec3 wi;
-    if (!lobe_weights(wo, w)) {
-        wi = cosine_hemisphere(u1, u2);
-    } else {
-        // u1 picks the lobe; its position inside the lobe's share, rescaled, drives the lobe's sampler.
-        std::size_t j = 0;
-        double start = 0.0;
-        while (j + 1 < terms_.size() && !(u1 < start + w[j])) start += w[j++];
-        while (!(w[j] > 0.0)) --j;  // rounding past the last non-empty lobe
-        const double v = std::clamp((u1 - start) / w[j], 0.0, std::nextafter(1.0, 0.0));
-        const Term& t = terms_[j];
-        wi = t.sampler.sample(params_.data() + t.offset, wo, v, u2);
-        wi.z = std::fabs(wi.z);
+    const std::array<double, 2> u{u1, u2};
+    BrdfSample s;
+    sample_block(&wo, &u, 1, &s);
+    return s;
+}
+
+void LobeMixture::sample_block(const Vec3* wo, const std::array<double, 2>* u, std::size_t n, BrdfSample* out) const {
+    constexpr std::size_t kBlock = 64;
+    const std::size_t terms = terms_.size();
+    double w[Model::kMaxTerms][kBlock], total[kBlock], v[kBlock], u2[kBlock], pdf[kBlock];
+    Vec3 wi[kBlock], lane_wo[kBlock], lane_wi[kBlock];
+    int chosen[kBlock];
+    std::size_t lanes[kBlock];
+    for (std::size_t start = 0; start < n; start += kBlock) {
+        const std::size_t m = std::min(kBlock, n - start);
+        const Vec3* o = wo + start;
+        // The lobe weights, as lobe_weights() forms them for each lane.
+        for (std::size_t k = 0; k < m; ++k) total[k] = 0.0;
+        for (std::size_t j = 0; j < terms; ++j)
+            for (std::size_t k = 0; k < m; ++k) {
+                const double pos = std::clamp(o[k].z * kAlbedoNodes - 0.5, 0.0, kAlbedoNodes - 1.0);
+                const int k0 = std::min(static_cast<int>(pos), kAlbedoNodes - 2);
+                const double t = pos - k0;
+                w[j][k] = (1.0 - t) * albedo_[k0 * terms + j] + t * albedo_[(k0 + 1) * terms + j];
+                total[k] += w[j][k];
+            }
+        for (std::size_t j = 0; j < terms; ++j)
+            for (std::size_t k = 0; k < m; ++k) w[j][k] = total[k] > 0.0 ? w[j][k] / total[k] : 0.0;
+        // The choices: u1 picks the lobe, its position inside the lobe's share, rescaled, drives the lobe's
+        // sampler; a model black at wo (every weight 0) is sampled with the cosine density.
+        for (std::size_t k = 0; k < m; ++k) {
+            const double u1 = u[start + k][0];
+            u2[k] = u[start + k][1];
+            if (!(total[k] > 0.0)) {
+                chosen[k] = -1;
+                wi[k] = cosine_hemisphere(u1, u2[k]);
+                continue;
+            }
+            std::size_t j = 0;
+            double first = 0.0;
+            while (j + 1 < terms && !(u1 < first + w[j][k])) first += w[j++][k];
+            while (!(w[j][k] > 0.0)) --j;  // rounding past the last non-empty lobe
+            chosen[k] = static_cast<int>(j);
+            v[k] = std::clamp((u1 - first) / w[j][k], 0.0, std::nextafter(1.0, 0.0));
+        }
+        // Each lobe's draws together, then the mixture's density a lobe at a time across the block.
+        for (std::size_t j = 0; j < terms; ++j) {
+            std::size_t count = 0;
+            double lane_v[kBlock], lane_u2[kBlock];
+            for (std::size_t k = 0; k < m; ++k)
+                if (chosen[k] == static_cast<int>(j)) lanes[count] = k, lane_wo[count] = o[k], lane_v[count] = v[k], lane_u2[count++] = u2[k];
+            const Term& t = terms_[j];
+            t.sampler.sample_n(params_.data() + t.offset, lane_wo, lane_v, lane_u2, count, lane_wi);
+            for (std::size_t c = 0; c < count; ++c) wi[lanes[c]] = {lane_wi[c].x, lane_wi[c].y, std::fabs(lane_wi[c].z)};
+        }
+        for (std::size_t k = 0; k < m; ++k) pdf[k] = chosen[k] < 0 ? CosineSampler::density(nullptr, o[k], wi[k]) : 0.0;
+        for (std::size_t j = 0; j < terms; ++j) {
+            const Term& t = terms_[j];
+            t.sampler.add_folded_n(params_.data() + t.offset, o, wi, w[j], m, pdf);
+        }
+        for (std::size_t k = 0; k < m; ++k) {
+            const double p = pdf[k];
+            out[start + k] = wi[k].z > 0.0 && std::isfinite(p) && p > 0.0 ? BrdfSample{wi[k], p, {}} : BrdfSample{};
+        }
     }
-    const double p = pdf(wo, wi);
-    if (!(wi.z > 0.0 && std::isfinite(p) && p > 0.0)) return {};
-    return {wi, p, {}};
 }
 
 }  // namespace brdfz

@@ -96,6 +96,25 @@ TEST_CASE("analytic samplers: chi-square, normalisation, round trip at 0/30/60/8
     }
 }
 
+// The mixture's block kernel (LobeMixture::sample_block, AnalyticBrdf's batch sample): chi-square of batch
+// draws, and batch = one call, bit for bit, for every case.
+void check_batch_samplers(std::size_t samples) {
+    const double p_min = 0.01 / (cases().size() * std::size(test::kThetaODeg));
+    for (const Case& c : cases()) {
+        const AnalyticBrdf b(c.model, c.params);
+        INFO(b.describe());
+        test::check_batch_sampler(b, samples, p_min);
+    }
+}
+
+TEST_CASE("analytic samplers: batch draws, chi-square and batch = one call", "[sample][analytic][chi2][heavy]") {
+    check_batch_samplers(200000);
+}
+
+TEST_CASE("analytic samplers: batch draws, chi-square and batch = one call (fewer draws)", "[sample][analytic][chi2][light]") {
+    check_batch_samplers(20000);
+}
+
 namespace {
 
 // n random (wo, u, parameters) over every lobe and a mixture: finite, non-negative pdfs and weights.

@@ -20,6 +20,7 @@
 // black at wo (every albedo 0) is sampled with the cosine density.
 #pragma once
 
+#include <array>
 #include <cstddef>
 #include <span>
 #include <vector>
@@ -37,6 +38,13 @@ struct LobeSampler {
     Vec3 (*sample)(const double* params, const Vec3& wo, double u1, double u2);
     // Density of sample() at the unit vector w, per unit solid angle, over the whole sphere.
     double (*density)(const double* params, const Vec3& wo, const Vec3& w);
+    // The same over n lanes, in loops that inline them (and vectorise where the family's code does):
+    // out[k] = sample(params, wo[k], u1[k], u2[k]); and pdf[k] += w[k]·(density at wi[k] and at wi[k]
+    // mirrored in z), the folded density weighted, for the lanes with w[k] > 0.
+    void (*sample_n)(const double* params, const Vec3* wo, const double* u1, const double* u2, std::size_t n,
+                     Vec3* out);
+    void (*add_folded_n)(const double* params, const Vec3* wo, const Vec3* wi, const double* w, std::size_t n,
+                         double* pdf);
 };
 
 // The sampler of a family in the catalogue (catalogue.h); every family has one.
@@ -52,6 +60,10 @@ public:
 
     // For wo above the horizon and u in [0, 1)²: wi and its pdf (pdf 0 for a failed draw).
     BrdfSample sample(const Vec3& wo, double u1, double u2) const;
+    // sample() for n draws (wo finite and above the horizon, u in [0, 1)², as sample() asks), in passes
+    // over blocks: the lobe weights, the choices, each lobe's draws together, then the mixture's pdf a
+    // lobe at a time across the block. sample() is this kernel on one draw, so the two agree to the bit.
+    void sample_block(const Vec3* wo, const std::array<double, 2>* u, std::size_t n, BrdfSample* out) const;
     // Density of sample() at wi, for wo and wi above the horizon.
     double pdf(const Vec3& wo, const Vec3& wi) const;
     // Probability of choosing each lobe at wo; all 0 when the model is black there (cosine sampling).
