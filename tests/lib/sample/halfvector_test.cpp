@@ -382,15 +382,15 @@ TEST_CASE("table sample_batch: each result is the one-at-a-time sample, and bad 
 // draw_block searches the CDFs across draws in two steps of the guided scan and hands longer scans
 // (and cell coordinates needing a nudge) to Piecewise2D::sample: every draw must still be draw()'s,
 // angles included, in both builds. A near-specular table has the steepest CDFs (the longest scans).
-TEST_CASE("HalfVectorSampler::draw_block: each draw is draw()'s, in both builds", "[sample][tabular]") {
+TEST_CASE("HalfVectorSampler::draw_block: each draw is draw()'s, in every build", "[sample][tabular]") {
     const TabularBrdf t = tabulated(0.02);
     const HalfVectorSampler& sampler = t.sampler();
     auto [wo, us] = random_views(20000, 31);
     const std::size_t count = wo.size();
     us[1] = {0.999999999, 0.9999999999};  // u rounding to 1 in float: the scans' last intervals
     us[2] = {0.5, INFINITY}, us[3] = {2.0, 0.5}, wo[4] = {0.0, 0.0, -1.0};
-    for (detail::Simd simd : {detail::Simd::Avx2Fma, detail::Simd::Sse2}) {
-        INFO((simd == detail::Simd::Sse2 ? "SSE2" : "AVX2") << " build");
+    for (detail::Simd simd : test::simd_levels()) {
+        INFO(test::simd_label(simd) << " build");
         std::size_t half = 0;
         HalfVectorSampler::Draws block;
         for (std::size_t start = 0; start < count; start += HalfVectorSampler::kBlock) {

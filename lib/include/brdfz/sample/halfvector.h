@@ -56,8 +56,8 @@ public:
     Draw draw(const Vec3& wo, double u1, double u2) const;
 
     // Up to kBlock draws at once, as arrays (the table kernel's passes read them so), each draw()'s bit
-    // for bit: the same operations per draw, run across draws in vector registers (SSE2, or AVX2
-    // without FMA contraction where the CPU has it: detail/simd.h). Inputs outside sample()'s domain
+    // for bit: the same operations per draw, run across draws in vector registers (SSE2, AVX2 or
+    // AVX-512, the widest the CPU has, without FMA contraction: detail/simd.h). Inputs outside sample()'s domain
     // (Brdf::can_draw) give a failed draw, pdf 0. 128 draws ran 2–5 % faster than 64 with the table
     // kernel (bench/README.md); the kernel's arrays then take ~50 KB of stack.
     static constexpr std::size_t kBlock = 128;
