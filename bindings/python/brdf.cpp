@@ -14,6 +14,7 @@
 #include "brdfz/errors.h"
 #include "brdfz/repr/analytic/model.h"
 #include "brdfz/repr/tabular.h"
+#include "brdfz/simd.h"
 #include "module.h"
 #include "rows.h"
 
@@ -194,6 +195,8 @@ std::optional<std::map<std::string, double>> parameters(const Brdf& brdf) {
 }  // namespace
 
 void bind_brdf(py::module_& m) {
+    m.def("simd", &simd_name,
+          "the instruction set Brdf's batch calls run with on this CPU: 'avx512', 'avx2' or 'sse2' (chosen at import)");
     py::class_<Brdf, BrdfPtr>(m, "Brdf", "A measured or compressed BRDF (brdf.h: normal +z, wi and wo pointing away)")
         .def("eval", &eval<false>, py::arg("wi"), py::arg("wo"),
              "f_r (1/sr, no cosine) at direction pairs: wi, wo of shape (N, 3) -> (N, 3) float64")

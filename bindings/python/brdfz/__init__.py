@@ -45,13 +45,14 @@ from ._core import (
     formats,
     load,
     representations,
+    simd,
 )
 
 __all__ = [
     "Brdf", "Candidate", "ChannelMetrics", "Compressed", "FitReport", "FitResult", "FormatError", "Metrics",
     "Scene", "Selection", "Trial", "UnsupportedError", "albedo", "benchmark_specs", "compress", "compress_kinds",
     "convert", "default_candidates", "fit", "format_of", "formats", "load", "metrics", "read_scene", "representations",
-    "save", "tabulate", "trial",
+    "save", "simd", "tabulate", "trial",
 ]
 
 Path = Union[str, os.PathLike]
