@@ -278,24 +278,27 @@ template <int W>
     int iy[kBlock], ix[kBlock], idx0[kBlock], idx1[kBlock];
     for (int k = 0; k < m; ++k) ux[k] = clamp01(p.x[k]), uy[k] = clamp01(p.y[k]), iy[k] = 0, ix[k] = 0;
     // Row: the marginal CDF at row j is marg[j − 1] (every probe j is at least 1).
+    // below: the CDF at the row found, kept from the search's last move up (the read marg[iy − 1]), 0 when
+    // it never moved; the same for the column below.
+    double below[kBlock], before[kBlock];
+    for (int k = 0; k < m; ++k) below[k] = before[k] = 0.0;
     for (int len = R - 1; len > 1;) {
         const int half = len / 2;
         for (int k = 0; k < m; ++k) idx0[k] = (iy[k] + half - 1) * S + s.lower[k];
         blend_reads<W>(w.marg, idx0, s.w, m, v0);
-        for (int k = 0; k < m; ++k) iy[k] = v0[k] < uy[k] ? iy[k] + half : iy[k];
+        for (int k = 0; k < m; ++k) {
+            const bool up = v0[k] < uy[k];
+            iy[k] = up ? iy[k] + half : iy[k];
+            below[k] = up ? v0[k] : below[k];
+        }
         len -= half;
     }
-    int below_idx[kBlock];
-    for (int k = 0; k < m; ++k) {
-        idx0[k] = (iy[k] * NC + NC - 1) * S + s.lower[k], idx1[k] = idx0[k] + NC * S;  // the rows' totals
-        below_idx[k] = (iy[k] > 0 ? iy[k] - 1 : 0) * S + s.lower[k];                  // the marginal below
-    }
-    double r0[kBlock], r1[kBlock], below[kBlock];
+    for (int k = 0; k < m; ++k) idx0[k] = (iy[k] * NC + NC - 1) * S + s.lower[k], idx1[k] = idx0[k] + NC * S;  // row totals
+    double r0[kBlock], r1[kBlock];
     blend_reads<W>(w.cond, idx0, s.w, m, r0);
     blend_reads<W>(w.cond, idx1, s.w, m, r1);
-    blend_reads<W>(w.marg, below_idx, s.w, m, below);
     for (int k = 0; k < m; ++k) {
-        fy[k] = invert_partial_integral((uy[k] - (iy[k] > 0 ? below[k] : 0.0)) / height, r0[k], r1[k]);
+        fy[k] = invert_partial_integral((uy[k] - below[k]) / height, r0[k], r1[k]);
         target[k] = ux[k] * lerp(r0[k], r1[k], fy[k]);
     }
     // Column: the conditional CDF at column j, between the patch's rows.
@@ -304,23 +307,21 @@ template <int W>
         for (int k = 0; k < m; ++k) idx0[k] = (iy[k] * NC + ix[k] + half - 1) * S + s.lower[k], idx1[k] = idx0[k] + NC * S;
         blend_reads<W>(w.cond, idx0, s.w, m, v0);
         blend_reads<W>(w.cond, idx1, s.w, m, v1);
-        for (int k = 0; k < m; ++k) ix[k] = lerp(v0[k], v1[k], fy[k]) < target[k] ? ix[k] + half : ix[k];
+        for (int k = 0; k < m; ++k) {
+            const double v = lerp(v0[k], v1[k], fy[k]);
+            const bool right = v < target[k];
+            ix[k] = right ? ix[k] + half : ix[k];
+            before[k] = right ? v : before[k];
+        }
         len -= half;
     }
     int entry[kBlock];
-    for (int k = 0; k < m; ++k) {
-        const int l = ix[k] > 0 ? ix[k] - 1 : 0;
-        entry[k] = iy[k] * C + ix[k];
-        idx0[k] = (iy[k] * NC + l) * S + s.lower[k], idx1[k] = idx0[k] + NC * S;
-    }
+    for (int k = 0; k < m; ++k) entry[k] = iy[k] * C + ix[k];
     double d[4][kBlock];
     corner_reads<W>(w.data, C, S, s, entry, m, d);
-    blend_reads<W>(w.cond, idx0, s.w, m, v0);
-    blend_reads<W>(w.cond, idx1, s.w, m, v1);
     for (int k = 0; k < m; ++k) {
         const double c0 = lerp(d[0][k], d[2][k], fy[k]), c1 = lerp(d[1][k], d[3][k], fy[k]);
-        const double before = ix[k] > 0 ? lerp(v0[k], v1[k], fy[k]) : 0.0;
-        const double fx = invert_partial_integral((target[k] - before) / width, c0, c1);
+        const double fx = invert_partial_integral((target[k] - before[k]) / width, c0, c1);
         p.x[k] = (static_cast<double>(ix[k]) + fx) * width;
         p.y[k] = (static_cast<double>(iy[k]) + fy[k]) * height;
         p.pdf[k] = lerp(c0, c1, fx);
