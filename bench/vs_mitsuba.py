@@ -1,6 +1,6 @@
 """brdfz against Mitsuba 3's `measured` plugin on one RGL-EPFL file, one thread each (issue 23's table):
 
-    PYTHONPATH=build/python .venv/bin/python bench/vs_mitsuba.py FILE.bsdf [--spec SPEC] [--reps N]
+    PYTHONPATH=build/python .venv/bin/python bench/vs_mitsuba.py FILE.bsdf [FILE...] [--spec SPEC] [--reps N]
         [--pairs N] [--cpp build/bench/rgl_batch] [--no-render]
 
 Five ratios, in one run:
@@ -18,6 +18,7 @@ wall times are printed too), after one warm-up. The render scene is brdfz.exampl
 `measured` rendered in Mitsuba's default (symbolic) mode and brdfz in whatever mode its bridge sets.
 The SIMD widths used: brdfz.simd() and the vector width in Dr.Jit's generated LLVM IR. With --cpp, the
 C++ program bench/rgl_batch.cpp times the same calls without Python (its own pairs, same distribution).
+With several files, each is measured in turn and a last table lists the five ratios per file.
 """
 from __future__ import annotations
 
@@ -77,7 +78,7 @@ def drjit_lanes(dr) -> int:
 
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    ap.add_argument("file", help="an RGL-EPFL .bsdf file (isotropic RGB)")
+    ap.add_argument("files", nargs="+", metavar="FILE", help="RGL-EPFL .bsdf files (isotropic RGB)")
     ap.add_argument("--spec", default=DEFAULT_SPEC, help="the representation (default: the ≤ 16 KB svd spec)")
     ap.add_argument("--reps", type=int, default=7, help="repetitions, at least 5 (default 7)")
     ap.add_argument("--pairs", type=int, default=1 << 20, help="direction pairs per call (default 2^20)")
@@ -87,22 +88,33 @@ def main() -> None:
     args = ap.parse_args()
     if args.reps < 5 or args.render_reps < 5:
         ap.error("--reps and --render-reps must be at least 5 (medians of five runs or more)")
-
-    import drjit as dr
     import mitsuba as mi
 
     mi.set_variant("llvm_ad_rgb")
+    summary = [(f, measure(f, args)) for f in args.files]
+    if len(summary) > 1:
+        print("\nratios per file (CPU time):")
+        print("  " + " | ".join(["file", "RGL eval", "RGL sample", "repr eval", "repr sample", "render"]))
+        for f, ratios in summary:
+            print("  " + " | ".join([os.path.basename(f)] + [f"{r:.2f}" for r in ratios]))
+
+
+def measure(file: str, args) -> list:
+    """Measures one file, prints its figures and returns its ratios (render last, when measured)."""
+    import drjit as dr
+    import mitsuba as mi
+
     dr.set_thread_count(1)
     import brdfz
     import brdfz.mitsuba
     from brdfz.examples.mitsuba_sphere import scene
 
     load = os.getloadavg()
-    rgl = brdfz.load(args.file)
+    rgl = brdfz.load(file)
     compressed = brdfz.compress(rgl, args.spec, report=True)
     build_s = compressed.build_seconds
     repr_ = compressed.brdf
-    measured = mi.load_dict({"type": "measured", "filename": str(args.file)})
+    measured = mi.load_dict({"type": "measured", "filename": str(file)})
 
     n = args.pairs
     rng = np.random.default_rng(20261201)
@@ -154,7 +166,7 @@ def main() -> None:
         def render_measured():
             for f, on in symbolic.items():
                 dr.set_flag(f, on)
-            img = mi.render(scene({"type": "measured", "filename": str(args.file)}, 128, 64))
+            img = mi.render(scene({"type": "measured", "filename": str(file)}, 128, 64))
             dr.eval(img)
             dr.sync_thread()
 
@@ -177,7 +189,7 @@ def main() -> None:
         render = {k: statistics.median(v) for k, v in times.items()}
         render_wall = {k: statistics.median(v) for k, v in walls.items()}
 
-    print(f"file: {args.file}")
+    print(f"file: {file}")
     print(f"representation: {args.spec} ({repr_.nbytes:,} B, built in {build_s:.1f} s): {repr_.describe()}")
     print(f"SIMD: brdfz {brdfz.simd()} (brdfz.simd()); Mitsuba llvm_ad_rgb, {drjit_lanes(dr)} float lanes "
           f"(Dr.Jit's LLVM IR); one thread each")
@@ -201,11 +213,12 @@ def main() -> None:
         print(f"  {what:62s} {ratio:6.2f}   {target}")
 
     if args.cpp:
-        run = subprocess.run([args.cpp, str(args.file), "--spec", args.spec, "--reps", str(args.reps)],
+        run = subprocess.run([args.cpp, str(file), "--spec", args.spec, "--reps", str(args.reps)],
                              capture_output=True, text=True, check=True)
         print(f"C++ ({args.cpp}):")
         for line in run.stdout.splitlines():
             print("  " + line)
+    return [ratio for _, ratio in rows]
 
 
 if __name__ == "__main__":
