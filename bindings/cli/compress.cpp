@@ -1,5 +1,6 @@
 // brdfz compress IN -o OUT --repr SPEC
 // brdfz compress IN -o OUT --auto --max-error E [--metric log|cos|image] [--scene SCENE.json]
+//                                  [--over grid|directions]
 // Builds a compact representation (compress.h) of any BRDF file, or fits scattered measurements
 // (analytic only), writes it (.brdfz keeps the representation itself; table formats tabulate it) and
 // reports what it achieved: bytes, ratio to the input file, the metrics against the input, batch
@@ -24,6 +25,7 @@ struct Outcome {
     std::string in, out;
     std::uintmax_t input_bytes = 0;
     const Trial* trial = nullptr;
+    Over over = Over::Grid;
 };
 
 double ratio_of(const Outcome& o) {
@@ -55,7 +57,7 @@ void print_trial(const Outcome& o, std::ostream& os) {
     std::snprintf(line, sizeof line, "  build time   %.3f s\n  eval speed   %.3g pairs/s (batch, one thread)\n",
                   t.build_seconds, t.eval_rate);
     os << line << "  against the input\n";
-    print_metrics(t.metrics, false, os);
+    print_metrics(t.metrics, false, os, o.over);
     for (const std::string& n : t.notes) os << "  note: " << n << "\n";
     os << "  wrote " << o.out << "\n";
 }
@@ -89,6 +91,7 @@ void add_compress(CLI::App& app) {
         double max_error = 0;
         int threads = 0;
         LoadOptions load;
+        MetricOptions metrics;
     };
     auto args = std::make_shared<Args>();
     CLI::App* cmd = app.add_subcommand("compress", "build a compact representation and report bytes, error and speed");
@@ -112,6 +115,7 @@ void add_compress(CLI::App& app) {
     cmd->add_option("--candidate", args->candidates, "a candidate spec for --auto (repeatable; default: cheapest "
                                                      "to richest of every kind)")
         ->needs(automatic);
+    add_over_options(cmd, args->metrics);
     cmd->add_option("--threads", args->threads, "0: one per hardware thread")->capture_default_str();
     cmd->add_flag("--json", args->json, "print the report as JSON");
     add_load_options(cmd, args->load);
@@ -131,13 +135,22 @@ void add_compress(CLI::App& app) {
         TrialOptions options;
         options.compress = with_file_access(options.compress);
         options.compress.threads = args->threads;
+        options.metrics = args->metrics;
         options.metrics.threads = args->threads;
         Outcome o;
         o.in = args->in;
+        o.over = args->metrics.over;
         o.input_bytes = std::filesystem::file_size(args->in);
         SaveOptions save_options;
         save_options.source = args->in;
 
+        // The container records errors over the grid (formats/SPEC.md, /achieved), whatever --over says.
+        const auto record_grid_metrics = [&](const Brdf& source, const Trial& t) {
+            if (options.metrics.over == Over::Grid) return;
+            MetricOptions grid = options.metrics;
+            grid.over = Over::Grid;
+            save_options.source_metrics = compare(source, *t.brdf, grid);
+        };
         Trial single;
         Selection selection;
         if (holds_measurements(args->in)) {
@@ -153,14 +166,17 @@ void add_compress(CLI::App& app) {
                 select.trial = options;
                 if (!args->json)
                     std::cout << "trying candidates for " << args->in << " (budget " << args->max_error << " in "
-                              << args->metric << (args->scene.empty() ? "" : " under " + args->scene) << ")\n";
+                              << args->metric << (args->scene.empty() ? "" : " under " + args->scene) << " over "
+                              << over_name(args->metrics.over) << ")\n";
                 select.on_candidate = [&](const Candidate& c) {
                     if (!args->json) print_candidate(c, std::cout), std::cout.flush();
                 };
                 selection = select_representation(*in.brdf, select);
+                if (selection.best()) record_grid_metrics(*in.brdf, selection.best()->trial);
             } else {
                 options.compress.progress = progress_bar("compressing");
                 single = trial(*in.brdf, args->repr, options);
+                record_grid_metrics(*in.brdf, single);
             }
         }
         if (args->automatic && !selection.best()) {
@@ -178,7 +194,7 @@ void add_compress(CLI::App& app) {
         }
         o.trial = args->automatic ? &selection.best()->trial : &single;
         save_options.build_spec = o.trial->spec;
-        save_options.source_metrics = o.trial->metrics;
+        if (!save_options.source_metrics) save_options.source_metrics = o.trial->metrics;
         save_options.threads = args->threads;
         save(*o.trial->brdf, args->out, save_options);
         o.out = args->out;
@@ -189,6 +205,7 @@ void add_compress(CLI::App& app) {
             if (args->automatic) {
                 j.key("chosen").value(o.trial->spec).key("error").value(selection.best()->error);
                 j.key("max_error").value(args->max_error).key("metric").value(args->metric);
+                j.key("over").value(std::string(over_name(args->metrics.over)));
                 j.key("scene").value(args->scene);
                 write_candidates(j, selection);
             }

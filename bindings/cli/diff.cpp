@@ -1,5 +1,5 @@
-// brdfz diff A B [--json]: error metrics of B against the reference A (a BRDF, or Cornell / ALTA
-// measurements).
+// brdfz diff A B [--json] [--over grid|directions]: error metrics of B against the reference A (a BRDF,
+// or Cornell / ALTA measurements), over A's grid or over direction pairs (metrics.h).
 #include <iostream>
 
 #include "commands.h"
@@ -22,6 +22,7 @@ void add_diff(CLI::App& app) {
     cmd->add_flag("--json", args->json, "print JSON");
     cmd->add_option("--max-theta", args->metrics.max_theta_deg, "leave out theta_i or theta_o at or above (degrees)")
         ->capture_default_str();
+    add_over_options(cmd, args->metrics);
     add_load_options(cmd, args->load);
     cmd->callback([args] {
         // A may be scattered measurements (Cornell, ALTA): B is then judged at the measured points.
@@ -35,7 +36,7 @@ void add_diff(CLI::App& app) {
             m = compare(*a.brdf, *load(args->b, args->load).brdf, args->metrics);
         }
         if (!args->json) std::cout << args->b << " against " << args->a << "\n";
-        print_metrics(m, args->json, std::cout);
+        print_metrics(m, args->json, std::cout, args->metrics.over);
     });
 }
 

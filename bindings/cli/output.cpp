@@ -12,81 +12,10 @@
 
 namespace brdfz::cli {
 
-std::string number(double v, bool json) {
-    if (json && !std::isfinite(v)) return "null";
+std::string number(double v) {
     char buf[32];
     std::snprintf(buf, sizeof buf, "%.17g", v);
     return buf;
-}
-
-void JsonWriter::separate() {
-    if (after_key_) {
-        after_key_ = false;
-        return;
-    }
-    if (!first_.back()) os_ << ", ";
-    first_.back() = false;
-}
-
-JsonWriter& JsonWriter::begin_object() {
-    separate();
-    os_ << "{";
-    first_.push_back(true);
-    return *this;
-}
-JsonWriter& JsonWriter::end_object() {
-    first_.pop_back();
-    os_ << "}";
-    return *this;
-}
-JsonWriter& JsonWriter::begin_array() {
-    separate();
-    os_ << "[";
-    first_.push_back(true);
-    return *this;
-}
-JsonWriter& JsonWriter::end_array() {
-    first_.pop_back();
-    os_ << "]";
-    return *this;
-}
-JsonWriter& JsonWriter::key(const std::string& k) {
-    value(k);
-    os_ << ": ";
-    after_key_ = true;
-    return *this;
-}
-JsonWriter& JsonWriter::value(double v) {
-    separate();
-    os_ << number(v, true);
-    return *this;
-}
-JsonWriter& JsonWriter::value(std::size_t v) {
-    separate();
-    os_ << v;
-    return *this;
-}
-JsonWriter& JsonWriter::value(bool v) {
-    separate();
-    os_ << (v ? "true" : "false");
-    return *this;
-}
-JsonWriter& JsonWriter::value(const std::string& v) {
-    separate();
-    os_ << '"';
-    for (char c : v) {
-        if (c == '"' || c == '\\') {
-            os_ << '\\' << c;
-        } else if (static_cast<unsigned char>(c) < 0x20) {
-            char buf[8];
-            std::snprintf(buf, sizeof buf, "\\u%04x", c);
-            os_ << buf;
-        } else {
-            os_ << c;
-        }
-    }
-    os_ << '"';
-    return *this;
 }
 
 std::function<void(double)> progress_bar(const std::string& label) {
@@ -107,6 +36,23 @@ void add_load_options(CLI::App* cmd, LoadOptions& options) {
     cmd->add_option("--lookup", options.lookup, "table lookup: nearest or linear")
         ->transform(CLI::CheckedTransformer(
             std::map<std::string, Lookup>{{"nearest", Lookup::Nearest}, {"linear", Lookup::Linear}}));
+}
+
+const char* const kOverHelp =
+    "where the metrics are taken: grid (each bin of the reference's Rusinkiewicz grid once, the MERL "
+    "literature's convention) or directions (--directions pairs uniform in solid angle, theta_i below "
+    "--max-theta and within the reference's measured range, theta_o below --max-theta, every azimuth; "
+    "each pair once: what a renderer asks for)";
+
+void add_over_options(CLI::App* cmd, MetricOptions& options) {
+    cmd->add_option("--over", options.over, kOverHelp)
+        ->transform(CLI::CheckedTransformer(
+            std::map<std::string, Over>{{"grid", Over::Grid}, {"directions", Over::Directions}}))
+        ->default_str("grid");
+    cmd->add_option("--directions", options.directions, "direction pairs drawn with --over directions")
+        ->check(CLI::Range(std::size_t{1}, MetricOptions::kMaxDirections))
+        ->capture_default_str();
+    cmd->add_option("--seed", options.seed, "seed of those pairs")->capture_default_str();
 }
 
 bool parse_numbers(const std::string& text, double* out, int count) {

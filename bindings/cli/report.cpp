@@ -104,6 +104,22 @@ void write_source_keys(JsonWriter& j, const std::string& path, const SourceInfo&
     j.key("inf").value(info.counts.inf);
 }
 
+void print_source_lines(std::ostream& os, const std::string& path, const SourceInfo& info, const std::string& describe,
+                        std::size_t nbytes, const SourceNotes& notes) {
+    std::string dims;
+    for (std::size_t d : info.dims) dims += (dims.empty() ? "" : "x") + std::to_string(d);
+    os << path << "\n"
+       << "  format     " << info.format << "\n"
+       << "  dims       " << dims << (notes.dims.empty() && !info.dims_of.empty() ? " (" + info.dims_of + ")" : notes.dims)
+       << "\n"
+       << "  stored as  " << describe << "\n"
+       << "  nbytes     " << nbytes << "\n"
+       << "  valid      " << info.counts.valid << "\n"
+       << "  negative   " << info.counts.negative << notes.negative << "\n"
+       << "  nan        " << info.counts.nan << notes.nan << "\n"
+       << "  inf        " << info.counts.inf << notes.inf << "\n";
+}
+
 void print_info(const std::string& path, const Loaded& loaded, bool json, std::ostream& os,
                 const container::Metadata* container) {
     const SourceInfo& info = loaded.info;
@@ -142,18 +158,8 @@ void print_info(const std::string& path, const Loaded& loaded, bool json, std::o
         os << "\n";
         return;
     }
-    std::string dims;
-    for (std::size_t d : info.dims) dims += (dims.empty() ? "" : "x") + std::to_string(d);
-    os << path << "\n"
-       << "  format     " << info.format << "\n"
-       << "  dims       " << dims << (info.dims_of.empty() ? "" : " (" + info.dims_of + ")") << "\n"
-       << "  stored as  " << loaded.brdf->describe() << "\n"
-       << "  nbytes     " << loaded.brdf->nbytes() << "\n"
-       << "  valid      " << info.counts.valid << "\n"
-       << "  negative   " << info.counts.negative << "\n"
-       << "  nan        " << info.counts.nan << "\n"
-       << "  inf        " << info.counts.inf << "\n"
-       << "  range      " << range_text(info) << "\n"
+    print_source_lines(os, path, info, loaded.brdf->describe(), loaded.brdf->nbytes());
+    os << "  range      " << range_text(info) << "\n"
        << "  albedo     theta_o      r        g        b         sampled (" << kAlbedoSamples
        << " samples)  r, g, b ± stderr\n";
     for (std::size_t k = 0; k < std::size(kAlbedoAnglesDeg); ++k) {
@@ -183,7 +189,7 @@ void write_metrics(JsonWriter& j, const Metrics& m) {
     j.end_object();
 }
 
-void print_metrics(const Metrics& m, bool json, std::ostream& os) {
+void print_metrics(const Metrics& m, bool json, std::ostream& os, Over over) {
     if (json) {
         JsonWriter j(os);
         write_metrics(j, m);
@@ -197,7 +203,8 @@ void print_metrics(const Metrics& m, bool json, std::ostream& os) {
         std::snprintf(buf, sizeof buf, "  %-13s  %-11.5g  %-11.5g  %-11.5g  %.5g\n", name, v->r, v->g, v->b, v->mean);
         os << buf;
     }
-    os << "  over " << m.samples << " bins (theta_i, theta_o < cut-off)";
+    os << "  over " << m.samples
+       << (over == Over::Grid ? " bins (theta_i, theta_o < cut-off)" : " direction pairs (uniform in solid angle)");
     if (m.negatives) os << "; " << m.negatives << " negative values taken as 0";
     os << "\n";
 }

@@ -210,6 +210,12 @@ void bind_brdf(py::module_& m) {
         .def("describe", &Brdf::describe, "one line saying what this is")
         .def_property_readonly("table", &table_view, "a table's values (θh, θd, φd, 3) float32, NaN where invalid; None otherwise")
         .def_property_readonly("parameters", &parameters, "an analytic model's parameters by name; None otherwise")
+        .def("parts", &brdf_parts,
+             "the representation's stored arrays and parameters as a dict ('kind': tabular, compact, factored, pca "
+             "or analytic), read-only; None for kinds without parts (RGL files, scattered measurements)")
+        .def("sampler_parts", &sampler_parts,
+             "the tables of the sampler sample() and pdf() use ('kind': halfvector or lobes), built on first "
+             "use; None for kinds without them")
         .def("__repr__", [](const Brdf& b) { return "<brdfz.Brdf " + b.describe() + ">"; });
 }
 

@@ -6,10 +6,12 @@
 #include <filesystem>
 #include <functional>
 #include <memory>
+#include <optional>
 #include <string>
 
 #include "brdfz/brdf.h"
 #include "brdfz/errors.h"
+#include "brdfz/metrics.h"
 
 namespace brdfz::python {
 
@@ -22,6 +24,15 @@ using BrdfPtr = std::shared_ptr<Brdf>;
 void bind_brdf(py::module_& m);
 void bind_operations(py::module_& m);
 void bind_select(py::module_& m);
+
+// Brdf.parts() and Brdf.sampler_parts() (parts.cpp): a dict, or None for kinds without parts.
+std::optional<py::dict> brdf_parts(const BrdfPtr& brdf);
+std::optional<py::dict> sampler_parts(const BrdfPtr& brdf);
+
+// The metric options every measuring function takes (metrics.h): max_theta in degrees, over "grid" or
+// "directions", the number of direction pairs and their seed.
+MetricOptions metric_options(double max_theta, int threads, const std::string& over, std::size_t directions,
+                             std::uint64_t seed);
 
 // A library IoError about a file that does not exist becomes FileNotFoundError (an OSError), with
 // the library's message; every other error goes to the module's translator (_core.cpp).

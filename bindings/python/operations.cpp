@@ -1,9 +1,10 @@
-// Module-level functions: load / save / convert, compress, fit, metrics, tabulate, albedo. Each
+// Module-level functions: load / save / convert, compress, fit, metrics, tabulate, albedo, validate. Each
 // releases the GIL while the library works; long ones take a progress callable (module.h).
 #include <pybind11/numpy.h>
 #include <pybind11/stl.h>
 #include <pybind11/stl/filesystem.h>
 
+#include <cstring>
 #include <filesystem>
 #include <numbers>
 #include <optional>
@@ -19,6 +20,7 @@
 #include "brdfz/repr/analytic/model.h"
 #include "brdfz/repr/tabular.h"
 #include "brdfz/tabulate.h"
+#include "brdfz/validate.h"
 #include "module.h"
 
 namespace brdfz::python {
@@ -71,6 +73,42 @@ py::dict counts_dict(const ValidityCounts& c) {
     return d;
 }
 
+// save() with the GIL released and progress reported; the written bins' counts.
+py::dict save_counts(const Brdf& brdf, const Path& path, SaveOptions o, py::object progress) {
+    Progress bar(std::move(progress));
+    o.progress = bar.hook();
+    ValidityCounts c;
+    {
+        py::gil_scoped_release release;
+        c = save(brdf, path.string(), o);
+    }
+    bar.rethrow();
+    return counts_dict(c);
+}
+
+py::list rgb_list(const Rgb& v) { return py::cast(std::vector<double>(v.begin(), v.end())); }
+
+// A check as `brdfz validate --json` prints it: ok, tested, failed, and the worst offences with
+// their values under the check's names for them.
+py::dict check_dict(const ValidationCheck& c) {
+    py::list worst;
+    for (const ValidationOffence& o : c.worst) {
+        py::dict w;
+        w["theta_i_deg"] = o.theta_i_deg;
+        w["theta_o_deg"] = o.theta_o_deg;
+        w["dphi_deg"] = o.dphi_deg;
+        w[py::str(c.f_name)] = rgb_list(o.f);
+        if (!c.g_name.empty()) w[py::str(c.g_name)] = rgb_list(o.g);
+        worst.append(w);
+    }
+    py::dict d;
+    d["ok"] = c.ok();
+    d["tested"] = c.tested;
+    d["failed"] = c.failed;
+    d["worst"] = worst;
+    return d;
+}
+
 // compress()'s result with the Brdf shared, as Python holds every Brdf.
 struct Built {
     BrdfPtr brdf;
@@ -110,7 +148,38 @@ py::dict per_channel_dict(const PerChannel& c) {
     return d;
 }
 
+using Rows = py::array_t<double, py::array::c_style | py::array::forcecast>;
+
+// An (N, 3) float64 array (converted when given otherwise); ValueError naming it for any other shape.
+Rows rows3(const py::handle& obj, const char* name) {
+    Rows a = Rows::ensure(obj);
+    if (!a || a.ndim() != 2 || a.shape(1) != 3) {
+        PyErr_Clear();
+        throw ValueError(std::string(name) + ": expected an array of shape (N, 3)");
+    }
+    return a;
+}
+
+template <typename T>
+Rows to_rows(const std::vector<T>& v) {
+    Rows a({static_cast<py::ssize_t>(v.size()), py::ssize_t{3}});
+    static_assert(sizeof(T) == 3 * sizeof(double));
+    if (!v.empty()) std::memcpy(a.mutable_data(), v.data(), v.size() * sizeof(T));
+    return a;
+}
+
 }  // namespace
+
+MetricOptions metric_options(double max_theta, int threads, const std::string& over, std::size_t directions,
+                             std::uint64_t seed) {
+    MetricOptions o;
+    o.max_theta_deg = max_theta;
+    o.threads = threads;
+    o.over = parse_over(over);
+    o.directions = directions;
+    o.seed = seed;
+    return o;
+}
 
 void bind_operations(py::module_& m) {
     m.def("load", [](const Path& path, const std::string& lookup, const std::string& bin_position,
@@ -119,24 +188,27 @@ void bind_operations(py::module_& m) {
           py::arg("format") = "", "a BRDF file (.binary, .bsdf, .brdfz, .exr, .json; format overrides the extension)");
 
     m.def("save", [](const BrdfPtr& brdf, const Path& path, const Resolution& res, const std::string& format,
-                     int threads, py::object progress) {
+                     int threads, py::object progress, const std::string& build_spec, const std::optional<Path>& source,
+                     const py::object& source_metrics) {
               SaveOptions o;
               if (res) o.grid = grid_of(*res);
               o.format = format;
               o.threads = threads;
-              Progress bar(std::move(progress));
-              o.progress = bar.hook();
-              ValidityCounts c;
-              {
-                  py::gil_scoped_release release;
-                  c = save(*brdf, path.string(), o);
+              o.build_spec = build_spec;
+              if (source) {
+                  o.source = source->string();
+                  o.source_format = detect_format(o.source);
               }
-              bar.rethrow();
-              return counts_dict(c);
+              // An object, not std::optional<Metrics>: Metrics is bound below, after this signature is made.
+              if (!source_metrics.is_none()) o.source_metrics = source_metrics.cast<Metrics>();
+              return save_counts(*brdf, path, o, std::move(progress));
           },
           py::arg("brdf"), py::arg("path"), py::kw_only(), py::arg("res") = py::none(), py::arg("format") = "",
-          py::arg("threads") = 0, py::arg("progress") = py::none(),
-          "writes atomically (format from the extension unless given); returns the written bins' counts");
+          py::arg("threads") = 0, py::arg("progress") = py::none(), py::arg("build_spec") = "",
+          py::arg("source") = py::none(), py::arg("source_metrics") = py::none(),
+          "writes atomically (format from the extension unless given); returns the written bins' counts. .brdfz "
+          "keeps provenance: build_spec (the compress() spec), source (the file it came from: name, format and "
+          "SHA-256) and source_metrics (its metrics against that file)");
 
     m.def("convert", [](const Path& src, const Path& dst, const Resolution& res, const std::string& src_format,
                         const std::string& dst_format, const std::string& lookup, const std::string& bin_position,
@@ -239,17 +311,43 @@ void bind_operations(py::module_& m) {
             return py::str("Metrics(cos_rmse={:.6g}, cos_rmse_rel={:.6g}, log_rmse={:.6g}, cbrt_rmse={:.6g}, samples={})")
                 .format(x.cos_rmse.mean, x.cos_rmse_rel.mean, x.log_rmse.mean, x.cbrt_rmse.mean, x.samples);
         });
-    m.def("metrics", [](const py::object& reference, const BrdfPtr& approx, double max_theta, int threads) {
+    m.def("metrics", [](const py::object& reference, const BrdfPtr& approx, double max_theta, int threads,
+                        const std::string& over, std::size_t directions, std::uint64_t seed) {
+              const MetricOptions o = metric_options(max_theta, threads, over, directions, seed);
               const Data ref = data_of(reference);
-              MetricOptions o;
-              o.max_theta_deg = max_theta;
-              o.threads = threads;
               py::gil_scoped_release release;
               if (const auto* set = std::get_if<MeasurementSet>(&ref)) return compare(*set, *approx, o);
               return compare(*std::get<BrdfPtr>(ref), *approx, o);
           },
           py::arg("reference"), py::arg("approx"), py::kw_only(), py::arg("max_theta") = 80.0, py::arg("threads") = 0,
+          py::arg("over") = "grid", py::arg("directions") = MetricOptions{}.directions, py::arg("seed") = MetricOptions{}.seed,
           "metrics of approx against reference (a Brdf, or a file: a BRDF or Cornell/ALTA measurements)");
+    m.def("metric_samples", [](const BrdfPtr& reference, double max_theta, int threads, const std::string& over,
+                               std::size_t directions, std::uint64_t seed) {
+              const MetricOptions o = metric_options(max_theta, threads, over, directions, seed);
+              MetricSamples s;
+              {
+                  py::gil_scoped_release release;
+                  s = metric_samples(*reference, o);
+              }
+              return py::make_tuple(to_rows(s.wi), to_rows(s.wo), to_rows(s.reference));
+          },
+          py::arg("reference"), py::kw_only(), py::arg("max_theta") = 80.0, py::arg("threads") = 0,
+          py::arg("over") = "grid", py::arg("directions") = MetricOptions{}.directions, py::arg("seed") = MetricOptions{}.seed,
+          "(wi, wo, f_reference): the samples metrics() takes against reference");
+    m.def("metrics_at", [](const py::object& wi_obj, const py::object& ref_obj, const py::object& app_obj) {
+              const Rows wi = rows3(wi_obj, "wi"), ref = rows3(ref_obj, "reference"), app = rows3(app_obj, "approx");
+              const auto n = static_cast<std::size_t>(wi.shape(0));
+              if (static_cast<std::size_t>(ref.shape(0)) != n || static_cast<std::size_t>(app.shape(0)) != n)
+                  throw ValueError("metrics_at: wi, reference and approx have different lengths");
+              std::vector<Vec3> w(n);
+              for (std::size_t k = 0; k < n; ++k) w[k] = {wi.at(k, 0), wi.at(k, 1), wi.at(k, 2)};
+              const auto* r = reinterpret_cast<const Rgb*>(ref.data());
+              const auto* a = reinterpret_cast<const Rgb*>(app.data());
+              return compare_values(w, std::span<const Rgb>(r, n), std::span<const Rgb>(a, n));
+          },
+          py::arg("wi"), py::arg("reference"), py::arg("approx"),
+          "the metrics of approx against reference values (N, 3) at pairs whose incident directions are wi");
 
     py::class_<FitReport>(m, "FitReport", "how a fit went (fit/fit.h)")
         .def_property_readonly("status", [](const FitReport& r) { return fit_status_name(r.status); },
@@ -359,6 +457,53 @@ void bind_operations(py::module_& m) {
           },
           py::arg("brdf"), py::arg("theta_o"),
           "directional albedo (quadrature, albedo.h) at θo in radians: shape of theta_o + (3,)");
+
+    py::class_<ValidationCheck>(m, "ValidationCheck", "one plausibility check (validate.h)")
+        .def_readonly("name", &ValidationCheck::name, "non-negativity, reciprocity or energy")
+        .def_readonly("unit", &ValidationCheck::unit, "what was tested: bins, pairs or elevations")
+        .def_readonly("tested", &ValidationCheck::tested)
+        .def_readonly("failed", &ValidationCheck::failed)
+        .def_property_readonly("ok", &ValidationCheck::ok)
+        .def_property_readonly("worst", [](const ValidationCheck& c) { return py::list(check_dict(c)["worst"]); },
+                               "the worst offences, worst first: angles in degrees and the values involved")
+        .def("to_dict", &check_dict)
+        .def("__repr__", [](const ValidationCheck& c) {
+            return "<brdfz.ValidationCheck " + c.name + ": " + (c.ok() ? "ok" : "FAIL") + ", " + std::to_string(c.failed) +
+                   " of " + std::to_string(c.tested) + " " + c.unit + " fail>";
+        });
+    py::class_<ValidationReport>(m, "ValidationReport", "the checks of validate(), in order")
+        .def_readonly("checks", &ValidationReport::checks)
+        .def_property_readonly("ok", &ValidationReport::ok)
+        .def("__getitem__", [](const ValidationReport& r, const std::string& name) {
+            for (const ValidationCheck& c : r.checks)
+                if (c.name == name) return c;
+            throw py::key_error(name);
+        })
+        .def("to_dict", [](const ValidationReport& r) {
+            py::dict d;
+            d["ok"] = r.ok();
+            for (const ValidationCheck& c : r.checks) d[py::str(c.name)] = check_dict(c);
+            return d;
+        }, "as `brdfz validate --json` prints it, without the file name")
+        .def("__repr__", [](const ValidationReport& r) {
+            return "<brdfz.ValidationReport " + (r.ok() ? std::string("ok") : "failed: " + r.failed_names()) + ">";
+        });
+    m.def("validate", [](const BrdfPtr& brdf, const std::tuple<int, int, int>& res, const std::vector<double>& theta,
+                         double rtol, double atol, double albedo_tol) {
+              ValidateOptions o;
+              o.grid = grid_of(res);
+              o.theta_deg = theta;
+              o.rtol = rtol;
+              o.atol = atol;
+              o.albedo_tol = albedo_tol;
+              py::gil_scoped_release release;
+              return validate(*brdf, o);
+          },
+          py::arg("brdf"), py::kw_only(), py::arg("res") = std::make_tuple(90, 90, 180),
+          py::arg("theta") = ValidateOptions{}.theta_deg, py::arg("rtol") = 0.05, py::arg("atol") = 1e-3,
+          py::arg("albedo_tol") = 0.01,
+          "non-negativity (a table's values, else f on the res grid), reciprocity (rtol, atol in 1/sr) and "
+          "energy (reflectance <= 1 + albedo_tol at the elevations theta, degrees), as `brdfz validate`");
 }
 
 }  // namespace brdfz::python

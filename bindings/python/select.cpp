@@ -53,13 +53,12 @@ CandidateResult summary_of(const Candidate& c) {
     return r;
 }
 
-TrialOptions trial_options(bool measure_speed, double max_theta, int threads) {
+TrialOptions trial_options(bool measure_speed, const MetricOptions& metrics) {
     TrialOptions o;
     o.compress = with_file_access(o.compress);
     o.measure_speed = measure_speed;
-    o.metrics.max_theta_deg = max_theta;
-    o.metrics.threads = threads;
-    o.compress.threads = threads;
+    o.metrics = metrics;
+    o.compress.threads = metrics.threads;
     return o;
 }
 
@@ -108,8 +107,8 @@ void bind_select(py::module_& m) {
           py::arg("path"), "a scene file (docs/scene-json.md), its samples drawn");
 
     m.def("trial", [](const BrdfPtr& brdf, const std::string& spec, bool measure_speed, double max_theta, int threads,
-                      py::object progress) {
-              TrialOptions o = trial_options(measure_speed, max_theta, threads);
+                      const std::string& over, std::size_t directions, std::uint64_t seed, py::object progress) {
+              TrialOptions o = trial_options(measure_speed, metric_options(max_theta, threads, over, directions, seed));
               Progress bar(std::move(progress));
               o.compress.progress = bar.hook();
               std::optional<Trial> t;
@@ -123,18 +122,20 @@ void bind_select(py::module_& m) {
               return r;
           },
           py::arg("brdf"), py::arg("spec"), py::kw_only(), py::arg("measure_speed") = true, py::arg("max_theta") = 80.0,
-          py::arg("threads") = 0, py::arg("progress") = py::none(),
+          py::arg("threads") = 0, py::arg("over") = "grid", py::arg("directions") = MetricOptions{}.directions,
+          py::arg("seed") = MetricOptions{}.seed, py::arg("progress") = py::none(),
           "compress(brdf, spec) and measure it: bytes, metrics, eval speed, build time");
 
     m.def("select_representation",
           [](const BrdfPtr& brdf, double max_error, const std::string& metric, const std::optional<Scene>& scene,
-             const std::vector<std::string>& candidates, bool measure_speed, int threads, py::object on_candidate) {
+             const std::vector<std::string>& candidates, bool measure_speed, int threads, const std::string& over,
+             std::size_t directions, std::uint64_t seed, py::object on_candidate) {
               SelectOptions o;
               o.max_error = max_error;
               o.metric = parse_scene_metric(metric);
               o.scene = scene;
               o.candidates = candidates;
-              o.trial = trial_options(measure_speed, 80.0, threads);
+              o.trial = trial_options(measure_speed, metric_options(80.0, threads, over, directions, seed));
               // The callable runs on this thread with the GIL released: take it back for the call, and
               // keep a Python exception to raise once the selection is over.
               std::exception_ptr failure;
@@ -167,7 +168,8 @@ void bind_select(py::module_& m) {
           },
           py::arg("brdf"), py::arg("max_error"), py::kw_only(), py::arg("metric") = "log", py::arg("scene") = py::none(),
           py::arg("candidates") = std::vector<std::string>{}, py::arg("measure_speed") = true, py::arg("threads") = 0,
-          py::arg("on_candidate") = py::none(),
+          py::arg("over") = "grid", py::arg("directions") = MetricOptions{}.directions,
+          py::arg("seed") = MetricOptions{}.seed, py::arg("on_candidate") = py::none(),
           "the smallest candidate within the budget (select.h); on_candidate(candidate, index, total) after each");
 
     m.def("benchmark_specs", &benchmark_specs, "the settings the compression benchmark sweeps");

@@ -109,9 +109,7 @@ void Brdf::pdf_batch(const Vec3* wo, const Vec3* wi, double* out, std::size_t n)
 }
 
 BrdfSample Brdf::sample_above(const Vec3&, double u1, double u2) const {
-    // Malley's method: a uniform point on the unit disk lifted to the hemisphere.
-    const double r = std::sqrt(u1), phi = 2.0 * std::numbers::pi * u2;
-    const Vec3 wi{r * std::cos(phi), r * std::sin(phi), std::sqrt(std::fmax(0.0, 1.0 - u1))};
+    const Vec3 wi = cosine_hemisphere(u1, u2);
     return {wi, wi.z / std::numbers::pi, {}};
 }
 

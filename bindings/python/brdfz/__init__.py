@@ -24,6 +24,7 @@ import tempfile
 from typing import Callable, Mapping, Optional, Sequence, Tuple, Union
 
 from . import _core
+from ._core import __version__
 from ._core import (
     Brdf,
     Candidate,
@@ -37,6 +38,8 @@ from ._core import (
     Selection,
     Trial,
     UnsupportedError,
+    ValidationCheck,
+    ValidationReport,
     albedo,
     benchmark_specs,
     compress_kinds,
@@ -46,13 +49,15 @@ from ._core import (
     load,
     representations,
     simd,
+    validate,
 )
 
 __all__ = [
     "Brdf", "Candidate", "ChannelMetrics", "Compressed", "FitReport", "FitResult", "FormatError", "Metrics",
-    "Scene", "Selection", "Trial", "UnsupportedError", "albedo", "benchmark_specs", "compress", "compress_kinds",
-    "convert", "default_candidates", "fit", "format_of", "formats", "load", "metrics", "read_scene", "representations",
-    "save", "simd", "tabulate", "trial",
+    "Scene", "Selection", "Trial", "UnsupportedError", "ValidationCheck", "ValidationReport", "albedo",
+    "benchmark_specs", "compress", "compress_kinds", "convert", "default_candidates", "fit", "format_of", "formats",
+    "load", "metric_samples", "metrics", "metrics_at", "read_scene", "representations", "save", "simd", "tabulate",
+    "trial", "validate",
 ]
 
 Path = Union[str, os.PathLike]
@@ -87,11 +92,16 @@ def _hook(progress: Progress, label: str) -> Optional[Callable[[float], object]]
 
 
 def save(brdf: Brdf, path: Path, *, res: Optional[Resolution] = None, format: str = "", threads: int = 0,
-         progress: Progress = None) -> dict:
+         progress: Progress = None, build_spec: str = "", source: Optional[Path] = None,
+         source_metrics: Optional[Metrics] = None) -> dict:
     """Writes `brdf` atomically (format from the extension unless `format` names one). A format that
     stores tables tabulates other representations on `res` (default: the table's own grid, or
-    90x90x180). Returns the written bins' validity counts."""
-    return _core.save(brdf, path, res=res, format=format, threads=threads, progress=_hook(progress, "tabulating"))
+    90x90x180). A .brdfz file keeps provenance as ``brdfz compress`` writes it: `build_spec` (the
+    compress() spec that built `brdf`), `source` (the file it was built from: its name, format and
+    SHA-256) and `source_metrics` (its metrics against that file). Returns the written bins' validity
+    counts."""
+    return _core.save(brdf, path, res=res, format=format, threads=threads, progress=_hook(progress, "tabulating"),
+                      build_spec=build_spec, source=source, source_metrics=source_metrics)
 
 
 def convert(src: Path, dst: Path, *, res: Optional[Resolution] = None, src_format: str = "", dst_format: str = "",
@@ -121,11 +131,12 @@ def read_scene(source: Union[Path, Mapping, Scene]) -> Scene:
 
 
 def trial(brdf: Brdf, spec: str, *, measure_speed: bool = True, max_theta: float = 80.0, threads: int = 0,
-          progress: Progress = None) -> Trial:
+          over: str = "grid", directions: int = 1 << 18, seed: int = 1, progress: Progress = None) -> Trial:
     """compress(brdf, spec) and measure what it achieved, as ``brdfz compress`` reports it: bytes,
-    metrics against `brdf`, eval_rate (pairs/s, one thread) and build_seconds."""
-    return _core.trial(brdf, spec, measure_speed=measure_speed, max_theta=max_theta, threads=threads,
-                       progress=_hook(progress, "compressing"))
+    metrics against `brdf` (over its grid or over direction pairs: see metrics()), eval_rate (pairs/s,
+    one thread) and build_seconds."""
+    return _core.trial(brdf, spec, measure_speed=measure_speed, max_theta=max_theta, threads=threads, over=over,
+                       directions=directions, seed=seed, progress=_hook(progress, "compressing"))
 
 
 def _candidate_hook(progress: Progress) -> Optional[Callable[[Candidate, int, int], object]]:
@@ -144,8 +155,8 @@ def _candidate_hook(progress: Progress) -> Optional[Callable[[Candidate, int, in
 
 def compress(brdf: Brdf, spec: Optional[str] = None, *, auto: bool = False, max_error: Optional[float] = None,
              metric: str = "log", scene: Union[Path, Mapping, Scene, None] = None,
-             candidates: Optional[Sequence[str]] = None, report: bool = False, threads: int = 0,
-             progress: Progress = None):
+             candidates: Optional[Sequence[str]] = None, over: str = "grid", directions: int = 1 << 18,
+             seed: int = 1, report: bool = False, threads: int = 0, progress: Progress = None):
     """Builds the representation `spec` names, as ``brdfz compress`` spells it ("tabular:res=45x45x90",
     "analytic:lambert+ggx", "svd:rank=4", ...; see compress_kinds()). Returns the Brdf, or with
     report=True a :class:`Compressed` holding it with its canonical spec, build_seconds and notes.
@@ -153,7 +164,8 @@ def compress(brdf: Brdf, spec: Optional[str] = None, *, auto: bool = False, max_
     With auto=True (``brdfz compress --auto``) it tries `candidates` (default: default_candidates())
     from cheapest to richest and returns the first, so the smallest, whose error in `metric` ("log":
     log_rmse, "cos": cos_rmse_rel, "image": relative pixel RMSE; under `scene` when given, a scene
-    file or dict) is at most `max_error`; report=True returns the :class:`Selection` instead, every
+    file or dict) is at most `max_error`, the errors without a scene taken `over` the grid or over
+    direction pairs (as in metrics()); report=True returns the :class:`Selection` instead, every
     candidate with its bytes, error, eval_rate, build_seconds and why it was rejected. No candidate
     within the budget is a ValueError (its ``selection`` attribute holds the report). progress=True
     prints a line per candidate."""
@@ -168,7 +180,8 @@ def compress(brdf: Brdf, spec: Optional[str] = None, *, auto: bool = False, max_
         raise ValueError("compress(auto=True): give max_error, a finite number > 0")
     selection = _core.select_representation(
         brdf, max_error, metric=metric, scene=None if scene is None else read_scene(scene),
-        candidates=list(candidates or []), threads=threads, on_candidate=_candidate_hook(progress))
+        candidates=list(candidates or []), threads=threads, over=over, directions=directions, seed=seed,
+        on_candidate=_candidate_hook(progress))
     if selection.chosen < 0:
         tried = "; ".join(f"{c.spec}: {c.reason}" for c in selection.candidates)
         error = ValueError(f"compress(auto=True): no candidate meets the budget {max_error:g} in {metric} ({tried})")
@@ -189,10 +202,34 @@ def fit(source: Union[Brdf, Path], model: str, *, loss: str = "log", starts: int
                      progress=_hook(progress, "fitting"))
 
 
-def metrics(reference: Union[Brdf, Path], approx: Brdf, *, max_theta: float = 80.0, threads: int = 0) -> Metrics:
+def metrics(reference: Union[Brdf, Path], approx: Brdf, *, max_theta: float = 80.0, threads: int = 0,
+            over: str = "grid", directions: int = 1 << 18, seed: int = 1) -> Metrics:
     """cos_rmse, cos_rmse_rel, log_rmse and cbrt_rmse of `approx` against `reference` (a Brdf, or a
-    file: a BRDF or Cornell / ALTA measurements), as ``brdfz diff``."""
-    return _core.metrics(reference, approx, max_theta=max_theta, threads=threads)
+    file: a BRDF or Cornell / ALTA measurements), as ``brdfz diff``.
+
+    over="grid": each bin of the reference's Rusinkiewicz grid once (its own grid for a table,
+    otherwise 90x90x180 at bin starts), θi and θo below `max_theta` (degrees) and within the
+    reference's measured range. over="directions": `directions` pairs drawn from `seed`, wi and wo
+    uniform in solid angle (θi below `max_theta` and within the measured range, θo below `max_theta`,
+    every azimuth), each pair once: the error a renderer sees. Measurements are judged at their own
+    points (over="grid" only)."""
+    return _core.metrics(reference, approx, max_theta=max_theta, threads=threads, over=over, directions=directions,
+                         seed=seed)
+
+
+def metric_samples(reference: Brdf, *, over: str = "grid", max_theta: float = 80.0, directions: int = 1 << 18,
+                   seed: int = 1, threads: int = 0):
+    """(wi, wo, f): the direction pairs metrics() judges against `reference` with these options, and
+    the reference's f_r there ((N, 3) float64 arrays; over the grid, a table's stored values). With
+    metrics_at(), judges what is not a Brdf (a peer's network) on exactly those samples."""
+    return _core.metric_samples(reference, max_theta=max_theta, threads=threads, over=over, directions=directions,
+                                seed=seed)
+
+
+def metrics_at(wi, reference, approx) -> Metrics:
+    """The metrics of `approx` against `reference`, (N, 3) arrays of f_r at pairs whose incident
+    directions are the rows of `wi` (cosθi = wi[:, 2]); as metrics() computes them from its samples."""
+    return _core.metrics_at(wi, reference, approx)
 
 
 def tabulate(brdf: Brdf, res: Resolution = (90, 90, 180), *, lookup: str = "linear", negative: str = "clamp",

@@ -3,13 +3,12 @@
 #include <algorithm>
 #include <cmath>
 #include <numbers>
-#include <thread>
 #include <vector>
 
 #include "brdfz/coords.h"
 #include "brdfz/errors.h"
 #include "brdfz/table.h"
-#include "detail/grid_sweep.h"
+#include "detail/parallel.h"
 #include "fit/random.h"
 
 namespace brdfz {
@@ -62,14 +61,10 @@ GridSamples sample_brdf(const Brdf& brdf, const SampleOptions& options) {
         // Sources can be slow to evaluate (RGL): split the batch over threads.
         const std::size_t workers = std::min<std::size_t>(detail::resolve_threads(options.threads), wi.size() / 1024 + 1);
         const std::size_t per = (wi.size() + workers - 1) / workers;
-        std::vector<std::thread> pool;
-        for (std::size_t w = 0; w < workers; ++w) {
+        detail::parallel_for(static_cast<int>(workers), static_cast<int>(workers), [&](int, int w) {
             const std::size_t begin = std::min(wi.size(), w * per), n = std::min(wi.size(), begin + per) - begin;
-            pool.emplace_back([&, begin, n] {
-                brdf.eval(std::span(wi).subspan(begin, n), std::span(wo).subspan(begin, n), std::span(f).subspan(begin, n));
-            });
-        }
-        for (auto& t : pool) t.join();
+            brdf.eval(std::span(wi).subspan(begin, n), std::span(wo).subspan(begin, n), std::span(f).subspan(begin, n));
+        });
     }
 
     out.set.channels = brdf.channels();

@@ -50,10 +50,10 @@ struct Basis {
 // max(x, 0) by a select (std::fmax is a call), NaN to 0.
 [[gnu::always_inline]] inline double nonneg(double x) { return x > 0.0 ? x : 0.0; }
 
-[[gnu::always_inline]] inline Vec3 cosine_hemisphere(double u1, double u2) {
-    const double r = std::sqrt(u1);
+// frame.h's cosine-weighted direction with the azimuth 2πu2 from turn().
+[[gnu::always_inline]] inline Vec3 cosine_turn(double u1, double u2) {
     const detail::SinCos2 phi = turn(u2);
-    return {r * phi.c, r * phi.s, std::sqrt(nonneg(1.0 - u1))};
+    return cosine_hemisphere(u1, phi.c, phi.s);
 }
 
 // Direction at polar angle cosine c (around +z) and azimuth 2π u.
@@ -99,7 +99,7 @@ double invert_cdf(Eval&& eval, double target, double lo, double hi, double x) {
 
 // --- lambert ------------------------------------------------------------------------------------
 struct CosineSampler {
-    static Vec3 sample(const double*, const Vec3&, double u1, double u2) { return cosine_hemisphere(u1, u2); }
+    static Vec3 sample(const double*, const Vec3&, double u1, double u2) { return cosine_turn(u1, u2); }
     static double density(const double*, const Vec3&, const Vec3& w) { return w.z > 0.0 ? w.z / kPi : 0.0; }
 };
 
@@ -241,7 +241,7 @@ double ashikhmin_shirley_specular_share(const double* p) {
 struct AshikhminShirleySampler {  // params: rd (3), rs (3), nu, nv
     static Vec3 sample(const double* p, const Vec3& wo, double u1, double u2) {
         const double share = ashikhmin_shirley_specular_share(p);
-        if (!(u1 < share)) return cosine_hemisphere(std::fmin((u1 - share) / (1.0 - share), std::nextafter(1.0, 0.0)), u2);
+        if (!(u1 < share)) return cosine_turn(std::fmin((u1 - share) / (1.0 - share), std::nextafter(1.0, 0.0)), u2);
         // φ in one quadrant by the paper's inversion, the quadrant from the top two bits of u.
         const double v = 4.0 * u1 / share;
         const int quadrant = std::min(static_cast<int>(v), 3);
@@ -276,7 +276,7 @@ struct LafortuneSampler {  // params: rho (3), cxy, cz, n
     }
     static Vec3 sample(const double* p, const Vec3& wo, double u1, double u2) {
         Vec3 a;
-        if (!axis(p, wo, a)) return cosine_hemisphere(u1, u2);
+        if (!axis(p, wo, a)) return cosine_turn(u1, u2);
         return Basis(a).to_world(around_z(std::exp(std::log1p(-u1) / (p[5] + 1.0)), u2));
     }
     static double density(const double* p, const Vec3& wo, const Vec3& w) {
@@ -440,7 +440,7 @@ void LobeMixture::sample_block(const Vec3* wo, const std::array<double, 2>* u, s
             u2[k] = u[start + k][1];
             if (!(total[k] > 0.0)) {
                 chosen[k] = -1;
-                wi[k] = cosine_hemisphere(u1, u2[k]);
+                wi[k] = cosine_turn(u1, u2[k]);
                 continue;
             }
             std::size_t j = 0;
