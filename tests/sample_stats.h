@@ -9,12 +9,15 @@
 #include <array>
 #include <cmath>
 #include <cstdint>
+#include <cstring>
+#include <span>
 #include <random>
 #include <utility>
 #include <vector>
 
 #include "brdfz/brdf.h"
 #include "brdfz/coords.h"
+#include "simd_levels.h"
 
 namespace brdfz::test {
 
@@ -87,24 +90,43 @@ struct Chi2Result {
     double integral;     // ∫ pdf dωi over the hemisphere, from the expected counts' quadrature
 };
 
+// How chi2_test draws: one sample() call per draw, or the batch sample() over spans of draws.
+enum class Draws { OneAtATime, Batch };
+
 // Histogram of `samples` sampled wi against expected counts from the pdf on a cells×cells grid in
 // half-vector coordinates; cells with expected count < 5 are pooled. The expected counts' quadrature
 // (cells·16 points a side, finer where the horizon crosses) also gives the pdf's integral.
 inline Chi2Result chi2_test(const Brdf& b, const Vec3& wo, std::size_t samples, int cells = 32,
-                            std::uint64_t seed = 1) {
+                            std::uint64_t seed = 1, Draws draws = Draws::OneAtATime) {
     std::vector<double> observed(cells * cells, 0.0), expected(cells * cells, 0.0);
     std::mt19937_64 rng(seed);
     std::uniform_real_distribution<double> u(0.0, 1.0);
     std::size_t failed = 0;
-    for (std::size_t k = 0; k < samples; ++k) {
-        const BrdfSample s = b.sample(wo, u(rng), u(rng));
+    const auto count = [&](const BrdfSample& s) {
         if (s.pdf == 0) {
             ++failed;
-            continue;
+            return;
         }
         const HalfCoords c = half_coords(wo, s.wi);
         const int i = std::min(int(c.x * cells), cells - 1), j = std::min(int(c.y * cells), cells - 1);
         observed[j * cells + i] += 1;
+    };
+    if (draws == Draws::Batch) {
+        constexpr std::size_t kChunk = 4096;
+        const std::vector<Vec3> views(kChunk, wo);
+        std::vector<std::array<double, 2>> us(kChunk);
+        std::vector<BrdfSample> out(kChunk);
+        for (std::size_t start = 0; start < samples; start += kChunk) {
+            const std::size_t m = std::min(kChunk, samples - start);
+            for (std::size_t k = 0; k < m; ++k) {
+                const double u1 = u(rng);
+                us[k] = {u1, u(rng)};
+            }
+            b.sample(std::span(views.data(), m), std::span<const std::array<double, 2>>(us.data(), m), std::span(out.data(), m));
+            for (std::size_t k = 0; k < m; ++k) count(out[k]);
+        }
+    } else {
+        for (std::size_t k = 0; k < samples; ++k) count(b.sample(wo, u(rng), u(rng)));
     }
     // Expected counts by a midpoint rule on 16×16 points per cell. Cells the horizon crosses (wi.z = 0,
     // where the pdf may drop to 0) take 64×64, or their quadrature error alone fails the test; the
@@ -187,6 +209,11 @@ inline void check_sampler(const Brdf& b, std::size_t samples, double p_min = kVi
     }
 }
 
+// The batch sampler (sample() over spans): χ² of `samples` batch draws at each of kThetaODeg (fails below
+// p_min), and at every SIMD build the CPU has, batch sample, pdf and eval equal to one call at a time, bit
+// for bit, on random views and pairs.
+inline void check_batch_sampler(const Brdf& b, std::size_t samples, double p_min = kViewsLevel);
+
 // count random views above the horizon and u pairs, from one seeded generator.
 inline std::pair<std::vector<Vec3>, std::vector<std::array<double, 2>>> random_views(std::size_t count,
                                                                                      std::uint64_t seed) {
@@ -201,6 +228,47 @@ inline std::pair<std::vector<Vec3>, std::vector<std::array<double, 2>>> random_v
         us[k] = {u(rng), u(rng)};
     }
     return {wo, us};
+}
+
+inline bool same_bits(double a, double b) { return std::memcmp(&a, &b, sizeof a) == 0; }
+inline bool same_bits(const Rgb& a, const Rgb& b) {
+    return same_bits(a[0], b[0]) && same_bits(a[1], b[1]) && same_bits(a[2], b[2]);
+}
+inline bool same_bits(const BrdfSample& a, const BrdfSample& b) {
+    return same_bits(a.wi.x, b.wi.x) && same_bits(a.wi.y, b.wi.y) && same_bits(a.wi.z, b.wi.z) &&
+           same_bits(a.pdf, b.pdf) && same_bits(a.weight, b.weight);
+}
+
+inline void check_batch_sampler(const Brdf& b, std::size_t samples, double p_min) {
+    for (double deg : kThetaODeg) {
+        INFO("batch draws, theta_o = " << deg);
+        CHECK(chi2_test(b, spherical_direction(deg * M_PI / 180, 0.4), samples, 32, 3, Draws::Batch).p_value > p_min);
+    }
+    // Views above and below the horizon, u in and out of [0, 1).
+    auto [wo, u] = random_views(3000, 21);
+    for (std::size_t k = 0; k < wo.size(); k += 97) wo[k].z = -wo[k].z;
+    for (std::size_t k = 5; k < u.size(); k += 89) u[k][k % 2] = k % 3 ? 1.0 : -0.25;
+    auto [wi, unused] = random_views(wo.size(), 22);
+    for (std::size_t k = 0; k < wi.size(); k += 13) wi[k].z = -wi[k].z;
+    std::vector<BrdfSample> s(wo.size());
+    std::vector<double> p(wo.size());
+    std::vector<Rgb> f(wo.size());
+    for (detail::Simd level : simd_levels()) {
+        INFO(simd_label(level) << " build");
+        const SimdCap cap(level);
+        b.sample(std::span<const Vec3>(wo), std::span<const std::array<double, 2>>(u), std::span(s));
+        b.pdf(std::span<const Vec3>(wo), std::span<const Vec3>(wi), std::span(p));
+        b.eval(std::span<const Vec3>(wi), std::span<const Vec3>(wo), std::span(f));
+        std::size_t differ = 0, drawn = 0;
+        for (std::size_t k = 0; k < wo.size(); ++k) {
+            differ += !same_bits(s[k], b.sample(wo[k], u[k][0], u[k][1]));
+            differ += !same_bits(p[k], b.pdf(wo[k], wi[k]));
+            differ += !same_bits(f[k], b.eval(wi[k], wo[k]));
+            drawn += s[k].pdf > 0;
+        }
+        CHECK(differ == 0);
+        CHECK(drawn > wo.size() / 2);
+    }
 }
 
 }  // namespace brdfz::test

@@ -14,7 +14,9 @@
 #include "brdfz/errors.h"
 #include "brdfz/repr/analytic/model.h"
 #include "brdfz/repr/tabular.h"
+#include "brdfz/simd.h"
 #include "module.h"
+#include "rows.h"
 
 namespace brdfz::python {
 
@@ -84,39 +86,26 @@ void check_lengths(const Rows& a, const char* a_name, const Rows& b, const char*
                          " and " + std::to_string(b.size()) + ")");
 }
 
-// Rows [begin, begin + out.size()) as unit directions, normalised as the CLI does (any finite
-// non-zero vector, in double).
-template <typename T>
-void normalise(const T* xyz, std::size_t begin, std::span<Vec3> out, const char* name) {
-    for (std::size_t k = 0; k < out.size(); ++k) {
-        const T* v = xyz + 3 * (begin + k);
-        const Vec3 d{v[0], v[1], v[2]};
-        const double n = length(d);
-        if (!std::isfinite(n) || n == 0.0)
-            throw ValueError(std::string(name) + "[" + std::to_string(begin + k) + "]: direction must be a finite non-zero vector");
-        out[k] = (1.0 / n) * d;
-    }
-}
-
+// Rows [begin, begin + out.size()) as unit directions (rows.h); ValueError naming the first bad row.
 void directions(const Rows& rows, std::size_t begin, std::span<Vec3> out, const char* name) {
-    if (rows.f32)
-        normalise(rows.data<float>(), begin, out, name);
-    else
-        normalise(rows.data<double>(), begin, out, name);
+    const std::size_t bad = rows.f32 ? normalise_rows(rows.data<float>(), begin, out)
+                                     : normalise_rows(rows.data<double>(), begin, out);
+    if (bad < out.size())
+        throw ValueError(std::string(name) + "[" + std::to_string(begin + bad) + "]: direction must be a finite non-zero vector");
 }
 
 // Rows [begin, begin + out.size()) of an (N, 2) array of random numbers; ValueError naming the row
 // for one outside [0, 1) or NaN (the samplers would return a null sample for it, silently).
 void pairs(const Rows& rows, std::size_t begin, std::span<std::array<double, 2>> out, const char* name) {
-    for (std::size_t k = 0; k < out.size(); ++k) {
-        const std::size_t j = 2 * (begin + k);
-        out[k] = rows.f32 ? std::array<double, 2>{rows.data<float>()[j], rows.data<float>()[j + 1]}
-                          : std::array<double, 2>{rows.data<double>()[j], rows.data<double>()[j + 1]};
+    if (rows.f32)
+        copy_rows(rows.data<float>(), begin, out);
+    else
+        copy_rows(rows.data<double>(), begin, out);
+    for (std::size_t k = 0; k < out.size(); ++k)
         for (double u : out[k])
             if (!(u >= 0.0 && u < 1.0))
                 throw ValueError(std::string(name) + "[" + std::to_string(begin + k) + "]: " + std::to_string(u) +
                                  " is outside [0, 1)");
-    }
 }
 
 Array new_rows(std::size_t n, py::ssize_t cols) {
@@ -181,13 +170,7 @@ std::tuple<Array, Array, Array> sample(const Brdf& brdf, const ArrayArg& wo_obj,
             directions(wo_rows, begin, std::span(wo.data(), m), "wo");
             pairs(u_rows, begin, std::span(u.data(), m), "u");
             brdf.sample(std::span(wo.data(), m), std::span(u.data(), m), std::span(samples.data(), m));
-            for (std::size_t k = 0; k < m; ++k) {
-                const BrdfSample& s = samples[k];
-                const std::size_t j = begin + k;
-                wi[3 * j] = s.wi.x, wi[3 * j + 1] = s.wi.y, wi[3 * j + 2] = s.wi.z;
-                p[j] = s.pdf;
-                for (int c = 0; c < 3; ++c) weight[3 * j + c] = s.weight[c];
-            }
+            split_samples(std::span(samples.data(), m), begin, wi, p, weight);
         }
     }
     return {wi_out, pdf_out, weight_out};
@@ -218,6 +201,8 @@ std::optional<std::map<std::string, double>> parameters(const Brdf& brdf) {
 }  // namespace
 
 void bind_brdf(py::module_& m) {
+    m.def("simd", &simd_name,
+          "the instruction set Brdf's batch calls run with on this CPU: 'avx512', 'avx2' or 'sse2' (chosen at import)");
     py::class_<Brdf, BrdfPtr>(m, "Brdf", "A measured or compressed BRDF (brdf.h: normal +z, wi and wo pointing away)")
         .def("eval", &eval<false>, py::arg("wi"), py::arg("wo"),
              "f_r (1/sr, no cosine) at direction pairs: wi, wo of shape (N, 3) -> (N, 3) float64")

@@ -262,17 +262,20 @@ Tensors derive(const Brdf& brdf, const WriteOptions& options) {
     wos.resize(plane);
     f.resize(plane);
     std::vector<Rgb> scale(plane);
-    std::vector<double> per_unit(plane);
+    std::vector<double> per_unit(plane), ux(plane), uy(plane), u_pdf(plane);
+    const detail::WarpTables warp_tables = warp.tables();
     for (int k = 0; k < n; ++k) {
         const Vec3 wi = in_plane(t.theta_i[k]);
-        const detail::SliceWeights slice{static_cast<std::size_t>(k), 0, 0.0};
         for (std::size_t p = 0; p < plane; ++p) {
-            const detail::Point2 s{static_cast<double>(p % nr) / (nr - 1), static_cast<double>(p / nr) / (nr - 1)};
-            const detail::Warped u = warp.sample(s, slice);
-            const Vec3 m = normal_at(u.p.x, u.p.y);
+            ux[p] = static_cast<double>(p % nr) / (nr - 1);
+            uy[p] = static_cast<double>(p / nr) / (nr - 1);
+        }
+        detail::sample_warp(warp_tables, k, ux.data(), uy.data(), u_pdf.data(), plane);
+        for (std::size_t p = 0; p < plane; ++p) {
+            const Vec3 m = normal_at(ux[p], uy[p]);
             wis[p] = wi;
             wos[p] = 2.0 * dot(m, wi) * m - wi;
-            per_unit[p] = u.pdf > 0.0 ? jacobian(u.p.x, m, wi) / u.pdf : 0.0;
+            per_unit[p] = u_pdf[p] > 0.0 ? jacobian(ux[p], m, wi) / u_pdf[p] : 0.0;
         }
         brdf.eval(wis, wos, f);
         scale_of.eval(wis, wos, scale);

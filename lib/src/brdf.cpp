@@ -5,8 +5,20 @@
 #include <numbers>
 
 #include "brdfz/errors.h"
+#include "brdfz/simd.h"
+#include "detail/simd.h"
 
 namespace brdfz {
+
+Simd simd_level() { return detail::simd_level(); }
+
+const char* simd_name() {
+    switch (detail::simd_level()) {
+        case detail::Simd::Avx512: return "avx512";
+        case detail::Simd::Avx2Fma: return "avx2";
+        default: return "sse2";
+    }
+}
 
 Rgb Brdf::eval_cos(const Vec3& wi, const Vec3& wo) const {
     Rgb f = eval(wi, wo);
@@ -89,7 +101,11 @@ void Brdf::pdf(std::span<const Vec3> wo, std::span<const Vec3> wi, std::span<dou
     if (wo.size() != wi.size() || wo.size() != out.size())
         throw ValueError("pdf: batch sizes differ (wo " + std::to_string(wo.size()) + ", wi " +
                          std::to_string(wi.size()) + ", out " + std::to_string(out.size()) + ")");
-    for (std::size_t k = 0; k < wo.size(); ++k) out[k] = pdf(wo[k], wi[k]);
+    pdf_batch(wo.data(), wi.data(), out.data(), wo.size());
+}
+
+void Brdf::pdf_batch(const Vec3* wo, const Vec3* wi, double* out, std::size_t n) const {
+    for (std::size_t k = 0; k < n; ++k) out[k] = pdf(wo[k], wi[k]);
 }
 
 BrdfSample Brdf::sample_above(const Vec3&, double u1, double u2) const {

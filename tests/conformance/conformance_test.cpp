@@ -31,6 +31,7 @@ const KindCase kKinds[] = {
     {"tabular:res=16x16x32,dtype=f16", true},
     {"tabular:res=16x16x32,dtype=u8log,lookup=nearest", true},
     {"bivariate:res=16x16,phi=8", true},
+    {"bivariate:res=16x16,phi=8,dtype=f16,lookup=nearest", true},
     {"svd:rank=2,res=16x16x32", true},
     {"nmf:rank=2,res=16x16x32,iterations=20", true},
     {"pca:basis=BASIS,k=2", true},
@@ -68,6 +69,7 @@ TEST_CASE("conformance: every representation kind", "[conformance]") {
             if (c.reciprocal) test::check_reciprocity(b);
             test::check_furnace(b, 1.0);
             test::check_sampler(b, 20000);
+            test::check_batch_sampler(b, 20000);
             LoadOptions reading;
             if (spec.find("lookup=nearest") != std::string::npos) reading.lookup = Lookup::Nearest;
             test::check_container_round_trip(b, reading);

@@ -321,3 +321,8 @@ def test_stubs_are_current(tmp_path):
                    capture_output=True)
     committed = pathlib.Path(__file__).resolve().parents[2] / "bindings" / "python" / "brdfz" / "_core.pyi"
     assert (tmp_path / "brdfz" / "_core.pyi").read_text() == committed.read_text(), "run scripts/python-stubs"
+
+
+def test_simd_names_the_batch_kernels_instruction_set():
+    assert brdfz.simd() in ("avx512", "avx2", "sse2")
+    assert "simd" in brdfz.__all__

@@ -48,6 +48,7 @@ from ._core import (
     formats,
     load,
     representations,
+    simd,
     validate,
 )
 
@@ -55,8 +56,8 @@ __all__ = [
     "Brdf", "Candidate", "ChannelMetrics", "Compressed", "FitReport", "FitResult", "FormatError", "Metrics",
     "Scene", "Selection", "Trial", "UnsupportedError", "ValidationCheck", "ValidationReport", "albedo",
     "benchmark_specs", "compress", "compress_kinds", "convert", "default_candidates", "fit", "format_of", "formats",
-    "load", "metric_samples", "metrics", "metrics_at", "read_scene", "representations", "save", "tabulate", "trial",
-    "validate",
+    "load", "metric_samples", "metrics", "metrics_at", "read_scene", "representations", "save", "simd", "tabulate",
+    "trial", "validate",
 ]
 
 Path = Union[str, os.PathLike]

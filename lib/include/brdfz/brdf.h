@@ -106,6 +106,8 @@ protected:
     // default draws blocks with sample_above and evaluates the weights they need with eval_batch;
     // overrides fuse the two (TabularBrdf: the lookup from the draw's own angles).
     virtual void sample_batch(const Vec3* wo, const std::array<double, 2>* u, BrdfSample* out, std::size_t n) const;
+    // Batch kernel of pdf(span): out[k] = pdf(wo[k], wi[k]), 0 below the horizon. The default loops over pdf().
+    virtual void pdf_batch(const Vec3* wo, const Vec3* wi, double* out, std::size_t n) const;
 
 private:
     // sample() without the weight when the sampler left it unset: a failed draw is returned as {}.

@@ -26,11 +26,19 @@ inline Vec3 spherical_direction(double theta, double phi) {
     return {s * std::cos(phi), s * std::sin(phi), std::cos(theta)};
 }
 
-// Cosine-weighted direction on the upper hemisphere (pdf cosθ/π) from u1, u2 in [0, 1), by Malley's
-// method: a uniform point on the unit disk (radius √u1, azimuth 2π·u2) lifted to the hemisphere.
+// Cosine-weighted direction on the upper hemisphere (pdf cosθ/π) by Malley's method: a uniform point on
+// the unit disk (radius √u1, azimuth φ) lifted to the hemisphere. This form takes cos φ and sin φ, for
+// samplers that compute them their own (vectorisable) way; always inlined, since a call in a loop over
+// lanes stops the vectoriser.
+[[gnu::always_inline]] inline Vec3 cosine_hemisphere(double u1, double cos_phi, double sin_phi) {
+    const double r = std::sqrt(u1), z2 = 1.0 - u1;
+    return {r * cos_phi, r * sin_phi, std::sqrt(z2 > 0.0 ? z2 : 0.0)};
+}
+
+// The same from u1, u2 in [0, 1), azimuth 2π·u2.
 inline Vec3 cosine_hemisphere(double u1, double u2) {
-    const double r = std::sqrt(u1), phi = 2.0 * std::numbers::pi * u2;
-    return {r * std::cos(phi), r * std::sin(phi), std::sqrt(std::fmax(0.0, 1.0 - u1))};
+    const double phi = 2.0 * std::numbers::pi * u2;
+    return cosine_hemisphere(u1, std::cos(phi), std::sin(phi));
 }
 
 // asin clamped to its domain, so unit vectors that are a rounding error too long stay finite.

@@ -9,6 +9,8 @@
 #include <numbers>
 #include <vector>
 
+#include "brdfz/sample/sincos.h"
+
 namespace brdfz::detail {
 
 // e^x − 1 for x ≥ 0 (x above 709 is taken as 709, where e^x is near the double range's end), within
@@ -106,7 +108,10 @@ public:
         for (int i = 0; i <= n; ++i) table_[i] = {std::sin(i * step_), std::cos(i * step_)};
     }
     SinCos operator()(double a) const {
-        const double x = std::clamp(a * inv_step_ + 0.5, 0.5, n_ + 0.5);
+        // Clamped by selects, which take NaN to entry 0 (std::clamp passes NaN through, to an index far
+        // outside the table): a NaN angle, as a sampler's masked-off lanes may compute, gives NaN, not a
+        // wild read.
+        const double r = a * inv_step_ + 0.5, lo = r > 0.5 ? r : 0.5, x = lo < n_ + 0.5 ? lo : n_ + 0.5;
         const int i = static_cast<int>(x);
         const double d = a - i * step_, d2 = d * d;
         const double sd = d * (1.0 - d2 * (1.0 / 6 - d2 * (1.0 / 120))),

@@ -1,25 +1,37 @@
 // The instruction set a batch kernel may use beyond the x86-64 baseline (SSE2) the library is compiled
-// for, chosen at run time: a kernel built twice (the second with [[gnu::target("avx2,fma")]]) runs the
-// wider one only where the CPU has it.
+// for, chosen at run time: a kernel built more than once (with [[gnu::target("avx2")]], or the
+// AVX-512 attribute below) runs the widest build the CPU has. Levels are ordered: a kernel without an
+// AVX-512 build runs its AVX2 one at Avx512.
 #pragma once
 
 #include <atomic>
 
+#include "brdfz/simd.h"
+
 namespace brdfz::detail {
 
-enum class Simd { Sse2, Avx2Fma };
+using ::brdfz::Simd;
 
-// Tests lower it to run the baseline kernels on a CPU that has AVX2.
-inline std::atomic<Simd> simd_cap{Simd::Avx2Fma};
+// Tests lower it to run the narrower builds on a CPU that has the wider ones; Avx512 is no cap.
+inline std::atomic<Simd> simd_cap{Simd::Avx512};
 
-// The widest level both the CPU and simd_cap allow.
+// The widest level both the CPU and simd_cap allow (brdfz::simd_level() for code outside the core).
 inline Simd simd_level() {
 #if defined(__x86_64__) || defined(__i386__)
     static const bool avx2_fma = __builtin_cpu_supports("avx2") && __builtin_cpu_supports("fma");
+    static const bool avx512 = avx2_fma && __builtin_cpu_supports("avx512f") && __builtin_cpu_supports("avx512dq") &&
+                               __builtin_cpu_supports("avx512vl") && __builtin_cpu_supports("avx512bw");
 #else
-    constexpr bool avx2_fma = false;
+    constexpr bool avx2_fma = false, avx512 = false;
 #endif
-    return avx2_fma && simd_cap.load(std::memory_order_relaxed) == Simd::Avx2Fma ? Simd::Avx2Fma : Simd::Sse2;
+    const Simd cap = simd_cap.load(std::memory_order_relaxed);
+    if (avx512 && cap >= Simd::Avx512) return Simd::Avx512;
+    return avx2_fma && cap >= Simd::Avx2Fma ? Simd::Avx2Fma : Simd::Sse2;
 }
 
 }  // namespace brdfz::detail
+
+// The target attribute of AVX-512 builds: 512-bit vectors (GCC otherwise prefers 256-bit ones even
+// where AVX-512 is enabled). Without FMA contraction where a kernel must give its other builds' bits,
+// which the unit's -ffp-contract=off provides.
+#define BRDFZ_AVX512 gnu::target("avx512f,avx512dq,avx512vl,avx512bw,prefer-vector-width=512")

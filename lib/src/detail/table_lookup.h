@@ -276,7 +276,7 @@ template <typename Values>
 
 template <typename Values>
 Rgb eval_table(const GridSpec& g, const Values& values, Lookup lookup, const Vec3& wi, const Vec3& wo) {
-    return (simd_level() == Simd::Avx2Fma ? eval_one_avx2<Values> : eval_one_sse2<Values>)(g, values, lookup, wi, wo);
+    return (simd_level() >= Simd::Avx2Fma ? eval_one_avx2<Values> : eval_one_sse2<Values>)(g, values, lookup, wi, wo);
 }
 
 // Batch kernels (eval_table_batch, and sample_table_batch's weights) work in blocks of pairs, in passes
@@ -380,7 +380,7 @@ template <typename Values>
 template <typename Values>
 void eval_table_batch(const GridSpec& g, const Values& values, Lookup lookup, const Vec3* wi, const Vec3* wo,
                       Rgb* out, std::size_t n) {
-    (simd_level() == Simd::Avx2Fma ? eval_table_batch_avx2<Values> : eval_table_batch_sse2<Values>)(
+    (simd_level() >= Simd::Avx2Fma ? eval_table_batch_avx2<Values> : eval_table_batch_sse2<Values>)(
         g, values, lookup, wi, wo, out, n);
 }
 

@@ -87,7 +87,7 @@ template <typename Values>
 template <typename Values>
 BrdfSample sample_table(const GridSpec& g, const Values& values, Lookup lookup, const HalfVectorSampler& sampler,
                         const Vec3& wo, double u1, double u2) {
-    return (simd_level() == Simd::Avx2Fma ? sample_one_avx2<Values> : sample_one_sse2<Values>)(g, values, lookup,
+    return (simd_level() >= Simd::Avx2Fma ? sample_one_avx2<Values> : sample_one_sse2<Values>)(g, values, lookup,
                                                                                                sampler, wo, u1, u2);
 }
 
@@ -145,7 +145,7 @@ template <typename Values>
 template <typename Values>
 void sample_table_batch(const GridSpec& g, const Values& values, Lookup lookup, const HalfVectorSampler& sampler,
                         const Vec3* wo, const std::array<double, 2>* u, BrdfSample* out, std::size_t n) {
-    (simd_level() == Simd::Avx2Fma ? sample_table_batch_avx2<Values> : sample_table_batch_sse2<Values>)(
+    (simd_level() >= Simd::Avx2Fma ? sample_table_batch_avx2<Values> : sample_table_batch_sse2<Values>)(
         g, values, lookup, sampler, wo, u, out, n);
 }
 

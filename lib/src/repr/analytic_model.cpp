@@ -163,6 +163,38 @@ BrdfSample AnalyticBrdf::sample_above(const Vec3& wo, double u1, double u2) cons
     return sampler().sample(wo, u1, u2);
 }
 
+// The mixture's block kernel on the draws sample() makes (the others fail), then the batch eval for the
+// weights: each sample is sample()'s, bit for bit.
+void AnalyticBrdf::sample_batch(const Vec3* wo, const std::array<double, 2>* u, BrdfSample* out, std::size_t n) const {
+    constexpr std::size_t kBlock = 64;
+    const LobeMixture& mixture = sampler();
+    Vec3 views[kBlock], wi[kBlock], wos[kBlock];
+    std::array<double, 2> us[kBlock];
+    BrdfSample drawn[kBlock];
+    Rgb f[kBlock];
+    std::size_t lane[kBlock], kept[kBlock];
+    for (std::size_t start = 0; start < n; start += kBlock) {
+        const std::size_t m = std::min(kBlock, n - start);
+        std::size_t count = 0;
+        for (std::size_t k = 0; k < m; ++k) {
+            const Vec3& w = wo[start + k];
+            out[start + k] = {};
+            if (!can_draw(w, u[start + k][0], u[start + k][1]) || !std::isfinite(w.x + w.y + w.z)) continue;
+            views[count] = w, us[count] = u[start + k], lane[count++] = start + k;
+        }
+        mixture.sample_block(views, us, count, drawn);
+        std::size_t usable_count = 0;
+        for (std::size_t c = 0; c < count; ++c)
+            if (usable(drawn[c])) wi[usable_count] = drawn[c].wi, wos[usable_count] = views[c], kept[usable_count++] = c;
+        eval_batch(wi, wos, f, usable_count);
+        for (std::size_t j = 0; j < usable_count; ++j) {
+            BrdfSample& o = out[lane[kept[j]]];
+            o = drawn[kept[j]];
+            for (int c = 0; c < 3; ++c) o.weight[c] = f[j][c] * o.wi.z / o.pdf;  // Brdf::sample's arithmetic
+        }
+    }
+}
+
 double AnalyticBrdf::pdf_above(const Vec3& wo, const Vec3& wi) const {
     if (!finite_pair(wi, wo)) return 0.0;
     return sampler().pdf(wo, wi);

@@ -126,7 +126,7 @@ FactoredBrdf::FactoredBrdf(Factors factors) : f_(std::move(factors)) {
         ceiling_[c] = detail::to_space(f_.space, std::min(top, std::numeric_limits<float>::max()));
     }
     // The evaluation copies: rows padded to a whole number of the kernel's SIMD steps.
-    avx2_ = detail::simd_level() == detail::Simd::Avx2Fma;
+    avx2_ = detail::simd_level() >= detail::Simd::Avx2Fma;
     const std::size_t step = detail::factor_lanes(avx2_ ? detail::Simd::Avx2Fma : detail::Simd::Sse2);
     width_ = (m + step - 1) / step * step;
     // U and V each from a 64-byte boundary: a row of 16 floats (separate colour to rank 5, shared to
@@ -231,6 +231,35 @@ const FactorSampler& FactoredBrdf::factor_sampler() const {
 
 BrdfSample FactoredBrdf::sample_above(const Vec3& wo, double u1, double u2) const {
     return sampler().sample(wo, u1, u2);
+}
+
+// Blocks of the half-vector sampler's draws (draw_block: draw()'s, bit for bit), then the eval kernel over
+// the drawn pairs for their weights (its results are one call's), so each sample is sample()'s.
+void FactoredBrdf::sample_batch(const Vec3* wo, const std::array<double, 2>* u, BrdfSample* out, std::size_t n) const {
+    constexpr std::size_t kBlock = HalfVectorSampler::kBlock;
+    const HalfVectorSampler& s = sampler();
+    HalfVectorSampler::Draws d;
+    Vec3 wi[kBlock], wos[kBlock];
+    Rgb f[kBlock];
+    std::size_t slot[kBlock];
+    for (std::size_t start = 0; start < n; start += kBlock) {
+        const std::size_t m = std::min(kBlock, n - start);
+        s.draw_block(wo + start, u + start, m, d);
+        std::size_t drawn = 0;
+        for (std::size_t k = 0; k < m; ++k) {
+            const BrdfSample x{{d.wi_x[k], d.wi_y[k], d.wi_z[k]}, d.pdf[k], {}};
+            out[start + k] = {};
+            if (!usable(x)) continue;
+            wi[drawn] = x.wi, wos[drawn] = wo[start + k], slot[drawn++] = start + k;
+        }
+        eval_batch(wi, wos, f, drawn);
+        for (std::size_t j = 0; j < drawn; ++j) {
+            BrdfSample& o = out[slot[j]];
+            o.wi = wi[j];
+            o.pdf = d.pdf[slot[j] - start];
+            for (int c = 0; c < 3; ++c) o.weight[c] = f[j][c] * o.wi.z / o.pdf;  // Brdf::sample's arithmetic
+        }
+    }
 }
 
 double FactoredBrdf::pdf_above(const Vec3& wo, const Vec3& wi) const { return sampler().pdf(wo, wi); }

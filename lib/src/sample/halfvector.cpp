@@ -289,8 +289,8 @@ Cell exact_cell(const StackView& v, int slice, int other, double u1, double u2) 
     }
 }
 
-// The kernel's two builds. The AVX2 one has no FMA, whose contraction would round differently from
-// draw(): both give draw()'s results to the bit.
+// The kernel's three builds. The AVX2 one has no FMA, whose contraction would round differently from
+// draw(): all give draw()'s results to the bit.
 [[gnu::flatten]] void draw_lanes_sse2(const SamplerView& v, const StackView& st, const detail::SinCosTable& table,
                                       const Vec3* wo, const std::array<double, 2>* u, std::size_t n,
                                       HalfVectorSampler::Draws& out) {
@@ -300,6 +300,14 @@ Cell exact_cell(const StackView& v, int slice, int other, double u1, double u2) 
                                                            const detail::SinCosTable& table, const Vec3* wo,
                                                            const std::array<double, 2>* u, std::size_t n,
                                                            HalfVectorSampler::Draws& out) {
+    draw_lanes(v, st, table, wo, u, n, out);
+}
+// AVX-512 has FMA: the unit is built without contraction (lib/CMakeLists.txt), so this build too gives
+// draw()'s bits.
+[[gnu::flatten, BRDFZ_AVX512]] void draw_lanes_avx512(const SamplerView& v, const StackView& st,
+                                                      const detail::SinCosTable& table, const Vec3* wo,
+                                                      const std::array<double, 2>* u, std::size_t n,
+                                                      HalfVectorSampler::Draws& out) {
     draw_lanes(v, st, table, wo, u, n, out);
 }
 
@@ -396,7 +404,8 @@ HalfVectorSampler::Draw HalfVectorSampler::draw(const Vec3& wo, double u1, doubl
 
 void HalfVectorSampler::draw_block(const Vec3* wo, const std::array<double, 2>* u, std::size_t n, Draws& out) const {
     const SamplerView v{options_.cosine_share, theta_o_.back(), static_cast<int>(theta_o_.size())};
-    (detail::simd_level() == detail::Simd::Avx2Fma ? draw_lanes_avx2 : draw_lanes_sse2)(
+    const detail::Simd simd = detail::simd_level();
+    (simd == detail::Simd::Avx512 ? draw_lanes_avx512 : simd == detail::Simd::Avx2Fma ? draw_lanes_avx2 : draw_lanes_sse2)(
         v, first_, detail::half_turn_sincos(), wo, u, n, out);
 }
 

@@ -61,3 +61,21 @@ TEST_CASE("fast math: fast_half_turn_angle matches atan2 folded to [0, pi]", "[f
     CHECK(worst < 1e-9);
     CHECK(std::isnan(detail::fast_half_turn_angle(1.0, std::nan(""))));  // NaN x: NaN
 }
+
+TEST_CASE("fast math: sincos_half_turn matches std::sin and std::cos within a few ulp", "[fast_math]") {
+    double worst = 0.0, worst_small = 0.0;
+    const auto ulps = [](double a, double b) { return std::fabs(a - b) / (std::fabs(b) * 0x1p-52 + 1e-300); };
+    for (int i = 0; i <= 2000000; ++i) {
+        const double a = std::numbers::pi * i / 2000000;
+        const detail::SinCos2 r = detail::sincos_half_turn(a);
+        // Absolute within a few ulp of 1 everywhere (near π/2 and π, relative to the double π's rounding);
+        // relative near 0, where the reduction leaves a as it is.
+        worst = std::max({worst, std::fabs(r.s - std::sin(a)), std::fabs(r.c - std::cos(a))});
+        if (a < 0.5) worst_small = std::max(worst_small, ulps(r.s, std::sin(a)));
+    }
+    CHECK(worst < 4e-16);
+    CHECK(worst_small < 4.0);
+    for (double a = 1e-300; a < 1e-3; a *= 1.7) CHECK(ulps(detail::sincos_half_turn(a).s, std::sin(a)) < 2.0);
+    CHECK(detail::sincos_half_turn(0.0).s == 0.0);
+    CHECK(detail::sincos_half_turn(0.0).c == 1.0);
+}

@@ -10,6 +10,7 @@
 #include "brdfz/albedo.h"
 #include "brdfz/repr/analytic/catalogue.h"
 #include "brdfz/repr/analytic/model.h"
+#include "brdfz/sample/lobes.h"
 #include "sample_stats.h"
 
 using namespace brdfz;
@@ -86,6 +87,53 @@ TEST_CASE("every lobe family has a tested sampler", "[sample][analytic]") {
     }
 }
 
+namespace {
+
+// Family F's header sample and pdf are what the mixture draws with: the catalogue's sampler points at
+// them, and a one-lobe model's draw is F::sample's direction (folded to the upper hemisphere) with the
+// folded F::pdf, bit for bit.
+template <typename F>
+void check_header_sampler(std::size_t index, std::mt19937_64& rng) {
+    const LobeType& type = lobe_types()[index];
+    INFO(type.name);
+    REQUIRE(type.name == F::name);
+    CHECK(lobe_sampler(type).sample == &F::sample);
+    CHECK(lobe_sampler(type).pdf == &F::pdf);
+    std::vector<double> p;
+    for (const ParamSpec& s : F::params) p.push_back(s.init);
+    const AnalyticBrdf b{std::string(F::name), p};
+    std::uniform_real_distribution<double> u(0.0, 1.0);
+    std::size_t drawn = 0;
+    for (int i = 0; i < 500; ++i) {
+        const Vec3 wo = random_upper(rng);
+        const double u1 = u(rng), u2 = u(rng);
+        const BrdfSample s = b.sampler().sample(wo, u1, u2);
+        Vec3 w = F::sample(p.data(), wo, u1, u2);
+        w.z = std::fabs(w.z);
+        const double pdf = F::pdf(p.data(), wo, w) + F::pdf(p.data(), wo, {w.x, w.y, -w.z});
+        if (s.pdf == 0.0) continue;
+        ++drawn;
+        REQUIRE(test::same_bits(s.wi.x, w.x));
+        REQUIRE(test::same_bits(s.wi.y, w.y));
+        REQUIRE(test::same_bits(s.wi.z, w.z));
+        REQUIRE(test::same_bits(s.pdf, pdf));
+    }
+    CHECK(drawn > 400);
+}
+
+template <typename... Families>
+void check_header_samplers(LobeList<Families...>) {
+    std::mt19937_64 rng(31);
+    std::size_t index = 0;
+    (check_header_sampler<Families>(index++, rng), ...);
+}
+
+}  // namespace
+
+TEST_CASE("every lobe family samples with its header's sample and pdf", "[sample][analytic]") {
+    check_header_samplers(AllLobes{});
+}
+
 TEST_CASE("analytic samplers: chi-square, normalisation, round trip at 0/30/60/80/87 deg", "[sample][analytic][chi2][heavy]") {
     // Bonferroni over every case and angle: a 1% chance in all that any check fails by chance.
     const double p_min = 0.01 / (cases().size() * std::size(test::kThetaODeg));
@@ -94,6 +142,25 @@ TEST_CASE("analytic samplers: chi-square, normalisation, round trip at 0/30/60/8
         INFO(b.describe());
         test::check_sampler(b, 200000, p_min);
     }
+}
+
+// The mixture's block kernel (LobeMixture::sample_block, AnalyticBrdf's batch sample): chi-square of batch
+// draws, and batch = one call, bit for bit, for every case.
+void check_batch_samplers(std::size_t samples) {
+    const double p_min = 0.01 / (cases().size() * std::size(test::kThetaODeg));
+    for (const Case& c : cases()) {
+        const AnalyticBrdf b(c.model, c.params);
+        INFO(b.describe());
+        test::check_batch_sampler(b, samples, p_min);
+    }
+}
+
+TEST_CASE("analytic samplers: batch draws, chi-square and batch = one call", "[sample][analytic][chi2][heavy]") {
+    check_batch_samplers(200000);
+}
+
+TEST_CASE("analytic samplers: batch draws, chi-square and batch = one call (fewer draws)", "[sample][analytic][chi2][light]") {
+    check_batch_samplers(20000);
 }
 
 namespace {

@@ -295,7 +295,7 @@ class GgxSampler(GgxAnisoSampler):
 
 
 def invert_cdf(evaluate, target, lo, hi, x, label):
-    """lobes.cpp invert_cdf: Newton steps inside a shrinking bracket, bisection when a step leaves it."""
+    """repr/analytic/sampling.h invert_cdf: Newton steps inside a shrinking bracket, bisection when a step leaves it."""
     active = dr.full(dr.mask_t(x), True, dr.width(x))
     it = dr.zeros(dr.int32_array_t(x), dr.width(x))
 

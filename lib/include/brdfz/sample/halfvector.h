@@ -56,10 +56,10 @@ public:
     Draw draw(const Vec3& wo, double u1, double u2) const;
 
     // Up to kBlock draws at once, as arrays (the table kernel's passes read them so), each draw()'s bit
-    // for bit: the same operations per draw, run across draws in vector registers (SSE2, or AVX2
-    // without FMA contraction where the CPU has it: detail/simd.h). Inputs outside sample()'s domain
-    // (Brdf::can_draw) give a failed draw, pdf 0. Large enough that the table kernel's memory reads of
-    // many draws overlap; its arrays then take ~50 KB of stack.
+    // for bit: the same operations per draw, run across draws in vector registers (SSE2, AVX2 or
+    // AVX-512, the widest the CPU has, without FMA contraction: detail/simd.h). Inputs outside sample()'s
+    // domain (Brdf::can_draw) give a failed draw, pdf 0. Large enough that the table kernel's memory reads
+    // of many draws overlap; its arrays then take ~50 KB of stack.
     static constexpr std::size_t kBlock = 128;
     struct Draws {
         double wi_x[kBlock], wi_y[kBlock], wi_z[kBlock], pdf[kBlock];  // pdf 0: failed

@@ -1,7 +1,7 @@
 // Importance sampling of analytic models (repr/analytic/model.h): one sampler per lobe family, mixed
 // in proportion to each lobe's directional albedo at wo.
 //
-// Per-family samplers (lib/src/sample/lobes.cpp):
+// Each family samples with its header's sample and pdf (repr/analytic/*.h):
 //   lambert                       cosine-weighted hemisphere
 //   ggx*, ggx_aniso               visible normals (Heitz 2018; drawn by Dupuy & Benyoub's spherical caps, 2023)
 //   beckmann*                     visible normals (Heitz & d'Eon 2014): slopes by inverting their CDFs
@@ -20,6 +20,7 @@
 // black at wo (every albedo 0) is sampled with the cosine density.
 #pragma once
 
+#include <array>
 #include <cstddef>
 #include <span>
 #include <vector>
@@ -31,12 +32,19 @@ namespace brdfz {
 
 class Model;
 
+// A family's sampler at run time (as LobeType is its eval).
 struct LobeSampler {
-    // A direction on the unit sphere (possibly below the horizon) for wo above the horizon and
-    // u1, u2 in [0, 1); params are the lobe's own, in its family's order.
+    // The family's sample and pdf (lobe.h): a direction on the unit sphere (possibly below the horizon)
+    // for wo above the horizon and u1, u2 in [0, 1), and its density there; params are the lobe's own.
     Vec3 (*sample)(const double* params, const Vec3& wo, double u1, double u2);
-    // Density of sample() at the unit vector w, per unit solid angle, over the whole sphere.
-    double (*density)(const double* params, const Vec3& wo, const Vec3& w);
+    double (*pdf)(const double* params, const Vec3& wo, const Vec3& w);
+    // The same over n lanes, in loops that inline them (and vectorise where the family's code does):
+    // out[k] = sample(params, wo[k], u1[k], u2[k]); and pdf[k] += w[k]·(density at wi[k] and at wi[k]
+    // mirrored in z), the folded density weighted, for the lanes with w[k] > 0.
+    void (*sample_n)(const double* params, const Vec3* wo, const double* u1, const double* u2, std::size_t n,
+                     Vec3* out);
+    void (*add_folded_n)(const double* params, const Vec3* wo, const Vec3* wi, const double* w, std::size_t n,
+                         double* pdf);
 };
 
 // The sampler of a family in the catalogue (catalogue.h); every family has one.
@@ -52,6 +60,10 @@ public:
 
     // For wo above the horizon and u in [0, 1)²: wi and its pdf (pdf 0 for a failed draw).
     BrdfSample sample(const Vec3& wo, double u1, double u2) const;
+    // sample() for n draws (wo finite and above the horizon, u in [0, 1)², as sample() asks), in passes
+    // over blocks: the lobe weights, the choices, each lobe's draws together, then the mixture's pdf a
+    // lobe at a time across the block. sample() is this kernel on one draw, so the two agree to the bit.
+    void sample_block(const Vec3* wo, const std::array<double, 2>* u, std::size_t n, BrdfSample* out) const;
     // Density of sample() at wi, for wo and wi above the horizon.
     double pdf(const Vec3& wo, const Vec3& wi) const;
     // Probability of choosing each lobe at wo; all 0 when the model is black there (cosine sampling).

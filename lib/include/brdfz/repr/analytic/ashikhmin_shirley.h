@@ -14,6 +14,7 @@
 #include <string_view>
 
 #include "brdfz/repr/analytic/lobe.h"
+#include "brdfz/repr/analytic/sampling.h"
 
 namespace brdfz::lobes {
 
@@ -54,6 +55,43 @@ struct AshikhminShirley {
             const T fresnel = rs + (T(1) - rs) * schlick;
             out[c] = spec * fresnel + T(28.0 / 23.0 * std::numbers::inv_pi) * rd * (T(1) - rs) * diff_shape;
         }
+    }
+
+    // The paper's specular density p_h = √((nu+1)(nv+1))/(2π) cosθh^(nu cos²φ + nv sin²φ) (sampled by its
+    // closed-form inversion), or cosine sampling for the diffuse part. The share of the specular part is
+    // its albedo over the total by a closed-form estimate: Fresnel averaged over the cosine-weighted
+    // hemisphere, Rs + (1 − Rs)/21, against the diffuse term's Rd (1 − Rs), both averaged over channels.
+    static double specular_share(const double* p) {
+        double spec = 0.0, diff = 0.0;
+        for (int c = 0; c < 3; ++c) {
+            spec += p[3 + c] + (1.0 - p[3 + c]) / 21.0;
+            diff += p[c] * (1.0 - p[3 + c]);
+        }
+        return spec / (spec + diff);
+    }
+    static Vec3 sample(const double* p, const Vec3& wo, double u1, double u2) {
+        using sampling::kPi;
+        const double share = specular_share(p);
+        if (!(u1 < share)) return sampling::cosine(std::fmin((u1 - share) / (1.0 - share), std::nextafter(1.0, 0.0)), u2);
+        // φ in one quadrant by the paper's inversion, the quadrant from the top two bits of u.
+        const double v = 4.0 * u1 / share;
+        const int quadrant = std::min(static_cast<int>(v), 3);
+        const double phi0 = std::atan(std::sqrt((p[6] + 1.0) / (p[7] + 1.0)) * std::tan(0.5 * kPi * (v - quadrant)));
+        const double phi = quadrant == 0 ? phi0 : quadrant == 1 ? kPi - phi0 : quadrant == 2 ? kPi + phi0 : 2.0 * kPi - phi0;
+        const double cp = std::cos(phi), sp = std::sin(phi);
+        const double e = p[6] * cp * cp + p[7] * sp * sp;
+        const double c = std::exp(std::log1p(-u2) / (e + 1.0)), s = std::sqrt(std::fmax(0.0, 1.0 - c * c));
+        return sampling::reflect_about_drawn_half(wo, {s * cp, s * sp, c});
+    }
+    static double pdf(const double* p, const Vec3& wo, const Vec3& w) {
+        const double share = specular_share(p);
+        const double nu = p[6], nv = p[7];
+        const double spec = sampling::reflected_density(wo, w, [nu, nv](const Vec3& h) {
+            const double xy = std::fmax(h.x * h.x + h.y * h.y, kTiny);
+            const double e = (nu * h.x * h.x + nv * h.y * h.y) / xy;
+            return std::sqrt((nu + 1.0) * (nv + 1.0)) * (0.5 / sampling::kPi) * std::exp(e * std::log(h.z));
+        });
+        return share * spec + (1.0 - share) * sampling::cosine_pdf(w);
     }
 };
 

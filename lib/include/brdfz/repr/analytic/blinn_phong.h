@@ -11,6 +11,7 @@
 #include <string_view>
 
 #include "brdfz/repr/analytic/lobe.h"
+#include "brdfz/repr/analytic/sampling.h"
 
 namespace brdfz::lobes {
 
@@ -33,6 +34,18 @@ struct BlinnPhong {
         const S log_cos = log(std::max(g.hz, S(kTiny)));
         const T lobe = (n + T(2)) * T(0.125 * std::numbers::inv_pi) * exp(n * log_cos);
         for (int c = 0; c < 3; ++c) out[c] = p[c] * lobe;
+    }
+
+    // h from p_h = (n+2)/(2π) cos^(n+1) θh, cosθh = u^(1/(n+2)), reflected about it.
+    static Vec3 sample(const double* p, const Vec3& wo, double u1, double u2) {
+        const double c = std::exp(std::log1p(-u1) / (p[3] + 2.0));
+        return sampling::reflect_about_drawn_half(wo, sampling::around_z(c, u2));
+    }
+    static double pdf(const double* p, const Vec3& wo, const Vec3& w) {
+        const double n = p[3];
+        return sampling::reflected_density(wo, w, [n](const Vec3& h) {
+            return (n + 2.0) * (0.5 / sampling::kPi) * std::exp((n + 1.0) * std::log(h.z));
+        });
     }
 };
 

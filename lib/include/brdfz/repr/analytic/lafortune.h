@@ -12,6 +12,7 @@
 #include <string_view>
 
 #include "brdfz/repr/analytic/lobe.h"
+#include "brdfz/repr/analytic/sampling.h"
 
 namespace brdfz::lobes {
 
@@ -39,6 +40,27 @@ struct Lafortune {
         const T power = exp(n * log(fmax(base, T(kTiny))));
         const T lobe = select(base > T(0), (n + T(2)) * T(0.5 * std::numbers::inv_pi) * power, T(0));
         for (int c = 0; c < 3; ++c) out[c] = p[c] * lobe;
+    }
+
+    // A cosine-power lobe (n+1)/(2π) (w·â)^n around â = a/|a|, a = (cxy wo.x, cxy wo.y, cz wo.z). The
+    // lobe is |a|^n (wi·â)^n; where a vanishes so does the lobe, and cosine sampling stands in.
+    static bool axis(const double* p, const Vec3& wo, Vec3& a) {
+        a = {p[3] * wo.x, p[3] * wo.y, p[4] * wo.z};
+        const double len = length(a);
+        if (!(len > 1e-12)) return false;
+        a = (1.0 / len) * a;
+        return true;
+    }
+    static Vec3 sample(const double* p, const Vec3& wo, double u1, double u2) {
+        Vec3 a;
+        if (!axis(p, wo, a)) return sampling::cosine(u1, u2);
+        return sampling::Basis(a).to_world(sampling::around_z(std::exp(std::log1p(-u1) / (p[5] + 1.0)), u2));
+    }
+    static double pdf(const double* p, const Vec3& wo, const Vec3& w) {
+        Vec3 a;
+        if (!axis(p, wo, a)) return sampling::cosine_pdf(w);
+        const double c = dot(w, a);
+        return c > 0.0 ? (p[5] + 1.0) * (0.5 / sampling::kPi) * std::exp(p[5] * std::log(c)) : 0.0;
     }
 };
 

@@ -6,6 +6,7 @@
 #include <string_view>
 
 #include "brdfz/repr/analytic/lobe.h"
+#include "brdfz/repr/analytic/sampling.h"
 
 namespace brdfz::lobes {
 
@@ -22,6 +23,10 @@ struct Lambert {
     static void eval(const Geometry<S>&, const T* p, T out[3]) {
         for (int c = 0; c < 3; ++c) out[c] = p[c] * T(std::numbers::inv_pi);
     }
+
+    // Cosine-weighted on the upper hemisphere.
+    static Vec3 sample(const double*, const Vec3&, double u1, double u2) { return sampling::cosine(u1, u2); }
+    static double pdf(const double*, const Vec3&, const Vec3& w) { return sampling::cosine_pdf(w); }
 };
 
 }  // namespace brdfz::lobes

@@ -7,12 +7,18 @@
 //   static constexpr bool linear_weights;                   // f_c = p[c] · (f_c with p[0..2] = 1)?
 //   template <typename T, typename S>
 //   static void eval(const Geometry<S>& g, const T* p, T out[3]);   // f_r per channel, no cosine
+//   static Vec3 sample(const double* p, const Vec3& wo, double u1, double u2);   // its sampler
+//   static double pdf(const double* p, const Vec3& wo, const Vec3& w);           // sample()'s density
 // T is the parameter/result scalar (double, float or ceres::Jet<double, N> for autodiff); S is the
 // geometry scalar (double or float; Jets only ever see double geometry). eval is only called for
 // pairs above the horizon but must stay finite for every such pair, grazing included, and is written
 // without data-dependent branches (min/max/select) so batch loops vectorise.
 // linear_weights declares that the first three parameters are colour weights scaling channel r, g, b
 // and nothing else; fitting then differentiates the rest by autodiff and the weights in closed form.
+// sample draws a direction on the whole unit sphere (possibly below the horizon) for wo above the
+// horizon and u1, u2 in [0, 1), with a density that integrates to 1 there; pdf is that density at the
+// unit vector w, per unit solid angle. The mixture (sample/lobes.h) folds draws below the horizon back
+// and weighs the lobes; sampling.h holds what the samplers share.
 #pragma once
 
 #include <algorithm>

@@ -9,6 +9,7 @@
 #include <string_view>
 
 #include "brdfz/repr/analytic/lobe.h"
+#include "brdfz/repr/analytic/sampling.h"
 
 namespace brdfz::microfacet {
 
@@ -143,6 +144,81 @@ T fresnel_conductor(const S& cos_i, const T& eta, const T& k) {
     return T(0.5) * (rs + rp);
 }
 
+// --- Sampling visible normals (the lobes' sample and pdf) ----------------------------------------
+// GGX: visible normals of the stretched (α = 1) configuration are uniform on a spherical cap seen from
+// the stretched wo; stretching the cap point back gives h (Dupuy & Benyoub 2023). Their density is
+// D_wo(h) = G1(wo) (wo·h) D(h) / cosθo, so pdf(wi) = D_wo(h) / (4 wo·h) = D(h) / (2 (cosθo + L)),
+// L = √(cos²θo + αx² wo.x² + αy² wo.y²), with the exact Smith G1 = 2 cosθo / (cosθo + L).
+[[gnu::always_inline]] inline Vec3 ggx_visible_sample(const Vec3& wo, double ax, double ay, double u1, double u2) {
+    const Vec3 v = normalize({ax * wo.x, ay * wo.y, wo.z});
+    const double z = (1.0 - u2) * (1.0 + v.z) - v.z;
+    const Vec3 c = lobes::sampling::around_z(z, u1);
+    const Vec3 hs = c + v;
+    const Vec3 h = normalize({ax * hs.x, ay * hs.y, hs.z});
+    return lobes::sampling::reflect(wo, h);
+}
+
+[[gnu::always_inline]] inline double ggx_visible_pdf(const Vec3& wo, const Vec3& w, double ax, double ay) {
+    Vec3 h;
+    if (!lobes::sampling::half_of(wo, w, h) || !(h.z > 0.0)) return 0.0;
+    const double l = std::sqrt(wo.z * wo.z + ax * ax * wo.x * wo.x + ay * ay * wo.y * wo.y);
+    return ggx_aniso_d(h.x, h.y, h.z, ax, ay) / (2.0 * (wo.z + l));
+}
+
+// Beckmann (Heitz & d'Eon 2014): in the stretched configuration (α = 1, wo at polar angle θ in the
+// xz-plane) slopes (x, y) of visible normals m ∝ (−x, −y, 1) have density ∝ exp(−x² − y²)
+// (cosθ − x sinθ) for x < cotθ: y is normal with variance ½, and x has the CDF ∝ M(x) = ½ cosθ erfc(−x)
+// + sinθ exp(−x²) / (2√π), whose total M(cotθ) = cosθ (1 + Λ(θ)). Both are inverted numerically to
+// 1e-13. pdf(wi) = D(h) / (4 cosθo (1 + Λ(wo))) with the exact Λ; cosθo (1 + Λ) = M(cotθo) at α is
+// written without dividing by cosθo or sinθo, so it stays finite at the pole and at grazing.
+inline constexpr double kInvSqrtPi = 0.56418958354775628695;  // 1/√π
+inline constexpr double kSlopeRange = 8.0;  // |slope| beyond 8 (in α units) carries e^-64 of the mass
+
+// Winitzki's closed-form approximation of erf⁻¹(2u − 1) (relative error < 2e-3): a starting point
+// from which Newton needs about three steps. 1 − z² is formed as 4u(1 − u) to keep the tails exact.
+inline double inverse_erf_guess(double u) {
+    constexpr double a = 0.147;
+    const double l = std::log(4.0 * u * (1.0 - u)), t = 2.0 / (std::numbers::pi * a) + 0.5 * l;
+    return std::clamp(std::copysign(std::sqrt(std::sqrt(t * t - l / a) - t), u - 0.5), -kSlopeRange, kSlopeRange);
+}
+
+inline double beckmann_visible_norm(const Vec3& wo, double alpha) {
+    const double s = std::sqrt(wo.x * wo.x + wo.y * wo.y), a = wo.z / (alpha * s);  // a = ∞ at the pole
+    return 0.5 * wo.z * std::erfc(-a) + alpha * s * std::exp(-a * a) * (0.5 * kInvSqrtPi);
+}
+
+inline Vec3 beckmann_visible_sample(const Vec3& wo, double alpha, double u1, double u2) {
+    const Vec3 v = normalize({alpha * wo.x, alpha * wo.y, wo.z});
+    const double sin_v = std::sqrt(v.x * v.x + v.y * v.y), cos_v = v.z;
+    const double hi = sin_v > 0.0 ? std::fmin(cos_v / sin_v, kSlopeRange) : kSlopeRange;
+    const auto m = [&](double x, double& c, double& d) {
+        const double g = std::exp(-x * x);
+        c = 0.5 * cos_v * std::erfc(-x) + sin_v * g * (0.5 * kInvSqrtPi);
+        d = g * (cos_v - x * sin_v) * kInvSqrtPi;
+    };
+    double m_hi, unused;
+    m(hi, m_hi, unused);
+    // Start between the two limits: a normal slope at the pole, −√(−ln u) (CDF exp(−x²)) at grazing.
+    const double t = sin_v * sin_v;
+    const double guess = (1.0 - t) * inverse_erf_guess(u1) - t * std::sqrt(-std::log(std::fmax(u1, 1e-300)));
+    const double x = lobes::sampling::invert_cdf(m, u1 * m_hi, -kSlopeRange, hi, std::clamp(guess, -kSlopeRange, hi));
+    const auto gauss = [](double y, double& c, double& d) {
+        c = 0.5 * std::erfc(-y);
+        d = std::exp(-y * y) * kInvSqrtPi;
+    };
+    const double y = lobes::sampling::invert_cdf(gauss, u2, -kSlopeRange, kSlopeRange, inverse_erf_guess(u2));
+    // Rotate the slopes to wo's azimuth and unstretch them.
+    const double cp = sin_v > 0.0 ? v.x / sin_v : 1.0, sp = sin_v > 0.0 ? v.y / sin_v : 0.0;
+    const Vec3 h = normalize({-alpha * (cp * x - sp * y), -alpha * (sp * x + cp * y), 1.0});
+    return lobes::sampling::reflect(wo, h);
+}
+
+inline double beckmann_visible_pdf(const Vec3& wo, const Vec3& w, double alpha) {
+    Vec3 h;
+    if (!lobes::sampling::half_of(wo, w, h) || !(h.z > 0.0)) return 0.0;
+    return beckmann_d(h.z, alpha) / (4.0 * beckmann_visible_norm(wo, alpha));
+}
+
 }  // namespace brdfz::microfacet
 
 // Microfacet lobes f = ks · F(wi·h) · D(h) · G2 / (4 cosθi cosθo): reciprocal, and energy-conserving
@@ -178,14 +254,23 @@ inline constexpr std::array<ParamSpec, 4> kSpecularWeightsAndAlpha{{
 
 }  // namespace detail
 
-// Distribution and masking-shadowing: dv(g, α) = D(h) · G2 / (4 cosθi cosθo).
-struct GgxCorrelated {
+// Distribution and masking-shadowing: dv(g, α) = D(h) · G2 / (4 cosθi cosθo); sample and pdf draw
+// wi by the distribution's visible normals.
+struct GgxVisibleNormals {
+    static Vec3 sample(const Vec3& wo, double alpha, double u1, double u2) {
+        return microfacet::ggx_visible_sample(wo, alpha, alpha, u1, u2);
+    }
+    static double pdf(const Vec3& wo, const Vec3& w, double alpha) {
+        return microfacet::ggx_visible_pdf(wo, w, alpha, alpha);
+    }
+};
+struct GgxCorrelated : GgxVisibleNormals {
     template <typename T, typename S>
     static T dv(const Geometry<S>& g, const T& alpha) {
         return microfacet::ggx_d(T(g.hz), alpha) * microfacet::ggx_visibility_correlated(g.iz, g.oz, alpha);
     }
 };
-struct GgxSeparable {
+struct GgxSeparable : GgxVisibleNormals {
     template <typename T, typename S>
     static T dv(const Geometry<S>& g, const T& alpha) {
         return microfacet::ggx_d(T(g.hz), alpha) * microfacet::ggx_visibility_separable(g.iz, g.oz, alpha);
@@ -196,6 +281,10 @@ struct BeckmannSeparable {
     static T dv(const Geometry<S>& g, const T& alpha) {
         return microfacet::beckmann_d(g.hz, alpha) * microfacet::beckmann_visibility_separable(g.iz, g.oz, alpha);
     }
+    static Vec3 sample(const Vec3& wo, double alpha, double u1, double u2) {
+        return microfacet::beckmann_visible_sample(wo, alpha, u1, u2);
+    }
+    static double pdf(const Vec3& wo, const Vec3& w, double alpha) { return microfacet::beckmann_visible_pdf(wo, w, alpha); }
 };
 
 // Fresnel terms: their parameters and F per channel at cosθ = wi·h.
@@ -243,6 +332,10 @@ struct Microfacet {
         Fresnel::eval(g.d, p + 4, f);
         for (int c = 0; c < 3; ++c) out[c] = p[c] * f[c] * dv;
     }
+    static Vec3 sample(const double* p, const Vec3& wo, double u1, double u2) {
+        return Distribution::sample(wo, p[3], u1, u2);
+    }
+    static double pdf(const double* p, const Vec3& wo, const Vec3& w) { return Distribution::pdf(wo, w, p[3]); }
 };
 
 using Ggx = Microfacet<GgxCorrelated, Schlick, "ggx">;
@@ -274,6 +367,12 @@ struct GgxAniso {
         const T dv = microfacet::ggx_aniso_d(g.hx, g.hy, g.hz, p[3], p[4]) * microfacet::ggx_aniso_visibility(g, p[3], p[4]);
         const T f = microfacet::fresnel_schlick(g.d, p[5]);
         for (int c = 0; c < 3; ++c) out[c] = p[c] * f * dv;
+    }
+    static Vec3 sample(const double* p, const Vec3& wo, double u1, double u2) {
+        return microfacet::ggx_visible_sample(wo, p[3], p[4], u1, u2);
+    }
+    static double pdf(const double* p, const Vec3& wo, const Vec3& w) {
+        return microfacet::ggx_visible_pdf(wo, w, p[3], p[4]);
     }
 };
 

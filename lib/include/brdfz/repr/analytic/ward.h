@@ -10,6 +10,8 @@
 #include <string_view>
 
 #include "brdfz/repr/analytic/lobe.h"
+#include "brdfz/repr/analytic/microfacet.h"
+#include "brdfz/repr/analytic/sampling.h"
 
 namespace brdfz::lobes {
 
@@ -33,6 +35,17 @@ struct Ward {
         const S d2 = std::max(g.d * g.d, S(kTiny));
         const T lobe = exp(-tan2 / a2) / (T(4 * std::numbers::pi) * a2 * (d2 * c2 * c2));
         for (int c = 0; c < 3; ++c) out[c] = p[c] * lobe;
+    }
+
+    // h from the Beckmann p_h = D(h)·cosθh, tan²θh = −α² ln(1 − u), reflected about it.
+    static Vec3 sample(const double* p, const Vec3& wo, double u1, double u2) {
+        const double tan2 = -p[3] * p[3] * std::log1p(-u1);
+        return sampling::reflect_about_drawn_half(wo, sampling::around_z(1.0 / std::sqrt(1.0 + tan2), u2));
+    }
+    static double pdf(const double* p, const Vec3& wo, const Vec3& w) {
+        const double alpha = p[3];
+        return sampling::reflected_density(wo, w,
+                                           [alpha](const Vec3& h) { return microfacet::beckmann_d(h.z, alpha) * h.z; });
     }
 };
 
