@@ -151,7 +151,7 @@ CompressOptions with_file_access(CompressOptions options) {
     return options;
 }
 
-void write_text(const std::string& path, std::string_view text) {
+void save_text(const std::string& path, std::string_view text) {
     detail::AtomicFile file(path);
     file.write(text.data(), text.size());
     file.commit();

@@ -91,7 +91,7 @@ void add_demo(CLI::App& app) {
                 ++failed;
             }
         }
-        write_text(csv_path, csv.str());
+        save_text(csv_path, csv.str());
         std::cout << "   wrote " << csv_path << "\n";
         if (failed)
             throw Error("demo: " + std::to_string(failed) + " of " + std::to_string(built.size()) +

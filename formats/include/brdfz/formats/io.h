@@ -107,7 +107,7 @@ ValidityCounts convert(const std::string& in, const std::string& out, const Conv
 
 // Writes a text file (a report, a CSV) the way every format is written: atomically, with the umask's
 // mode or a replaced file's; IoError on failure.
-void write_text(const std::string& path, std::string_view text);
+void save_text(const std::string& path, std::string_view text);
 
 // `options` with the file access compress() needs to resolve the files a spec names (pca:basis=FILE).
 CompressOptions with_file_access(CompressOptions options);
