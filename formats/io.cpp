@@ -165,7 +165,7 @@ LoadedMeasurements load_measurements(const std::string& path) {
         out.set = std::move(r.set);
     } else if (format == "alta") {
         alta::ReadResult r = alta::read(path);
-        out.info.dims = {r.rows, 1};
+        out.info.dims = {r.rows, static_cast<std::size_t>(r.set.channels)};
         out.info.counts = r.counts;
         out.set = std::move(r.set);
     } else {

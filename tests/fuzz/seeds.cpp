@@ -68,6 +68,10 @@ int main(int argc, char** argv) try {
          "#DIM 3 1\n#PARAM_IN ISOTROPIC_TL_TV_PROJ_DPHI\n#PARAM_OUT INV_STERADIAN\n#VS 0\n#ALTA HEADER END\n"
          "0.1 0.2 0.3 0.5\n0.2 0.1 -0.1 0.7\n0.5 0.0 0.0 2.5\n");
     text(dir / "alta" / "b.dat", "#DIM 3 1\n#PARAM_IN RUSIN_TH_TD_PD\n0.1 0.2 0.3 0.5\n0.4 0.1 1.2 0.2\n");
+    text(dir / "alta" / "c.dat",
+         "#DIM 6 3\n#PARAM_IN CARTESIAN\n#PARAM_OUT INV_STERADIAN_COSINE_FACTOR\n#VS 1\n"
+         "0 0 1 0.6 0 0.8 0.1 0.2 0.3 0.01\n0.3 0.4 0.866 0 0 1 0.4 0.5 0.6 0.02\n");
+    text(dir / "alta" / "d.dat", "#DIM 4 3\n#PARAM_IN SPHERICAL_TL_PL_TV_PV\n#PARAM_OUT RGB_COLOR\n0.4 1 0.9 -2 0.1 0.2 0.3\n");
     text(dir / "json" / "a.json",
          "{\"format\": \"brdfz-analytic\", \"version\": 1, \"model\": \"lambert+ggx\", \"parameters\": "
          "{\"lambert.rho_r\": 0.1, \"lambert.rho_g\": 0.2, \"lambert.rho_b\": 0.3, \"ggx.ks_r\": 1, \"ggx.ks_g\": 1, "
