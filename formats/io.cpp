@@ -87,11 +87,16 @@ Loaded load_json(const std::string& path) {
 }
 
 // Table formats: a table on the requested grid (or its own) is written as it is, anything else is
-// tabulated first. MERL and EXR files know only the linear θd axis, so a warped table is tabulated too.
+// tabulated first. MERL and EXR files know only the linear θd axis and the reciprocal φd axis, so a
+// warped table is tabulated too, and a table over the full φd circle onto half as many φd bins over
+// [0, π) (each the mean of the pair and its exchange, tabulate.h).
 template <typename Write>
 ValidityCounts save_table(const Brdf& brdf, const SaveOptions& options, const Write& write) {
+    if (options.grid && !options.grid->reciprocal())
+        throw ValueError("MERL and EXR tables fold phi_d by reciprocity: a grid with symmetry none needs .brdfz");
     const auto* table = dynamic_cast<const TabularBrdf*>(&brdf);
-    if (table && table->table().grid().theta_d_warp == 0.0 && (!options.grid || *options.grid == table->table().grid())) {
+    const auto plain = [](const GridSpec& g) { return g.theta_d_warp == 0.0 && g.reciprocal(); };
+    if (table && plain(table->table().grid()) && (!options.grid || *options.grid == table->table().grid())) {
         write(table->table());
         ValidityCounts written;
         written.valid = table->table().valid_bins();
@@ -99,9 +104,11 @@ ValidityCounts save_table(const Brdf& brdf, const SaveOptions& options, const Wr
     }
     TabulateOptions t;
     t.grid = options.grid.value_or(GridSpec{});
-    if (table && !options.grid) {  // a warped table: its own grid on the linear θd axis
+    if (table && !options.grid) {  // its own grid on the linear θd axis and the reciprocal φd axis
         t.grid = table->table().grid();
         t.grid.theta_d_warp = 0.0;
+        if (!t.grid.reciprocal()) t.grid.n_phi_d = std::max(1, t.grid.n_phi_d / 2);
+        t.grid.symmetry = Symmetry::Reciprocal;
     }
     t.threads = options.threads;
     t.progress = options.progress;

@@ -17,6 +17,7 @@
 #include "brdfz/albedo.h"
 #include "brdfz/coords.h"
 #include "brdfz/errors.h"
+#include "brdfz/metrics.h"
 #include "commands.h"
 #include "output.h"
 
@@ -38,6 +39,7 @@ struct Check {
     std::size_t tested = 0, failed = 0;
     std::string unit;  // what was tested ("bins", "pairs", "elevations")
     std::vector<Offence> worst;
+    double error = -1;  // reciprocity: reciprocity_error()'s cos_rmse_rel (metrics.h); -1: not a number this check gives
 
     void offend(const Offence& o) {
         ++failed;
@@ -110,6 +112,7 @@ Check reciprocity(const Brdf& brdf, double rtol, double atol) {
                 }
                 if (bad) c.offend(at(wi, wo, f, g, worst));
             }
+    c.error = reciprocity_error(brdf).cos_rmse_rel.mean;
     return c;
 }
 
@@ -155,6 +158,7 @@ void print_text(const std::string& file, const std::vector<Check>& checks, std::
         std::snprintf(line, sizeof line, "  %-15s %-5s %zu of %zu %s fail\n", c.name.c_str(), c.failed ? "FAIL" : "ok",
                       c.failed, c.tested, c.unit.c_str());
         os << line;
+        if (c.error >= 0) os << "      error " << c.error << " (cos_rmse_rel of f(wo, wi) against f(wi, wo), over directions)\n";
         for (const Offence& o : c.worst) {
             if (c.name == "energy") {
                 std::snprintf(line, sizeof line, "      theta %5.1f deg: ", o.theta_i);
@@ -182,6 +186,7 @@ void print_json(const std::string& file, const std::vector<Check>& checks, std::
         j.key("ok").value(c.failed == 0);
         j.key("tested").value(c.tested);
         j.key("failed").value(c.failed);
+        if (c.error >= 0) j.key("error").value(c.error);
         j.key("worst").begin_array();
         for (const Offence& o : c.worst) {
             j.begin_object();

@@ -33,12 +33,14 @@ void note_tabulation(const Brdf& source, const Tabulated& t, Compressed& out) {
 
 // Tabulates `source` on `grid` (box-filtered by `supersample`) and keeps the table in `dtype`.
 Compressed build_table(const Brdf& source, const GridSpec& grid, std::array<int, 3> supersample,
-                       TabulateOptions::Filter filter, TableDtype dtype, Lookup lookup, const CompressOptions& options) {
+                       TabulateOptions::Filter filter, TabulateOptions::FitWeight weight, TableDtype dtype,
+                       Lookup lookup, const CompressOptions& options) {
     TabulateOptions tab;
     tab.grid = grid;
     tab.grid.validate();
     tab.supersample = supersample;
     tab.filter = filter;
+    tab.fit_weight = weight;
     tab.threads = options.threads;
     tab.progress = options.progress;
     Tabulated t = tabulate(source, tab);
@@ -72,6 +74,14 @@ TabulateOptions::Filter filter_option(const ReprSpec& spec, Lookup lookup) {
     return lsq ? TabulateOptions::Filter::LeastSquares : TabulateOptions::Filter::Box;
 }
 
+// weight=bins|solid (fit=lsq and filter=lsq): the fit's points weighed as the grid's bins (default: the
+// metrics over the grid) or by their solid angle (the metrics over directions), tabulate.h.
+TabulateOptions::FitWeight weight_option(const ReprSpec& spec, bool lsq) {
+    if (!lsq && spec.has("weight")) throw ValueError(spec.kind() + ": weight= belongs to the least-squares fit (lsq)");
+    return spec.get_choice("weight", "bins", {"bins", "solid"}) == "solid" ? TabulateOptions::FitWeight::SolidAngle
+                                                                           : TabulateOptions::FitWeight::Bins;
+}
+
 int supersample_option(const ReprSpec& spec, TabulateOptions::Filter filter) {
     return spec.get_int("ss", filter == TabulateOptions::Filter::LeastSquares ? 3 : 1, 1, 16);
 }
@@ -84,16 +94,24 @@ double theta_d_warp_option(const ReprSpec& spec) {
     return w;
 }
 
+// symmetry=reciprocal|none (table.h): φd over [0, π), f(wi, wo) and f(wo, wi) sharing a bin (their
+// mean when the source is not reciprocal), or over [0, 2π), which keeps non-reciprocal data as measured.
+Symmetry symmetry_option(const ReprSpec& spec, Symmetry fallback = Symmetry::Reciprocal) {
+    return parse_symmetry(spec.get_choice("symmetry", symmetry_name(fallback), {"reciprocal", "none"}));
+}
+
 Compressed build_tabular(const Brdf& source, const ReprSpec& spec, const CompressOptions& options) {
     const std::vector<int> res = spec.get_dims("res", {90, 90, 180});
     const TableDtype dtype = dtype_option(spec);
     const Lookup lookup = lookup_option(spec);
     const TabulateOptions::Filter filter = filter_option(spec, lookup);
     const int ss = supersample_option(spec, filter);
+    const TabulateOptions::FitWeight weight = weight_option(spec, filter == TabulateOptions::Filter::LeastSquares);
     const double warp = theta_d_warp_option(spec);
+    const Symmetry symmetry = symmetry_option(spec);
     spec.finish();
-    return build_table(source, GridSpec{res[0], res[1], res[2], BinPosition::Centre, warp}, {ss, ss, ss}, filter,
-                       dtype, lookup, options);
+    return build_table(source, GridSpec{res[0], res[1], res[2], BinPosition::Centre, warp, symmetry}, {ss, ss, ss},
+                       filter, weight, dtype, lookup, options);
 }
 
 // Romeiro et al. 2008's bivariate table: θh × θd, the source averaged over phi=N values of φd.
@@ -103,11 +121,15 @@ Compressed build_bivariate(const Brdf& source, const ReprSpec& spec, const Compr
     const Lookup lookup = lookup_option(spec);
     const TabulateOptions::Filter filter = filter_option(spec, lookup);
     const int ss = supersample_option(spec, filter);
+    const TabulateOptions::FitWeight weight = weight_option(spec, filter == TabulateOptions::Filter::LeastSquares);
     const int phi = spec.get_int("phi", 180, 1, GridSpec::kMaxAxis);
     const double warp = theta_d_warp_option(spec);
+    // (θh, θd) do not change when wi and wo are exchanged: the φd mean is reciprocal either way, and
+    // symmetry=none only spreads its phi values over [0, 2π).
+    const Symmetry symmetry = symmetry_option(spec);
     spec.finish();
-    return build_table(source, GridSpec{res[0], res[1], 1, BinPosition::Centre, warp}, {ss, ss, phi}, filter, dtype,
-                       lookup, options);
+    return build_table(source, GridSpec{res[0], res[1], 1, BinPosition::Centre, warp, symmetry}, {ss, ss, phi}, filter,
+                       weight, dtype, lookup, options);
 }
 
 FitOptions analytic_options(const ReprSpec& spec, const CompressOptions& options) {
@@ -138,9 +160,15 @@ Compressed build_pca(const Brdf& source, const ReprSpec& spec, const CompressOpt
     const int k = spec.get_int("k", 12, 1, 1 << 16);
     const Lookup lookup = parse_lookup(spec.get_choice("lookup", "linear", {"linear", "nearest"}));
     const bool embed = spec.get_choice("store", "reference", {"reference", "embed"}) == "embed";
+    const std::optional<Symmetry> symmetry =
+        spec.has("symmetry") ? std::optional<Symmetry>(symmetry_option(spec)) : std::nullopt;
     spec.finish();
     if (file.empty()) throw ValueError("pca: name the basis file (brdfz pca-train makes one), e.g. pca:basis=merl.brdfz,k=12");
     std::shared_ptr<const PcaBasis> basis = container::read_pca_basis(file);
+    // The basis fixes the grid, its φd axis included: the key can only confirm it.
+    if (symmetry && *symmetry != basis->grid().symmetry)
+        throw ValueError("pca: symmetry=" + std::string(symmetry_name(*symmetry)) + " but basis " + file + " has symmetry " +
+                         symmetry_name(basis->grid().symmetry) + " (brdfz pca-train --symmetry)");
     if (k > basis->k_max())
         throw ValueError("pca: k = " + std::to_string(k) + " but basis " + file + " has " +
                          std::to_string(basis->k_max()) + " components");
@@ -166,8 +194,8 @@ Compressed build_pca(const Brdf& source, const ReprSpec& spec, const CompressOpt
 }
 
 // svd / nmf (repr/factored.h): a table factored in a transform space. The source is factored on its
-// own grid when it is a table and no res= is given, else tabulated on res (default 90x90x180), with
-// dwarp=W its θd axis warped as for tables (bench/README.md: satin_rosaline at 90x32x16 rank 6,
+// own grid when it is a table and neither res= nor another symmetry= is given, else tabulated on res
+// (default 90x90x180), with symmetry= as for tables and dwarp=W its θd axis warped as for tables (bench/README.md: satin_rosaline at 90x32x16 rank 6,
 // 3.94 -> 2.96 %).
 Compressed build_factored(FactorMethod method, const Brdf& source, const ReprSpec& spec, const CompressOptions& options) {
     FactorOptions fo;
@@ -183,9 +211,11 @@ Compressed build_factored(FactorMethod method, const Brdf& source, const ReprSpe
         throw ValueError(spec.kind() + ": ss= and fit_iterations= belong to fit=lsq");
     fo.supersample = spec.get_int("ss", fo.supersample, 1, 16);
     fo.fit_iterations = spec.get_int("fit_iterations", fo.fit_iterations, 1, 10000);
+    fo.fit_weight = weight_option(spec, lsq);
     fo.dtype = parse_factor_dtype(spec.get_choice("dtype", "f32", {"f32", "f16"}));
     const auto* tabular = dynamic_cast<const TabularBrdf*>(&source);
-    const bool resample = !tabular || spec.has("res");
+    const Symmetry symmetry = symmetry_option(spec, tabular ? tabular->table().grid().symmetry : Symmetry::Reciprocal);
+    const bool resample = !tabular || spec.has("res") || symmetry != tabular->table().grid().symmetry;
     const std::vector<int> res = spec.get_dims("res", {90, 90, 180});
     const double warp = theta_d_warp_option(spec);
     if (warp != 0.0 && !resample) throw ValueError(spec.kind() + ": dwarp= applies to the res= grid; give res= as well");
@@ -198,7 +228,7 @@ Compressed build_factored(FactorMethod method, const Brdf& source, const ReprSpe
     Factored factored;
     if (resample) {
         TabulateOptions tab;
-        tab.grid = GridSpec{res[0], res[1], res[2], BinPosition::Centre, warp};
+        tab.grid = GridSpec{res[0], res[1], res[2], BinPosition::Centre, warp, symmetry};
         tab.grid.validate();
         tab.threads = options.threads;
         Tabulated t = tabulate(source, tab);

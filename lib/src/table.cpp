@@ -16,6 +16,8 @@ void GridSpec::validate() const {
     for (int n : {n_theta_h, n_theta_d, n_phi_d})
         if (n < 1 || n > kMaxAxis)
             throw ValueError("grid " + str() + ": every axis must be in [1, " + std::to_string(kMaxAxis) + "]");
+    if (symmetry != Symmetry::Reciprocal && symmetry != Symmetry::None)
+        throw ValueError("grid " + str() + ": unknown phi_d symmetry");
     if (!(theta_d_warp >= 0.0 && theta_d_warp <= kMaxWarp))
         throw ValueError("grid " + str() + ": theta_d warp " + std::to_string(theta_d_warp) + " outside [0, 0.95]");
 }
@@ -31,6 +33,14 @@ double axis::u_to_theta_d(double u, int n, double w) {
         (theta_d_to_u(mid, 1, w) < x ? lo : hi) = mid;
     }
     return 0.5 * (lo + hi);
+}
+
+const char* symmetry_name(Symmetry s) { return s == Symmetry::Reciprocal ? "reciprocal" : "none"; }
+
+Symmetry parse_symmetry(const std::string& name) {
+    if (name == "reciprocal") return Symmetry::Reciprocal;
+    if (name == "none") return Symmetry::None;
+    throw ValueError("symmetry must be 'reciprocal' or 'none', not '" + name + "'");
 }
 
 std::string GridSpec::str() const {

@@ -554,9 +554,10 @@ private:
 };
 
 // Checks of tabulate() and compare() against an RGL source whose measured range ends at
-// measured_theta_max(); `grid` is the tabulation grid.
+// measured_theta_max(); `grid` is the tabulation grid, reciprocal or not.
 void check_measured_range(const rgl::RglBrdf& b, const GridSpec& grid) {
     const double theta_max = b.measured_theta_max();
+    const double theta_o_max = std::max(theta_max, 80.0 * std::numbers::pi / 180.0);
     TabulateOptions options;
     options.grid = grid;
     options.negative = NegativePolicy::Invalidate;  // the source's own values, unclamped
@@ -570,13 +571,21 @@ void check_measured_range(const rgl::RglBrdf& b, const GridSpec& grid) {
                 const auto [wi, wo] =
                     from_half_diff({grid.theta_h_at(ih), 0.0, grid.theta_d_at(id), grid.phi_d_at(ip)});
                 if (!(wi.z > 0 && wo.z > 0)) continue;
-                beyond += elevation(wi) > theta_max || elevation(wo) > theta_max;
+                // The incident direction beyond the measured range, the outgoing one beyond 80° (or the
+                // range), at the elevation clamped to it: constant extrapolation. A reciprocal grid holds
+                // the mean over the pair and its exchange, each clamped so.
+                const double ti = elevation(wi), to = elevation(wo);
+                beyond += ti > theta_max || to > theta_o_max ||
+                          (grid.reciprocal() && (to > theta_max || ti > theta_o_max));
                 if (!t.table.valid(bin)) continue;  // a negative value
-                // Beyond the range, the value at the elevations clamped to it: constant extrapolation.
-                const auto clamp = [&](const Vec3& w) {
-                    return elevation(w) > theta_max ? spherical_direction(theta_max, std::atan2(w.y, w.x)) : w;
+                const auto clamp = [](const Vec3& w, double limit) {
+                    return elevation(w) > limit ? spherical_direction(limit, std::atan2(w.y, w.x)) : w;
                 };
-                const Rgb f = b.eval(clamp(wi), clamp(wo));
+                Rgb f = b.eval(clamp(wi, theta_max), clamp(wo, theta_o_max));
+                if (grid.reciprocal()) {
+                    const Rgb g = b.eval(clamp(wo, theta_max), clamp(wi, theta_o_max));
+                    for (int c = 0; c < 3; ++c) f[c] = 0.5 * (f[c] + g[c]);
+                }
                 for (int c = 0; c < 3; ++c) CHECK(t.table.at(bin, c) == Approx(f[c]).epsilon(1e-5).margin(1e-7));
             }
     CHECK(beyond == t.extrapolated);
@@ -617,6 +626,9 @@ TEST_CASE("rgl: a 90° θi slice pads the measured range", "[rgl]") {
     const rgl::RglBrdf b(std::move(t));
     CHECK(b.measured_theta_max() == 1.2f);
     check_measured_range(b, GridSpec{16, 16, 16, BinPosition::Centre});
+    GridSpec full{16, 16, 32, BinPosition::Centre};
+    full.symmetry = Symmetry::None;
+    check_measured_range(b, full);
 }
 
 TEST_CASE("rgl: shared files' grazing values are bounded in tables and left out of metrics", "[rgl][tabulate]") {
@@ -638,12 +650,12 @@ TEST_CASE("rgl: shared files' grazing values are bounded in tables and left out 
         CHECK(std::equal(t.rgb.values.end() - static_cast<std::ptrdiff_t>(plane), t.rgb.values.end(),
                          t.rgb.values.end() - static_cast<std::ptrdiff_t>(2 * plane)));
 
-        // A bound from the data: rgb · D(m) / (4σ(wi)) / cosθo over the measured range, which every
-        // tabulated value keeps to.
+        // A bound from the data: rgb · D(m) / (4σ(wi)) / cosθo over the measured range and θo up to
+        // max(range, 80°), which every tabulated value keeps to.
         const auto max_of = [](const std::vector<float>& v) { return *std::max_element(v.begin(), v.end()); };
         const double bound = max_of(t.rgb.values) * max_of(t.ndf.values) /
                              (4.0 * *std::min_element(t.sigma.values.begin(), t.sigma.values.end())) /
-                             std::cos(b.measured_theta_max());
+                             std::cos(std::max(b.measured_theta_max(), 80.0 * std::numbers::pi / 180.0));
         TabulateOptions options;
         options.grid = GridSpec{45, 45, 90, BinPosition::Centre};
         const Tabulated tab = tabulate(b, options);
