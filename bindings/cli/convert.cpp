@@ -1,7 +1,6 @@
-// brdfz convert IN OUT: between every readable and writable format, from the extensions or --from /
-// --to. A representation the output format cannot hold is tabulated (on --res, default 90x90x180).
-//   read:  .binary (MERL), .bsdf (RGL), .brdfz, .exr, .json (analytic model)
-//   write: .binary, .bsdf (isotropic RGB, for Mitsuba 3 and pbrt-v4), .brdfz, .exr, .json (analytic only)
+// brdfz convert IN OUT: between every readable and writable format (`brdfz formats`), from the
+// extensions or --from / --to. A representation the output format cannot hold is tabulated (on --res,
+// default 90x90x180).
 #include <iostream>
 
 #include "commands.h"
@@ -15,7 +14,7 @@ void add_convert(CLI::App& app) {
         LoadOptions load;
     };
     auto args = std::make_shared<Args>();
-    CLI::App* cmd = app.add_subcommand("convert", "convert between formats (merl, rgl, brdfz, exr, json)");
+    CLI::App* cmd = app.add_subcommand("convert", "convert between formats (brdfz formats lists them)");
     cmd->add_option("IN", args->in, "input file")->required();
     cmd->add_option("OUT", args->out, "output file")->required();
     cmd->add_option("--res", args->res, "table resolution NHxNDxNP (default: the input's, or 90x90x180)");
@@ -23,15 +22,14 @@ void add_convert(CLI::App& app) {
     cmd->add_option("--to", args->to, "output format (default: from the extension of OUT)");
     add_load_options(cmd, args->load);
     cmd->callback([args] {
-        const Loaded in = load_as(args->from.empty() ? format_of(args->in) : args->from, args->in, args->load);
-        SaveOptions save_options;
-        save_options.format = args->to;
-        save_options.source = args->in;
-        save_options.source_format = in.info.format;
-        if (!args->res.empty()) save_options.grid = parse_resolution(args->res);
-        save_options.progress = progress_bar("tabulating");
-        const ValidityCounts c = save(*in.brdf, args->out, save_options);
-        std::cout << "wrote " << args->out << ": " << c.valid << " valid bins";
+        ConvertOptions options;
+        options.from = args->from;
+        options.load = args->load;
+        options.save.format = args->to;
+        if (!args->res.empty()) options.save.grid = parse_resolution(args->res);
+        options.save.progress = progress_bar("tabulating");
+        const ValidityCounts c = convert(args->in, args->out, options);
+        std::cout << "wrote " << args->out << ": " << c.valid << " valid entries";
         if (c.below_horizon) std::cout << ", " << c.below_horizon << " below the horizon";
         if (c.clamped) std::cout << ", " << c.clamped << " negative clamped to 0";
         if (c.negative + c.nan + c.inf)
