@@ -102,6 +102,7 @@ void write_source_keys(JsonWriter& j, const std::string& path, const SourceInfo&
     j.key("negative").value(info.counts.negative);
     j.key("nan").value(info.counts.nan);
     j.key("inf").value(info.counts.inf);
+    if (info.format == "rgl") j.key("luminance_negative").value(info.luminance_negative);
 }
 
 void print_source_lines(std::ostream& os, const std::string& path, const SourceInfo& info, const std::string& describe,
@@ -118,6 +119,8 @@ void print_source_lines(std::ostream& os, const std::string& path, const SourceI
        << "  negative   " << info.counts.negative << notes.negative << "\n"
        << "  nan        " << info.counts.nan << notes.nan << "\n"
        << "  inf        " << info.counts.inf << notes.inf << "\n";
+    if (info.luminance_negative > 0)
+        os << "  luminance  " << info.luminance_negative << " negative values (the sampling density), taken as 0\n";
 }
 
 void print_info(const std::string& path, const Loaded& loaded, bool json, std::ostream& os,

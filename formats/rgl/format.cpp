@@ -13,6 +13,7 @@ Loaded read(const std::string& path, const LoadOptions&) {
     out.info.format = "rgl";
     out.info.dims = std::move(r.dims);
     out.info.counts = r.counts;
+    out.info.luminance_negative = r.luminance_negative;
     out.info.min_value = r.min_value;
     out.info.max_value = r.max_value;
     out.brdf = std::move(r.brdf);

@@ -18,6 +18,7 @@
 #include "brdfz/compress.h"
 #include "brdfz/coords.h"
 #include "brdfz/errors.h"
+#include "brdfz/formats/io.h"
 #include "brdfz/formats/rgl.h"
 #include "brdfz/metrics.h"
 #include "brdfz/tabulate.h"
@@ -253,14 +254,12 @@ TEST_CASE("rgl: invalid files are rejected with FormatError or IoError", "[rgl]"
     rejects("NaN in ndf", serialize(edited).bytes);
 
     edited = fields;
-    auto negative = filled(32, 1.0f);
-    negative[5] = -0.5f;
-    field(edited, "luminance").data = f32(negative);
-    rejects("negative luminance (no density)", serialize(edited).bytes);
-
-    edited = fields;
     field(edited, "luminance").data = f32(filled(32, 0.0f));
     rejects("luminance integrating to 0", serialize(edited).bytes);
+
+    edited = fields;
+    field(edited, "luminance").data = f32(filled(32, -1e-3f));
+    rejects("luminance negative everywhere (0 once taken as 0)", serialize(edited).bytes);
 
     edited = fields;
     field(edited, "luminance").shape = {1, 2, 2, 8};
@@ -307,6 +306,37 @@ TEST_CASE("rgl: non-finite and negative rgb values are counted, eval stays finit
     CHECK(r.min_value == Approx(-0.01));
     std::mt19937_64 rng(5);
     for (int k = 0; k < 1000; ++k) CHECK(all_finite(r.brdf->eval(random_upper(rng), random_upper(rng))));
+}
+
+TEST_CASE("rgl: slightly negative luminance values load, counted, and sample as 0", "[rgl]") {
+    TempDir dir;
+    auto fields = synthetic_fields();
+    auto luminance = filled(32, 1.0f);
+    luminance[5] = -1e-4f;
+    luminance[21] = -2e-5f;
+    field(fields, "luminance").data = f32(luminance);
+    const std::string negative = dir.write("negative_luminance.bsdf", serialize(fields).bytes);
+    const auto r = rgl::read(negative);
+    CHECK(r.luminance_negative == 2);
+    CHECK(r.counts.negative == 0);  // the rgb tensor's count is its own
+    // Taken as 0, the density is that of a file holding 0 there: the same draws and pdfs.
+    luminance[5] = luminance[21] = 0.0f;
+    field(fields, "luminance").data = f32(luminance);
+    const auto zero = rgl::read(dir.write("zero_luminance.bsdf", serialize(fields).bytes));
+    CHECK(zero.luminance_negative == 0);
+    std::mt19937_64 rng(7);
+    std::uniform_real_distribution<double> u(0.0, 1.0);
+    for (int k = 0; k < 1000; ++k) {
+        const Vec3 wo = random_upper(rng);
+        const double u1 = u(rng), u2 = u(rng);
+        const BrdfSample a = r.brdf->sample(wo, u1, u2), b = zero.brdf->sample(wo, u1, u2);
+        CHECK(a.pdf >= 0.0);
+        CHECK(std::isfinite(a.pdf));
+        CHECK(a.pdf == b.pdf);
+        CHECK(a.wi.x == b.wi.x);
+    }
+    // load() reports the count with the file's other counts.
+    CHECK(load(negative).info.luminance_negative == 2);
 }
 
 TEST_CASE("rgl: corrupted bytes never crash the reader", "[rgl]") {

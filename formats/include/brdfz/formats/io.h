@@ -33,6 +33,8 @@ struct SourceInfo {
     std::string dims_of;
     // False when nothing stored is a value to take a range of (factors): min_value and max_value are 0.
     bool has_range = true;
+    // RGL: negative values of the `luminance` tensor, taken as 0 (rgl.h, ReadResult); 0 otherwise.
+    std::size_t luminance_negative = 0;
 };
 
 struct Loaded {
