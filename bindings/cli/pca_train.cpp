@@ -1,4 +1,4 @@
-// brdfz pca-train DIR... -o BASIS [--k-max 32] [--res 90x90x180]
+// brdfz pca-train DIR... -o BASIS [--k-max 32] [--res 90x90x180] [--symmetry reciprocal|none]
 // Learns a PCA basis (brdfz/repr/pca.h) from every BRDF file in the given directories (or the files
 // given) and writes it as a basis file (formats/SPEC.md, "pca") for `compress --repr pca:basis=BASIS`.
 // Tables on the basis's grid are used as they are; anything else is tabulated onto it.
@@ -53,7 +53,7 @@ std::string fmt(const char* f, double v) {
 void add_pca_train(CLI::App& app) {
     struct Args {
         std::vector<std::string> in;
-        std::string out, res;
+        std::string out, res, symmetry;
         bool json = false;
         LoadOptions load;
         PcaTrainOptions train;
@@ -65,6 +65,9 @@ void add_pca_train(CLI::App& app) {
     cmd->add_option("--k-max", args->train.k_max, "components kept (at most one fewer than the materials)")
         ->capture_default_str();
     cmd->add_option("--res", args->res, "grid of the basis, e.g. 45x45x90 (default: the first table's, else 90x90x180)");
+    cmd->add_option("--symmetry", args->symmetry,
+                    "the basis's phi_d axis: reciprocal ([0, pi)) or none ([0, 2pi)); default: the grid's")
+        ->check(CLI::IsMember({"reciprocal", "none"}));
     cmd->add_option("--epsilon", args->train.epsilon, "offset of the log mapping, in 1/sr")->capture_default_str();
     cmd->add_option("--max-invalid", args->train.max_invalid_fraction,
                     "drop a bin invalid in more than this fraction of the materials")
@@ -87,6 +90,7 @@ void add_pca_train(CLI::App& app) {
             Loaded l = load(files[i], args->load);
             const Table* t = l.brdf->stored_table();
             if (!grid) grid = t ? t->grid() : GridSpec{};
+            if (!args->symmetry.empty()) grid->symmetry = parse_symmetry(args->symmetry);
             if (t && t->grid() == *grid) {
                 tables.push_back(*t);
             } else {

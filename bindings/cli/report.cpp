@@ -141,6 +141,7 @@ void print_info(const std::string& path, const Loaded& loaded, bool json, std::o
         albedo[k] = directional_albedo(*loaded.brdf, theta_o);
         sampled[k] = sampled_albedo(*loaded.brdf, theta_o, kAlbedoSamples);
     }
+    const Metrics reciprocity = reciprocity_error(*loaded.brdf);
 
     if (json) {
         JsonWriter j(os);
@@ -164,6 +165,7 @@ void print_info(const std::string& path, const Loaded& loaded, bool json, std::o
             j.end_object();
         }
         j.end_array();
+        j.key("reciprocity_error").value(reciprocity.cos_rmse_rel.mean);
         if (container) container_json(j, *container);
         j.end_object();
         os << "\n";
@@ -179,6 +181,8 @@ void print_info(const std::string& path, const Loaded& loaded, bool json, std::o
         for (int c = 0; c < 3; ++c)
             os << fixed(sampled[k].mean[c], "%.4f") << "±" << fixed(sampled[k].stderr_[c], "%.4f") << (c < 2 ? "  " : "\n");
     }
+    os << "  reciprocity error " << fixed(reciprocity.cos_rmse_rel.mean, "%.4g")
+       << " (cos_rmse_rel of f(wo, wi) against f(wi, wo) over " << reciprocity.samples << " direction pairs)\n";
     if (container) container_text(*container, os);
 }
 

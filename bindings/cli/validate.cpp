@@ -29,6 +29,7 @@ void print_text(const std::string& file, const ValidationReport& report, std::os
         std::snprintf(line, sizeof line, "  %-15s %-5s %zu of %zu %s fail\n", c.name.c_str(), c.failed ? "FAIL" : "ok",
                       c.failed, c.tested, c.unit.c_str());
         os << line;
+        if (c.error) os << "      error " << *c.error << " (cos_rmse_rel of f(wo, wi) against f(wi, wo), over directions)\n";
         for (const ValidationOffence& o : c.worst) {
             if (c.name == "energy") {
                 std::snprintf(line, sizeof line, "      theta %5.1f deg: ", o.theta_i_deg);
@@ -54,6 +55,7 @@ void print_json(const std::string& file, const ValidationReport& report, std::os
         j.key("ok").value(c.ok());
         j.key("tested").value(c.tested);
         j.key("failed").value(c.failed);
+        if (c.error) j.key("error").value(*c.error);
         j.key("worst").begin_array();
         for (const ValidationOffence& o : c.worst) {
             j.begin_object();

@@ -105,6 +105,7 @@ py::dict check_dict(const ValidationCheck& c) {
     d["ok"] = c.ok();
     d["tested"] = c.tested;
     d["failed"] = c.failed;
+    if (c.error) d["error"] = *c.error;
     d["worst"] = worst;
     return d;
 }
@@ -322,6 +323,15 @@ void bind_operations(py::module_& m) {
           py::arg("reference"), py::arg("approx").none(false), py::kw_only(), py::arg("max_theta") = 80.0, py::arg("threads") = 0,
           py::arg("over") = "grid", py::arg("directions") = MetricOptions{}.directions, py::arg("seed") = MetricOptions{}.seed,
           "metrics of approx against reference (a Brdf, or a file: a BRDF or Cornell/ALTA measurements)");
+    m.def("reciprocity_error", [](const BrdfPtr& brdf, double max_theta, int threads, std::size_t directions,
+                                  std::uint64_t seed) {
+              const MetricOptions o = metric_options(max_theta, threads, "directions", directions, seed);
+              py::gil_scoped_release release;
+              return reciprocity_error(*brdf, o);
+          },
+          py::arg("brdf").none(false), py::kw_only(), py::arg("max_theta") = 80.0, py::arg("threads") = 0,
+          py::arg("directions") = MetricOptions{}.directions, py::arg("seed") = MetricOptions{}.seed,
+          "metrics of f(wo, wi) against f(wi, wo) over direction pairs (cos_rmse_rel.mean: the reciprocity error)");
     m.def("metric_samples", [](const BrdfPtr& reference, double max_theta, int threads, const std::string& over,
                                std::size_t directions, std::uint64_t seed) {
               const MetricOptions o = metric_options(max_theta, threads, over, directions, seed);
@@ -418,9 +428,10 @@ void bind_operations(py::module_& m) {
           "fits an analytic model (e.g. 'lambert+ggx') to a Brdf or a file, as `brdfz fit`");
 
     m.def("tabulate", [](const BrdfPtr& brdf, const std::tuple<int, int, int>& res, const std::string& lookup,
-                         const std::string& negative, int threads, py::object progress) {
+                         const std::string& negative, const std::string& symmetry, int threads, py::object progress) {
               TabulateOptions o;
               o.grid = grid_of(res);
+              o.grid.symmetry = parse_symmetry(symmetry);
               o.negative = parse_negative(negative);
               o.threads = threads;
               const Lookup l = parse_lookup(lookup);
@@ -435,8 +446,9 @@ void bind_operations(py::module_& m) {
               return out;
           },
           py::arg("brdf").none(false), py::arg("res") = std::make_tuple(90, 90, 180), py::kw_only(), py::arg("lookup") = "linear",
-          py::arg("negative") = "clamp", py::arg("threads") = 0, py::arg("progress") = py::none(),
-          "the Brdf evaluated on a (θh, θd, φd) Rusinkiewicz grid at bin centres, as a table");
+          py::arg("negative") = "clamp", py::arg("symmetry") = "reciprocal", py::arg("threads") = 0,
+          py::arg("progress") = py::none(),
+          "the Brdf evaluated on a (θh, θd, φd) Rusinkiewicz grid at bin centres, as a table (symmetry: table.h)");
 
     m.def("albedo", [](const BrdfPtr& brdf, const py::array_t<double, py::array::forcecast>& theta_o) {
               const py::ssize_t n = theta_o.size();
@@ -463,6 +475,9 @@ void bind_operations(py::module_& m) {
         .def_readonly("unit", &ValidationCheck::unit, "what was tested: bins, pairs or elevations")
         .def_readonly("tested", &ValidationCheck::tested)
         .def_readonly("failed", &ValidationCheck::failed)
+        .def_readonly("error", &ValidationCheck::error,
+                      "reciprocity: the reciprocity error (cos_rmse_rel of f(wo, wi) against f(wi, wo) over directions); "
+                      "None for the other checks")
         .def_property_readonly("ok", &ValidationCheck::ok)
         .def_property_readonly("worst", [](const ValidationCheck& c) { return py::list(check_dict(c)["worst"]); },
                                "the worst offences, worst first: angles in degrees and the values involved")

@@ -15,7 +15,7 @@
 namespace brdfz::alta {
 namespace {
 
-enum class Param { TlTvProjDphi, RusinThTdPd, RusinThTd, RusinThPhTdPd };
+enum class Param { TlTvProjDphi, RusinThTdPd, RusinThTd, RusinThPhTdPd, SphericalTlPlTvPv, Cartesian };
 
 struct ParamInfo {
     std::string_view name;
@@ -28,6 +28,21 @@ constexpr ParamInfo kParams[] = {
     {"RUSIN_TH_TD_PD", Param::RusinThTdPd, 3},
     {"RUSIN_TH_TD", Param::RusinThTd, 2},
     {"RUSIN_TH_PH_TD_PD", Param::RusinThPhTdPd, 4},
+    {"SPHERICAL_TL_PL_TV_PV", Param::SphericalTlPlTvPv, 4},
+    {"CARTESIAN", Param::Cartesian, 6},
+};
+
+// What a row's values are (alta.h), and how many a row may hold.
+struct OutputInfo {
+    std::string_view name;
+    bool cosine;            // f_r·cosθ of the light, divided out on reading
+    bool one, three;        // the #DIM output counts it comes in
+};
+
+constexpr OutputInfo kOutputs[] = {
+    {"INV_STERADIAN", false, true, true},
+    {"INV_STERADIAN_COSINE_FACTOR", true, true, true},
+    {"RGB_COLOR", false, false, true},
 };
 
 constexpr std::size_t kMaxDim = 16;
@@ -37,11 +52,13 @@ struct Header {
     std::string param_in, param_out = "INV_STERADIAN", format = "text";
     bool has_dim = false, has_param_in = false, has_param_out = false, has_vs = false, has_format = false;
     const ParamInfo* param = nullptr;  // set once the header is complete
+    const OutputInfo* output = nullptr;
 };
 
-std::string supported_names() {
+template <typename Info, std::size_t N>
+std::string supported_names(const Info (&list)[N]) {
     std::string s;
-    for (const ParamInfo& p : kParams) s += (s.empty() ? "" : ", ") + std::string(p.name);
+    for (const Info& p : list) s += (s.empty() ? "" : ", ") + std::string(p.name);
     return s;
 }
 
@@ -61,7 +78,7 @@ public:
     Scanner(const std::string& path, std::string_view text) : path_(path), text_(text) {}
 
     // Walks the file: reads and checks the header, checks every row and hands its directions and
-    // value with its line number to `on_row(line, wi, wo, f)`. Run twice: once to count rows before
+    // f_r (three channels, a monochrome value repeated) with its line number to `on_row(line, wi, wo, f)`. Run twice: once to count rows before
     // anything is allocated, once to store them. Returns the header.
     template <typename OnRow>
     Header scan(OnRow&& on_row) {
@@ -88,7 +105,12 @@ public:
             }
             parse_row(line, at, h, row);
             const auto [wi, wo] = directions(row, at, h);
-            on_row(at, wi, wo, row[h.dim_in]);
+            Rgb f;
+            for (int c = 0; c < 3; ++c) f[c] = row[h.dim_in + (h.dim_out == 3 ? c : 0)];
+            // f_r·cosθl, the light being wi: below the horizon (cosθl <= 0) the row is dropped anyway.
+            if (h.output->cosine && wi.z > 0.0)
+                for (double& c : f) c /= wi.z;
+            on_row(at, wi, wo, f);
         }
         if (in_header) finish(h);
         return h;
@@ -150,19 +172,25 @@ private:
             if (p.name == h.param_in) h.param = &p;
         if (!h.param)
             throw UnsupportedError(path_, "ALTA input parameterisation " + detail::quote(h.param_in) +
-                                              " is not supported (supported: " + supported_names() + ")");
+                                              " is not supported (supported: " + supported_names(kParams) + ")");
         if (h.dim_in != h.param->dim)
             throw FormatError(path_, "#DIM " + std::to_string(h.dim_in) + " " + std::to_string(h.dim_out) + " but " +
                                          h.param_in + " has " + std::to_string(h.param->dim) + " coordinates");
-        if (h.dim_out != 1)
-            throw UnsupportedError(path_, "ALTA data with " + std::to_string(h.dim_out) +
-                                              " output values per row: only monochrome (#DIM N 1) is supported");
-        if (h.param_out != "INV_STERADIAN")
-            throw UnsupportedError(path_, "ALTA output " + detail::quote(h.param_out) + ": only INV_STERADIAN (f_r) is supported");
+        for (const OutputInfo& o : kOutputs)
+            if (o.name == h.param_out) h.output = &o;
+        if (!h.output)
+            throw UnsupportedError(path_, "ALTA output " + detail::quote(h.param_out) + " is not supported (supported: " +
+                                              supported_names(kOutputs) + ")");
+        if (!((h.dim_out == 1 && h.output->one) || (h.dim_out == 3 && h.output->three)))
+            throw UnsupportedError(path_, "ALTA data with " + std::to_string(h.dim_out) + " output values per row in " +
+                                              h.param_out + ": " +
+                                              (h.output->one ? "one (monochrome) or three (RGB) are read"
+                                                             : "three (R, G, B) are read"));
     }
 
     void parse_row(std::string_view line, std::size_t at, const Header& h, std::vector<double>& row) const {
-        const std::size_t want = h.dim_in + 1 + h.vs;
+        // ALTA's confidence columns (#VS) follow all the values and belong to the first.
+        const std::size_t want = h.dim_in + h.dim_out + h.vs;
         row.clear();
         for (std::string_view token = detail::next_token(line); !token.empty(); token = detail::next_token(line)) {
             if (row.size() == want) throw fail(at, "more than the " + std::to_string(want) + " numbers of a row");
@@ -172,8 +200,9 @@ private:
         }
         if (row.size() != want)
             throw fail(at, "a row needs " + std::to_string(want) + " numbers (" + std::to_string(h.dim_in) +
-                               " coordinates, the value" + (h.vs ? ", " + std::to_string(h.vs) + " confidence" : "") +
-                               "), found " + std::to_string(row.size()));
+                               " coordinates, " + (h.dim_out == 1 ? std::string("the value") : "the 3 values") +
+                               (h.vs ? ", " + std::to_string(h.vs) + " confidence" : "") + "), found " +
+                               std::to_string(row.size()));
         for (std::size_t k = 0; k < h.dim_in; ++k)
             if (!std::isfinite(row[k])) throw fail(at, "coordinate " + std::to_string(k + 1) + " is not finite");
     }
@@ -185,6 +214,18 @@ private:
                 throw fail(at, std::string(name) + " = " + std::to_string(theta) + " outside [0, pi]");
             return theta;
         };
+        if (h.param->param == Param::Cartesian) {
+            // [V, L], as ALTA packs them: each a direction, normalised here (any finite non-zero vector).
+            const auto unit = [&](std::size_t k, const char* name) {
+                const Vec3 v{x[k], x[k + 1], x[k + 2]};
+                const double n = length(v);
+                if (!(n > 0.0) || !std::isfinite(n)) throw fail(at, std::string(name) + " is not a non-zero vector");
+                return (1.0 / n) * v;
+            };
+            return {unit(3, "the light vector L"), unit(0, "the view vector V")};
+        }
+        if (h.param->param == Param::SphericalTlPlTvPv)
+            return {spherical_direction(polar(x[0], "theta_l"), x[1]), spherical_direction(polar(x[2], "theta_v"), x[3])};
         if (h.param->param == Param::TlTvProjDphi) {
             const double theta_l = polar(x[0], "theta_l");
             const double theta_v = polar(std::hypot(x[1], x[2]), "theta_v (the length of the projected view)");
@@ -212,29 +253,32 @@ ReadResult read(const std::string& path) {
     Scanner scanner(path, text);
 
     ReadResult result;
-    const Header header = scanner.scan([&](std::size_t line, const Vec3&, const Vec3&, double) {
+    const Header header = scanner.scan([&](std::size_t line, const Vec3&, const Vec3&, const Rgb&) {
         if (++result.rows > kMaxRows)
             throw FormatError(path, "line " + std::to_string(line) + ": more than " + std::to_string(kMaxRows) + " rows");
     });
     if (result.rows == 0) throw FormatError(path, "no data rows after the header");
     result.param_in = header.param_in;
+    result.param_out = header.param_out;
 
     MeasurementSet& set = result.set;
-    set.channels = 1;
+    set.channels = header.dim_out == 3 ? 3 : 1;
     set.source = path;
     set.samples.reserve(result.rows);
     ValidityCounts& counts = result.counts;
-    scanner.scan([&](std::size_t, const Vec3& wi, const Vec3& wo, double f) {
+    scanner.scan([&](std::size_t, const Vec3& wi, const Vec3& wo, const Rgb& f) {
+        bool nan = false, inf = false, negative = false;
+        for (double c : f) nan |= std::isnan(c), inf |= std::isinf(c), negative |= c < 0.0;
         if (!detail::above_horizon(wi) || !detail::above_horizon(wo)) {
             ++counts.below_horizon;
-        } else if (std::isnan(f)) {
-            ++counts.nan;
-        } else if (std::isinf(f)) {
-            ++counts.inf;
-        } else {
-            ++(f < 0.0 ? counts.negative : counts.valid);
-            set.samples.push_back({wi, wo, {f, f, f}});
+            return;
         }
+        // As for tables: a row counts in every class one of its values falls in.
+        counts.nan += nan;
+        counts.inf += inf;
+        if (nan || inf) return;
+        ++(negative ? counts.negative : counts.valid);
+        set.samples.push_back({wi, wo, f});
     });
     if (set.samples.empty())
         throw FormatError(path, "no usable row: all " + std::to_string(result.rows) +

@@ -42,6 +42,10 @@ const StorageModule* find_storage(std::string_view type);
 // and throws FormatError for an unknown axis or a warp outside (0, GridSpec::kMaxWarp].
 void write_theta_d_axis(h5::WriteNode& rep, const GridSpec& g);
 double read_theta_d_warp(const h5::ReadNode& rep);
+// The φd axis likewise (formats/SPEC.md, `phi_d_axis`): nothing for the reciprocal [0, π), "full" for
+// Symmetry::None; reading throws FormatError for another value.
+void write_phi_d_axis(h5::WriteNode& rep, const GridSpec& g);
+Symmetry read_phi_d_symmetry(const h5::ReadNode& rep);
 
 // Features of the container itself (layout, metadata, CRC-32C checksums).
 inline const Feature kCore{"core", 1};

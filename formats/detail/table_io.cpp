@@ -51,10 +51,15 @@ ValidityCounts invalidate_out_of_range(const std::string& path, Table& table) {
     return counts;
 }
 
-// MERL and EXR files know only the linear θd axis, so a warped table is tabulated too.
+// Table formats (MERL, EXR, NPY) know only the linear θd axis and the reciprocal φd axis, so a warped
+// table is tabulated too, and a table over the full φd circle onto half as many φd bins over [0, π)
+// (each the mean of the pair and its exchange, tabulate.h).
 ValidityCounts save_table(const Brdf& brdf, const SaveOptions& options, const std::function<void(const Table&)>& write) {
+    if (options.grid && !options.grid->reciprocal())
+        throw ValueError("MERL, EXR and NPY tables fold phi_d by reciprocity: a grid with symmetry none needs .brdfz");
     const Table* table = brdf.stored_table();
-    if (table && table->grid().theta_d_warp == 0.0 && (!options.grid || *options.grid == table->grid())) {
+    const auto plain = [](const GridSpec& g) { return g.theta_d_warp == 0.0 && g.reciprocal(); };
+    if (table && plain(table->grid()) && (!options.grid || *options.grid == table->grid())) {
         write(*table);
         ValidityCounts written;
         written.valid = table->valid_bins();
@@ -62,9 +67,11 @@ ValidityCounts save_table(const Brdf& brdf, const SaveOptions& options, const st
     }
     TabulateOptions t;
     t.grid = options.grid.value_or(GridSpec{});
-    if (table && !options.grid) {  // a warped table: its own grid on the linear θd axis
+    if (table && !options.grid) {  // its own grid on the linear θd axis and the reciprocal φd axis
         t.grid = table->grid();
         t.grid.theta_d_warp = 0.0;
+        if (!t.grid.reciprocal()) t.grid.n_phi_d = std::max(1, t.grid.n_phi_d / 2);
+        t.grid.symmetry = Symmetry::Reciprocal;
     }
     t.threads = options.threads;
     t.progress = options.progress;

@@ -244,6 +244,32 @@ MetricSamples metric_samples(const Brdf& reference, const MetricOptions& options
     return out;
 }
 
+Metrics reciprocity_error(const Brdf& brdf, const MetricOptions& options) {
+    // The same BRDF read the other way round.
+    class Exchanged final : public Brdf {
+    public:
+        explicit Exchanged(const Brdf& b) : b_(b) {}
+        int channels() const override { return b_.channels(); }
+        std::size_t nbytes() const override { return b_.nbytes(); }
+        std::string describe() const override { return b_.describe(); }
+        double measured_theta_max() const override { return b_.measured_theta_max(); }
+
+    protected:
+        Rgb eval_above(const Vec3& wi, const Vec3& wo) const override { return b_.eval(wo, wi); }
+        void eval_batch(const Vec3* wi, const Vec3* wo, Rgb* out, std::size_t n) const override {
+            b_.eval(std::span(wo, n), std::span(wi, n), std::span(out, n));
+        }
+
+    private:
+        const Brdf& b_;
+    };
+    MetricOptions o = options;
+    o.over = Over::Directions;
+    // Both directions are incident on one side: both within the measured range.
+    o.max_theta_deg = std::min(options.max_theta_deg, brdf.measured_theta_max() * 180.0 / std::numbers::pi);
+    return compare(brdf, Exchanged(brdf), o);
+}
+
 Metrics compare_values(std::span<const Vec3> wi, std::span<const Rgb> reference, std::span<const Rgb> approx) {
     if (wi.size() != reference.size() || wi.size() != approx.size())
         throw ValueError("metrics: pairs, reference values and approximate values differ in number");

@@ -20,6 +20,8 @@ void GridSpec::validate() const {
         throw ValueError("grid " + str() + ": " + std::to_string(bins()) + " bins, a float32 table of " +
                          std::to_string(3 * sizeof(float) * bins()) + " bytes, over the limit of " +
                          std::to_string(kMaxBins) + " bins (" + std::to_string(3 * sizeof(float) * kMaxBins) + " bytes)");
+    if (symmetry != Symmetry::Reciprocal && symmetry != Symmetry::None)
+        throw ValueError("grid " + str() + ": unknown phi_d symmetry");
     if (!(theta_d_warp >= 0.0 && theta_d_warp <= kMaxWarp))
         throw ValueError("grid " + str() + ": theta_d warp " + std::to_string(theta_d_warp) + " outside [0, 0.95]");
 }
@@ -35,6 +37,14 @@ double axis::u_to_theta_d(double u, int n, double w) {
         (theta_d_to_u(mid, 1, w) < x ? lo : hi) = mid;
     }
     return 0.5 * (lo + hi);
+}
+
+const char* symmetry_name(Symmetry s) { return s == Symmetry::Reciprocal ? "reciprocal" : "none"; }
+
+Symmetry parse_symmetry(const std::string& name) {
+    if (name == "reciprocal") return Symmetry::Reciprocal;
+    if (name == "none") return Symmetry::None;
+    throw ValueError("symmetry must be 'reciprocal' or 'none', not '" + name + "'");
 }
 
 std::string GridSpec::str() const {

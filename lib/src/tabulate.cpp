@@ -23,9 +23,17 @@ Tabulated tabulate_points(const Brdf& brdf, const TabulateOptions& options) {
     std::vector<ValidityCounts> counts(workers);
     std::vector<std::size_t> extrapolated(workers, 0);
     std::vector<std::vector<Rgb>> scratch(workers);
-    std::vector<std::vector<Vec3>> clamped_wi(workers), clamped_wo(workers);
+    // Per direction, its elevation clamped as the incident one (i) and as the outgoing one (o).
+    struct Clamped {
+        std::vector<Vec3> wi_i, wi_o, wo_i, wo_o;
+    };
+    std::vector<Clamped> clamped(workers);
     const double theta_max = brdf.measured_theta_max();
     const bool limited = theta_max < std::numbers::pi / 2;
+    const double theta_o_max = std::max(theta_max, options.outgoing_theta_max_deg * std::numbers::pi / 180.0);
+    // A reciprocal grid holds f(wi, wo) and f(wo, wi) in one bin: their mean, unless they are equal.
+    const bool both_sides = g.reciprocal() && !brdf.reciprocal();
+    std::vector<std::vector<Rgb>> swapped(workers);
 
     detail::sweep_slices(
         g, workers,
@@ -33,20 +41,33 @@ Tabulated tabulate_points(const Brdf& brdf, const TabulateOptions& options) {
             std::vector<Rgb>& f = scratch[worker];
             f.resize(wi.size());
             if (limited) {
-                std::vector<Vec3>& ci = clamped_wi[worker];
-                std::vector<Vec3>& co = clamped_wo[worker];
-                ci.resize(wi.size());
-                co.resize(wi.size());
+                Clamped& c = clamped[worker];
+                for (auto* v : {&c.wi_i, &c.wi_o, &c.wo_i, &c.wo_o}) v->resize(wi.size());
+                // w at elevation at most `limit`, azimuth kept; `moved` set when it was beyond.
+                const auto clamp = [](const Vec3& w, double limit, bool& moved) {
+                    const bool beyond = elevation(w) > limit;
+                    moved = moved || beyond;
+                    return beyond ? spherical_direction(limit, std::atan2(w.y, w.x)) : w;
+                };
                 for (std::size_t k = 0; k < wi.size(); ++k) {
-                    const bool beyond_i = elevation(wi[k]) > theta_max, beyond_o = elevation(wo[k]) > theta_max;
-                    ci[k] = beyond_i ? spherical_direction(theta_max, std::atan2(wi[k].y, wi[k].x)) : wi[k];
-                    co[k] = beyond_o ? spherical_direction(theta_max, std::atan2(wo[k].y, wo[k].x)) : wo[k];
-                    extrapolated[worker] += wi[k].z > 0.0 && wo[k].z > 0.0 && (beyond_i || beyond_o);
+                    bool moved = false;
+                    c.wi_i[k] = clamp(wi[k], theta_max, moved);
+                    c.wo_o[k] = clamp(wo[k], theta_o_max, moved);
+                    if (both_sides) {
+                        c.wo_i[k] = clamp(wo[k], theta_max, moved);
+                        c.wi_o[k] = clamp(wi[k], theta_o_max, moved);
+                    }
+                    extrapolated[worker] += wi[k].z > 0.0 && wo[k].z > 0.0 && moved;
                 }
-                brdf.eval(ci, co, f);
+                brdf.eval(c.wi_i, c.wo_o, f);
+                if (both_sides) swapped[worker].resize(wi.size()), brdf.eval(c.wo_i, c.wi_o, swapped[worker]);
             } else {
                 brdf.eval(wi, wo, f);
+                if (both_sides) swapped[worker].resize(wi.size()), brdf.eval(wo, wi, swapped[worker]);
             }
+            if (both_sides)
+                for (std::size_t k = 0; k < wi.size(); ++k)
+                    for (int c = 0; c < 3; ++c) f[k][c] = 0.5 * (f[k][c] + swapped[worker][k][c]);
             ValidityCounts& n = counts[worker];
             const std::size_t base = g.index(ih, 0, 0);
             for (std::size_t k = 0; k < wi.size(); ++k) {
@@ -104,7 +125,8 @@ Tabulated tabulate_boxes(const Brdf& brdf, const TabulateOptions& options) {
     const GridSpec& g = options.grid;
     const auto [sh, sd, sp] = options.supersample;
     TabulateOptions fine_options = options;
-    fine_options.grid = GridSpec{g.n_theta_h * sh, g.n_theta_d * sd, g.n_phi_d * sp, BinPosition::Centre, g.theta_d_warp};
+    fine_options.grid = GridSpec{g.n_theta_h * sh, g.n_theta_d * sd, g.n_phi_d * sp, BinPosition::Centre, g.theta_d_warp,
+                                 g.symmetry};
     fine_options.grid.validate();
     Tabulated fine = tabulate_points(brdf, fine_options);
     const Table& f = fine.table;
@@ -216,7 +238,8 @@ FitPoints fit_points(const Brdf& brdf, const TabulateOptions& options, double ou
     const GridSpec& g = options.grid;
     const auto [sh, sd, sp] = options.supersample;
     TabulateOptions fine_options = options;
-    fine_options.grid = GridSpec{g.n_theta_h * sh, g.n_theta_d * sd, g.n_phi_d * sp, BinPosition::Centre, g.theta_d_warp};
+    fine_options.grid = GridSpec{g.n_theta_h * sh, g.n_theta_d * sd, g.n_phi_d * sp, BinPosition::Centre, g.theta_d_warp,
+                                 g.symmetry};
     fine_options.grid.validate();
     const GridSpec& fg = fine_options.grid;
     if (fg.bins() > kMaxFitPoints)
@@ -231,8 +254,19 @@ FitPoints fit_points(const Brdf& brdf, const TabulateOptions& options, double ou
             const double w = fg.theta_d_warp, t = fg.theta_d_at(jd);
             density[jd] = std::sqrt(2.0 / std::numbers::pi / ((1.0 - w) * 2.0 / std::numbers::pi + w * std::sin(t)));
         }
-    const double min_cos =
-        std::cos(std::min(options.box_max_theta_deg * std::numbers::pi / 180.0, brdf.measured_theta_max()));
+    // Weighing by solid angle: dωi dωo = 4 cosθd sinθd sinθh dθh dθd dφh dφd, with dθh/du ∝ u on the
+    // square-root axis (dθd/du is in `density`); the square root, as the scale multiplies a residual.
+    // Normalised to a mean of 1 over the points, so that the outside share keeps its meaning.
+    const bool solid = options.fit_weight == TabulateOptions::FitWeight::SolidAngle;
+    const auto solid_scale = [&](int jh, int jd) {
+        const double th = fg.theta_h_at(jh), td = fg.theta_d_at(jd);
+        return std::sqrt(std::sin(th) * (jh + 0.5) * std::sin(td) * std::cos(td));
+    };
+    // Outside: beyond the cut, or evaluated at a clamped incident elevation (wo too where the bin holds
+    // (wo, wi) as well).
+    const double min_cos = std::cos(options.box_max_theta_deg * std::numbers::pi / 180.0);
+    const double measured_cos = std::cos(brdf.measured_theta_max());
+    const bool both_sides = g.reciprocal() && !brdf.reciprocal();
     FitPoints points;
     for (int jh = 0; jh < fg.n_theta_h; ++jh)
         for (int jd = 0; jd < fg.n_theta_d; ++jd)
@@ -240,12 +274,20 @@ FitPoints fit_points(const Brdf& brdf, const TabulateOptions& options, double ou
                 const std::size_t bin = fg.index(jh, jd, jp);
                 if (!fine.table.valid(bin)) continue;
                 const auto [wi, wo] = from_half_diff({fg.theta_h_at(jh), 0.0, fg.theta_d_at(jd), fg.phi_d_at(jp)});
-                const bool outside = !(wi.z > min_cos && wo.z > min_cos);
+                const bool outside = !(wi.z > min_cos && wo.z > min_cos) || !(wi.z >= measured_cos) ||
+                                     (both_sides && !(wo.z >= measured_cos));
                 points.wi.push_back(wi);
                 points.wo.push_back(wo);
                 points.value.push_back({fine.table.at(bin, 0), fine.table.at(bin, 1), fine.table.at(bin, 2)});
-                points.scale.push_back(density[jd] * (outside ? outside_scale : 1.0));
+                points.scale.push_back(density[jd] * (solid ? solid_scale(jh, jd) : 1.0) *
+                                       (outside ? outside_scale : 1.0));
             }
+    if (solid && !points.scale.empty()) {
+        double mean_sq = 0.0;
+        for (double s : points.scale) mean_sq += s * s;
+        const double norm = std::sqrt(points.scale.size() / mean_sq);
+        for (double& s : points.scale) s *= norm;
+    }
     return points;
 }
 
@@ -253,6 +295,8 @@ FitPoints fit_points(const Brdf& brdf, const TabulateOptions& options, double ou
 
 Tabulated tabulate(const Brdf& brdf, const TabulateOptions& options) {
     options.grid.validate();
+    if (!(options.outgoing_theta_max_deg > 0.0 && options.outgoing_theta_max_deg <= 90.0))
+        throw ValueError("tabulate: outgoing_theta_max_deg must be in (0, 90]");
     const auto [sh, sd, sp] = options.supersample;
     if (sh < 1 || sd < 1 || sp < 1)
         throw ValueError("tabulate: supersampling factors must be >= 1");

@@ -8,6 +8,7 @@
 #include "brdfz/albedo.h"
 #include "brdfz/coords.h"
 #include "brdfz/errors.h"
+#include "brdfz/metrics.h"
 #include "brdfz/table.h"
 
 namespace brdfz {
@@ -40,7 +41,7 @@ ValidationOffence at(const Vec3& wi, const Vec3& wo, const Rgb& f, const Rgb& g,
 }
 
 ValidationCheck non_negativity(const Brdf& brdf, const ValidateOptions& options) {
-    Tally c({"non-negativity", "bins", "f", "", 0, 0, {}}, options.worst);
+    Tally c({"non-negativity", "bins", "f", "", 0, 0, {}, {}}, options.worst);
     const Table* table = brdf.stored_table();
     const GridSpec& g = table ? table->grid() : options.grid;
     std::vector<Vec3> wi, wo;
@@ -80,7 +81,7 @@ ValidationCheck non_negativity(const Brdf& brdf, const ValidateOptions& options)
 }
 
 ValidationCheck reciprocity(const Brdf& brdf, const ValidateOptions& options) {
-    Tally c({"reciprocity", "pairs", "f", "f_swapped", 0, 0, {}}, options.worst);
+    Tally c({"reciprocity", "pairs", "f", "f_swapped", 0, 0, {}, {}}, options.worst);
     for (double ti = 2.5; ti < 85.0; ti += 5.0)
         for (double to = 2.5; to < 85.0; to += 5.0)
             for (double dphi = 0.0; dphi < 360.0; dphi += 22.5) {
@@ -96,7 +97,9 @@ ValidationCheck reciprocity(const Brdf& brdf, const ValidateOptions& options) {
                 }
                 if (bad) c.offend(at(wi, wo, f, g, worst));
             }
-    return std::move(c).done();
+    ValidationCheck out = std::move(c).done();
+    out.error = reciprocity_error(brdf).cos_rmse_rel.mean;
+    return out;
 }
 
 // f with the roles of the two directions exchanged: its directional albedo at θ is the reflectance
@@ -116,7 +119,7 @@ private:
 };
 
 ValidationCheck energy(const Brdf& brdf, const ValidateOptions& options) {
-    Tally c({"energy", "elevations", "albedo_viewed", "reflectance_lit", 0, 0, {}}, options.worst);
+    Tally c({"energy", "elevations", "albedo_viewed", "reflectance_lit", 0, 0, {}, {}}, options.worst);
     const Transposed incident(brdf);
     for (double t : options.theta_deg) {
         c.test();

@@ -31,8 +31,9 @@ fs::path write(const test::TempDir& dir, const std::string& name, const std::str
     return p;
 }
 
-std::string header(const std::string& param, int dim, const std::string& extra = "") {
-    return "#SAMPLE \"synthetic\"\n#DIM " + std::to_string(dim) + " 1\n" + extra + "#PARAM_IN " + param + "\n";
+std::string header(const std::string& param, int dim, const std::string& extra = "", int outputs = 1) {
+    return "#SAMPLE \"synthetic\"\n#DIM " + std::to_string(dim) + " " + std::to_string(outputs) + "\n" + extra +
+           "#PARAM_IN " + param + "\n";
 }
 
 std::string at_line(const fs::path& p, int line) { return p.string() + ": line " + std::to_string(line) + ":"; }
@@ -198,13 +199,128 @@ TEST_CASE("ALTA reader: malformed and unsupported files", "[alta]") {
     check_error("binary-garbage.dat", header(proj, 3) + std::string("\x01\x02\xff\x00\x10", 5) + "\n", 4,
                 "expected a number, found '" + std::string(5, '?') + "'");
     check_error("param-unknown.dat", header("STARK_2D", 2) + "0.1 0.2 1\n", 0, "STARK_2D", true);
-    check_error("rgb.dat", "#DIM 3 3\n#PARAM_IN " + proj + "\n0.2 0.1 0 1 1 1\n", 0, "monochrome", true);
-    check_error("cosine.dat", header(proj, 3, "#PARAM_OUT INV_STERADIAN_COSINE_FACTOR\n") + "0.2 0.1 0 1\n", 0,
-                "INV_STERADIAN", true);
+    check_error("two.dat", "#DIM 3 2\n#PARAM_IN " + proj + "\n0.2 0.1 0 1 1\n", 0, "one (monochrome) or three", true);
+    check_error("rgb-one.dat", header(proj, 3, "#PARAM_OUT RGB_COLOR\n") + "0.2 0.1 0 1\n", 0, "three (R, G, B)", true);
+    check_error("xyz.dat", "#DIM 3 3\n#PARAM_OUT XYZ_COLOR\n#PARAM_IN " + proj + "\n0.2 0.1 0 1 1 1\n", 0,
+                "XYZ_COLOR", true);
+    check_error("rgb-short.dat", "#DIM 3 3\n#PARAM_IN " + proj + "\n0.2 0.1 0 1 1\n", 3, "the 3 values");
+    check_error("cartesian-zero.dat", header("CARTESIAN", 6) + "0 0 1 0 0 0 1\n", 4, "light vector L");
+    check_error("spherical-theta.dat", header("SPHERICAL_TL_PL_TV_PV", 4) + "0.2 0 -1 0 1\n", 4, "theta_v");
     check_error("binary.dat",
                 header(proj, 3, "#FORMAT binary\n#VERSION 0\n#BEGIN_STREAM\n") + std::string("\x00\x01\x02", 3), 0,
                 "only text files", true);
     CHECK_THROWS_AS(alta::read((dir.path / "missing.dat").string()), IoError);
+}
+
+TEST_CASE("ALTA #PARAM_OUT INV_STERADIAN_COSINE_FACTOR: values are f_r·cosθi", "[alta]") {
+    test::TempDir dir;
+    // θl = 1.0: f = value / cos(1.0); the view's elevation does not enter.
+    const fs::path p = write(dir, "cos.dat",
+                             header("ISOTROPIC_TL_TV_PROJ_DPHI", 3, "#PARAM_OUT INV_STERADIAN_COSINE_FACTOR\n") +
+                                 "1.0 0.3 -0.4 0.25\n0.0 1.2 0 0.5\n");
+    const alta::ReadResult r = alta::read(p.string());
+    CHECK(r.param_out == "INV_STERADIAN_COSINE_FACTOR");
+    REQUIRE(r.set.samples.size() == 2);
+    CHECK(r.set.samples[0].f[0] == Approx(0.25 / std::cos(1.0)));
+    CHECK(r.set.samples[0].f[2] == r.set.samples[0].f[0]);
+    CHECK(r.set.samples[1].f[0] == Approx(0.5));  // light along the normal
+    CHECK(r.set.channels == 1);
+}
+
+TEST_CASE("ALTA three outputs: RGB_COLOR and #DIM 3 3 / 4 3", "[alta]") {
+    test::TempDir dir;
+    SECTION("RGB_COLOR, projected Δφ, with #VS after the three values") {
+        const fs::path p = write(dir, "rgb.dat",
+                                 "#DIM 3 3\n#PARAM_IN ISOTROPIC_TL_TV_PROJ_DPHI\n#PARAM_OUT RGB_COLOR\n#VS 2\n"
+                                 "0.5 0.3 -0.4 0.1 0.2 0.3 0.05 0.15\n");
+        const alta::ReadResult r = alta::read(p.string());
+        CHECK(r.param_out == "RGB_COLOR");
+        CHECK(r.set.channels == 3);
+        CHECK(r.set.samples.at(0).f == Rgb{0.1, 0.2, 0.3});
+        CHECK(r.counts.valid == 1);
+    }
+    SECTION("#DIM 4 3 in 1/sr, RUSIN_TH_PH_TD_PD") {
+        const fs::path p = write(dir, "rgb4.dat", header("RUSIN_TH_PH_TD_PD", 4, "", 3) + "0.5 0.7 0.3 -2.0 1 2 3\n");
+        const alta::ReadResult r = alta::read(p.string());
+        CHECK(r.set.channels == 3);
+        const Measurement& m = r.set.samples.at(0);
+        CHECK(m.f == Rgb{1, 2, 3});
+        const HalfDiff v = to_half_diff(m.wo, m.wi);
+        CHECK(v.theta_h == Approx(0.5));
+        CHECK(v.phi_d == Approx(-2.0));
+    }
+    SECTION("three cosine-weighted values, and a negative channel counted") {
+        const fs::path p = write(dir, "rgbcos.dat",
+                                 "#DIM 3 3\n#PARAM_IN ISOTROPIC_TL_TV_PROJ_DPHI\n#PARAM_OUT INV_STERADIAN_COSINE_FACTOR\n"
+                                 "0.6 0.3 0 0.3 0.6 -0.01\n0.6 0.3 0 0.3 nan 1\n");
+        const alta::ReadResult r = alta::read(p.string());
+        REQUIRE(r.set.samples.size() == 1);
+        const double c = std::cos(0.6);
+        CHECK(r.set.samples[0].f[0] == Approx(0.3 / c));
+        CHECK(r.set.samples[0].f[1] == Approx(0.6 / c));
+        CHECK(r.set.samples[0].f[2] == Approx(-0.01 / c));
+        CHECK(r.counts.negative == 1);
+        CHECK(r.counts.nan == 1);
+    }
+}
+
+TEST_CASE("ALTA CARTESIAN and SPHERICAL_TL_PL_TV_PV rows", "[alta]") {
+    test::TempDir dir;
+    SECTION("CARTESIAN packs [V, L]; vectors are normalised") {
+        const fs::path p = write(dir, "cart.dat", header("CARTESIAN", 6) + "0 0 2 0.6 0 0.8 0.5\n");
+        const Measurement m = alta::read(p.string()).set.samples.at(0);
+        CHECK(m.wo.z == Approx(1.0));
+        CHECK(m.wi.x == Approx(0.6));
+        CHECK(m.wi.z == Approx(0.8));
+        CHECK(m.f[0] == 0.5);
+    }
+    SECTION("SPHERICAL_TL_PL_TV_PV: light then view, each (θ, φ)") {
+        const fs::path p = write(dir, "sph.dat", header("SPHERICAL_TL_PL_TV_PV", 4) + "0.4 1.0 0.9 -2.0 0.5\n");
+        const Measurement m = alta::read(p.string()).set.samples.at(0);
+        CHECK(elevation(m.wi) == Approx(0.4));
+        CHECK(std::atan2(m.wi.y, m.wi.x) == Approx(1.0));
+        CHECK(elevation(m.wo) == Approx(0.9));
+        CHECK(std::atan2(m.wo.y, m.wo.x) == Approx(-2.0));
+    }
+    SECTION("a non-reciprocal RGB BRDF written in both forms, cosine-weighted, reads back as itself") {
+        // f depends on which direction is the light: L and V must not be exchanged.
+        const CoatedDiffuse lobe(CoatedDiffuseParams{{0.2, 0.4, 0.6}, 0.3, 1.5});
+        const auto f = [&](const Vec3& wi, const Vec3& wo) {
+            Rgb v = lobe.eval(wi, wo);
+            for (double& c : v) c *= 1.0 + 0.5 * (wi.z - wo.z);
+            return v;
+        };
+        std::string sph = "#DIM 4 3\n#PARAM_IN SPHERICAL_TL_PL_TV_PV\n#PARAM_OUT INV_STERADIAN_COSINE_FACTOR\n";
+        std::string cart = "#DIM 6 3\n#PARAM_IN CARTESIAN\n#PARAM_OUT RGB_COLOR\n";
+        std::vector<std::pair<Vec3, Vec3>> pairs;
+        std::mt19937_64 rng(9);
+        std::uniform_real_distribution<double> u(0, 1);
+        for (int k = 0; k < 200; ++k) {
+            const double tl = 1.4 * u(rng), pl = 6.2 * u(rng) - 3.1, tv = 1.4 * u(rng), pv = 6.2 * u(rng) - 3.1;
+            const Vec3 wi = spherical_direction(tl, pl), wo = spherical_direction(tv, pv);
+            pairs.emplace_back(wi, wo);
+            const Rgb v = f(wi, wo);
+            char line[512];
+            std::snprintf(line, sizeof line, "%.17g %.17g %.17g %.17g %.17g %.17g %.17g\n", tl, pl, tv, pv,
+                          v[0] * wi.z, v[1] * wi.z, v[2] * wi.z);
+            sph += line;
+            std::snprintf(line, sizeof line, "%.17g %.17g %.17g %.17g %.17g %.17g %.17g %.17g %.17g\n", wo.x, wo.y,
+                          wo.z, wi.x, wi.y, wi.z, v[0], v[1], v[2]);
+            cart += line;
+        }
+        for (const auto& [name, text] : {std::pair{"sph3.dat", sph}, std::pair{"cart3.dat", cart}}) {
+            INFO(name);
+            const alta::ReadResult r = alta::read(write(dir, name, text).string());
+            REQUIRE(r.set.samples.size() == pairs.size());
+            CHECK(r.set.channels == 3);
+            for (std::size_t k = 0; k < pairs.size(); ++k) {
+                const Rgb want = f(pairs[k].first, pairs[k].second);
+                for (int c = 0; c < 3; ++c) REQUIRE(r.set.samples[k].f[c] == Approx(want[c]).epsilon(1e-12));
+                REQUIRE(length(r.set.samples[k].wi - pairs[k].first) < 1e-12);
+                REQUIRE(length(r.set.samples[k].wo - pairs[k].second) < 1e-12);
+            }
+        }
+    }
 }
 
 TEST_CASE("ALTA reader: arbitrary bytes never crash, only throw brdfz errors", "[alta][fuzz]") {

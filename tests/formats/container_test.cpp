@@ -217,7 +217,7 @@ TEST_CASE("Compact tables (float16, u8log, bivariate) round-trip through .brdfz 
             REQUIRE(back);
             CHECK(back->table() == table.table());  // grid, codes and codec parameters, bit for bit
             for (std::size_t k = 0; k < wi.size(); ++k) CHECK(back->eval(wi[k], wo[k]) == table.eval(wi[k], wo[k]));
-            CHECK(r.meta.version == 2);
+            CHECK(r.meta.version == container::kVersion);
             CHECK(r.meta.min_reader_version == 2);
             const container::Feature element =
                 dtype == TableDtype::F16 ? container::Feature{"tabular.float16", 2} : container::Feature{"tabular.uint8-log", 2};

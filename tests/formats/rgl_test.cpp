@@ -18,6 +18,7 @@
 #include "brdfz/compress.h"
 #include "brdfz/coords.h"
 #include "brdfz/errors.h"
+#include "brdfz/formats/io.h"
 #include "brdfz/formats/rgl.h"
 #include "brdfz/metrics.h"
 #include "brdfz/tabulate.h"
@@ -310,6 +311,44 @@ TEST_CASE("rgl: non-finite and negative rgb values are counted, eval stays finit
     for (int k = 0; k < 1000; ++k) CHECK(all_finite(r.brdf->eval(random_upper(rng), random_upper(rng))));
 }
 
+static ValidityCounts luminance_counts(const std::vector<std::pair<std::string, ValidityCounts>>& fields) {
+    for (const auto& [name, c] : fields)
+        if (name == "luminance") return c;
+    FAIL("no luminance field counted");
+    return {};
+}
+
+TEST_CASE("rgl: slightly negative luminance values load, counted, and sample as 0", "[rgl]") {
+    TempDir dir;
+    auto fields = synthetic_fields();
+    auto luminance = filled(32, 1.0f);
+    luminance[5] = -1e-4f;
+    luminance[21] = -2e-5f;
+    field(fields, "luminance").data = f32(luminance);
+    const std::string negative = dir.write("negative_luminance.bsdf", serialize(fields).bytes);
+    const auto r = rgl::read(negative);
+    CHECK(luminance_counts(r.fields).negative == 2);
+    CHECK(r.counts.negative == 0);  // the rgb tensor's count is its own
+    // Taken as 0, the density is that of a file holding 0 there: the same draws and pdfs.
+    luminance[5] = luminance[21] = 0.0f;
+    field(fields, "luminance").data = f32(luminance);
+    const auto zero = rgl::read(dir.write("zero_luminance.bsdf", serialize(fields).bytes));
+    CHECK(luminance_counts(zero.fields).negative == 0);
+    std::mt19937_64 rng(7);
+    std::uniform_real_distribution<double> u(0.0, 1.0);
+    for (int k = 0; k < 1000; ++k) {
+        const Vec3 wo = random_upper(rng);
+        const double u1 = u(rng), u2 = u(rng);
+        const BrdfSample a = r.brdf->sample(wo, u1, u2), b = zero.brdf->sample(wo, u1, u2);
+        CHECK(a.pdf >= 0.0);
+        CHECK(std::isfinite(a.pdf));
+        CHECK(a.pdf == b.pdf);
+        CHECK(a.wi.x == b.wi.x);
+    }
+    // load() reports the count with the file's other counts.
+    CHECK(luminance_counts(load(negative).info.fields).negative == 2);
+}
+
 TEST_CASE("rgl: corrupted bytes never crash the reader", "[rgl]") {
     TempDir dir;
     const Image good = serialize(synthetic_fields());
@@ -582,9 +621,10 @@ private:
 };
 
 // Checks of tabulate() and compare() against an RGL source whose measured range ends at
-// measured_theta_max(); `grid` is the tabulation grid.
+// measured_theta_max(); `grid` is the tabulation grid, reciprocal or not.
 void check_measured_range(const rgl::RglBrdf& b, const GridSpec& grid) {
     const double theta_max = b.measured_theta_max();
+    const double theta_o_max = std::max(theta_max, 80.0 * std::numbers::pi / 180.0);
     TabulateOptions options;
     options.grid = grid;
     options.negative = NegativePolicy::Invalidate;  // the source's own values, unclamped
@@ -598,13 +638,21 @@ void check_measured_range(const rgl::RglBrdf& b, const GridSpec& grid) {
                 const auto [wi, wo] =
                     from_half_diff({grid.theta_h_at(ih), 0.0, grid.theta_d_at(id), grid.phi_d_at(ip)});
                 if (!(wi.z > 0 && wo.z > 0)) continue;
-                beyond += elevation(wi) > theta_max || elevation(wo) > theta_max;
+                // The incident direction beyond the measured range, the outgoing one beyond 80° (or the
+                // range), at the elevation clamped to it: constant extrapolation. A reciprocal grid holds
+                // the mean over the pair and its exchange, each clamped so.
+                const double ti = elevation(wi), to = elevation(wo);
+                beyond += ti > theta_max || to > theta_o_max ||
+                          (grid.reciprocal() && (to > theta_max || ti > theta_o_max));
                 if (!t.table.valid(bin)) continue;  // a negative value
-                // Beyond the range, the value at the elevations clamped to it: constant extrapolation.
-                const auto clamp = [&](const Vec3& w) {
-                    return elevation(w) > theta_max ? spherical_direction(theta_max, std::atan2(w.y, w.x)) : w;
+                const auto clamp = [](const Vec3& w, double limit) {
+                    return elevation(w) > limit ? spherical_direction(limit, std::atan2(w.y, w.x)) : w;
                 };
-                const Rgb f = b.eval(clamp(wi), clamp(wo));
+                Rgb f = b.eval(clamp(wi, theta_max), clamp(wo, theta_o_max));
+                if (grid.reciprocal()) {
+                    const Rgb g = b.eval(clamp(wo, theta_max), clamp(wi, theta_o_max));
+                    for (int c = 0; c < 3; ++c) f[c] = 0.5 * (f[c] + g[c]);
+                }
                 for (int c = 0; c < 3; ++c) CHECK(t.table.at(bin, c) == Approx(f[c]).epsilon(1e-5).margin(1e-7));
             }
     CHECK(beyond == t.extrapolated);
@@ -645,6 +693,9 @@ TEST_CASE("rgl: a 90° θi slice pads the measured range", "[rgl]") {
     const rgl::RglBrdf b(std::move(t));
     CHECK(b.measured_theta_max() == 1.2f);
     check_measured_range(b, GridSpec{16, 16, 16, BinPosition::Centre});
+    GridSpec full{16, 16, 32, BinPosition::Centre};
+    full.symmetry = Symmetry::None;
+    check_measured_range(b, full);
 }
 
 TEST_CASE("rgl: shared files' grazing values are bounded in tables and left out of metrics", "[rgl][tabulate]") {
@@ -666,12 +717,12 @@ TEST_CASE("rgl: shared files' grazing values are bounded in tables and left out 
         CHECK(std::equal(t.rgb.values.end() - static_cast<std::ptrdiff_t>(plane), t.rgb.values.end(),
                          t.rgb.values.end() - static_cast<std::ptrdiff_t>(2 * plane)));
 
-        // A bound from the data: rgb · D(m) / (4σ(wi)) / cosθo over the measured range, which every
-        // tabulated value keeps to.
+        // A bound from the data: rgb · D(m) / (4σ(wi)) / cosθo over the measured range and θo up to
+        // max(range, 80°), which every tabulated value keeps to.
         const auto max_of = [](const std::vector<float>& v) { return *std::max_element(v.begin(), v.end()); };
         const double bound = max_of(t.rgb.values) * max_of(t.ndf.values) /
                              (4.0 * *std::min_element(t.sigma.values.begin(), t.sigma.values.end())) /
-                             std::cos(b.measured_theta_max());
+                             std::cos(std::max(b.measured_theta_max(), 80.0 * std::numbers::pi / 180.0));
         TabulateOptions options;
         options.grid = GridSpec{45, 45, 90, BinPosition::Centre};
         const Tabulated tab = tabulate(b, options);

@@ -352,6 +352,34 @@ def test_unsupported_variants_and_kinds_are_clear_errors(llvm, glossy, rgl_files
         mi.set_variant("llvm_ad_rgb")
 
 
+def test_symmetry_none_grids_take_the_wavefront_bridge(llvm, rgl_files):
+    """The ports fold φd by reciprocity: a table over the full φd circle (a non-reciprocal RGL file's)
+    is no native port, and the default bridge evaluates it through the library, both sides kept."""
+    m = brdfz.compress(brdfz.load(rgl_files[0]), "tabular:res=16x16x32,symmetry=none")
+    assert m.parts()["grid"]["symmetry"] == "none"
+    with pytest.raises(ValueError, match="no native port for a grid with symmetry=none"):
+        brdfz.mitsuba.bsdf(m, native=True)
+    flags = {f: dr.flag(f) for f in SYMBOLIC}
+    try:
+        bsdf = brdfz.mitsuba.bsdf(m)
+        assert "NativeBrdfzBSDF" not in bsdf.to_string()
+        rng = np.random.default_rng(5)
+        view, light = directions(rng, 4096), directions(rng, 4096)
+        si = dr.zeros(mi.SurfaceInteraction3f, len(view))
+        si.wi = vec(view)
+        value = rows(bsdf.eval(mi.BSDFContext(), si, vec(light)))
+        lz = np.maximum(light[:, 2:3], 0.0)
+        expected = m.eval(view, light) * lz
+        assert np.allclose(value, expected, rtol=1e-5, atol=1e-7)
+        swapped = m.eval(light, view) * lz
+        assert np.abs(expected - swapped).max() > 0.01 * np.abs(expected).max()  # not the folded table
+        del bsdf
+    finally:
+        gc.collect()
+        for f, v in flags.items():
+            dr.set_flag(f, v)
+
+
 def test_evaluation_from_threads_agrees(llvm, glossy):
     m = brdfz.compress(glossy, "tabular:res=16x16x32")
     rng = np.random.default_rng(3)

@@ -56,8 +56,8 @@ __all__ = [
     "Brdf", "Candidate", "ChannelMetrics", "Compressed", "FitReport", "FitResult", "FormatError", "Metrics",
     "Scene", "Selection", "Trial", "UnsupportedError", "ValidationCheck", "ValidationReport", "albedo",
     "benchmark_specs", "compress", "compress_kinds", "convert", "default_candidates", "fit", "format_of", "formats",
-    "load", "metric_samples", "metrics", "metrics_at", "read_scene", "representations", "save", "simd", "tabulate",
-    "trial", "validate",
+    "load", "metric_samples", "metrics", "metrics_at", "read_scene", "reciprocity_error", "representations", "save",
+    "simd", "tabulate", "trial", "validate",
 ]
 
 Path = Union[str, os.PathLike]
@@ -226,6 +226,14 @@ def metric_samples(reference: Brdf, *, over: str = "grid", max_theta: float = 80
                                 seed=seed)
 
 
+def reciprocity_error(brdf: Brdf, *, max_theta: float = 80.0, directions: int = 1 << 18, seed: int = 1,
+                      threads: int = 0) -> Metrics:
+    """The metrics of f(wo, wi) against f(wi, wo) over `directions` pairs uniform in solid angle, both
+    elevations below `max_theta` and within the measured range; ``.cos_rmse_rel.mean`` is the number
+    ``brdfz info`` reports (0 for a reciprocal table, 0.1-1 for real RGL files)."""
+    return _core.reciprocity_error(brdf, max_theta=max_theta, directions=directions, seed=seed, threads=threads)
+
+
 def metrics_at(wi, reference, approx) -> Metrics:
     """The metrics of `approx` against `reference`, (N, 3) arrays of f_r at pairs whose incident
     directions are the rows of `wi` (cosθi = wi[:, 2]); as metrics() computes them from its samples."""
@@ -233,9 +241,10 @@ def metrics_at(wi, reference, approx) -> Metrics:
 
 
 def tabulate(brdf: Brdf, res: Resolution = (90, 90, 180), *, lookup: str = "linear", negative: str = "clamp",
-             threads: int = 0, progress: Progress = None) -> Brdf:
+             symmetry: str = "reciprocal", threads: int = 0, progress: Progress = None) -> Brdf:
     """`brdf` evaluated at the bin centres of a (θh, θd, φd) Rusinkiewicz grid, as a table Brdf
     (its values: ``.table``). Negative values are clamped to 0 or, with negative="invalidate",
-    marked invalid."""
-    return _core.tabulate(brdf, res, lookup=lookup, negative=negative, threads=threads,
+    marked invalid. symmetry="reciprocal" folds φd over [0, π) (a bin holds the mean of f(wi, wo)
+    and f(wo, wi)); "none" keeps φd over [0, 2π)."""
+    return _core.tabulate(brdf, res, lookup=lookup, negative=negative, symmetry=symmetry, threads=threads,
                           progress=_hook(progress, "tabulating"))

@@ -7,7 +7,7 @@ import numpy
 import numpy.typing
 import os
 import typing
-__all__: list[str] = ['Brdf', 'Candidate', 'ChannelMetrics', 'Compressed', 'FitReport', 'FitResult', 'FormatError', 'Metrics', 'Scene', 'Selection', 'Trial', 'UnsupportedError', 'ValidationCheck', 'ValidationReport', 'albedo', 'benchmark_specs', 'compress', 'compress_kinds', 'convert', 'default_candidates', 'fit', 'format_of', 'formats', 'load', 'metric_samples', 'metrics', 'metrics_at', 'read_scene', 'representations', 'save', 'select_representation', 'simd', 'tabulate', 'trial', 'validate']
+__all__: list[str] = ['Brdf', 'Candidate', 'ChannelMetrics', 'Compressed', 'FitReport', 'FitResult', 'FormatError', 'Metrics', 'Scene', 'Selection', 'Trial', 'UnsupportedError', 'ValidationCheck', 'ValidationReport', 'albedo', 'benchmark_specs', 'compress', 'compress_kinds', 'convert', 'default_candidates', 'fit', 'format_of', 'formats', 'load', 'metric_samples', 'metrics', 'metrics_at', 'read_scene', 'reciprocity_error', 'representations', 'save', 'select_representation', 'tabulate', 'trial', 'validate']
 class FormatError(ValueError):
     pass
 class UnsupportedError(ValueError):
@@ -242,6 +242,11 @@ class ValidationCheck:
     def to_dict(self) -> dict:
         ...
     @property
+    def error(self) -> float | None:
+        """
+        reciprocity: the reciprocity error (cos_rmse_rel of f(wo, wi) against f(wi, wo) over directions); None for the other checks
+        """
+    @property
     def failed(self) -> int:
         ...
     @property
@@ -434,6 +439,10 @@ def read_scene(path: os.PathLike | str | bytes) -> Scene:
     """
     a scene file (docs/scene-json.md), its samples drawn
     """
+def reciprocity_error(brdf: Brdf, *, max_theta: typing.SupportsFloat | typing.SupportsIndex = 80.0, threads: typing.SupportsInt | typing.SupportsIndex = 0, directions: typing.SupportsInt | typing.SupportsIndex = 262144, seed: typing.SupportsInt | typing.SupportsIndex = 1) -> Metrics:
+    """
+    metrics of f(wo, wi) against f(wi, wo) over direction pairs (cos_rmse_rel.mean: the reciprocity error)
+    """
 def representations() -> list:
     """
     the representation kinds compress() builds, as `brdfz representations --json` lists them
@@ -446,13 +455,9 @@ def select_representation(brdf: Brdf, max_error: typing.SupportsFloat | typing.S
     """
     the smallest candidate within the budget (select.h); on_candidate(candidate, index, total) after each
     """
-def simd() -> str:
+def tabulate(brdf: Brdf, res: tuple[typing.SupportsInt | typing.SupportsIndex, typing.SupportsInt | typing.SupportsIndex, typing.SupportsInt | typing.SupportsIndex] = (90, 90, 180), *, lookup: str = 'linear', negative: str = 'clamp', symmetry: str = 'reciprocal', threads: typing.SupportsInt | typing.SupportsIndex = 0, progress: typing.Any = None) -> Brdf:
     """
-    the instruction set Brdf's batch calls run with on this CPU: 'avx512', 'avx2' or 'sse2' (chosen at import)
-    """
-def tabulate(brdf: Brdf, res: tuple[typing.SupportsInt | typing.SupportsIndex, typing.SupportsInt | typing.SupportsIndex, typing.SupportsInt | typing.SupportsIndex] = (90, 90, 180), *, lookup: str = 'linear', negative: str = 'clamp', threads: typing.SupportsInt | typing.SupportsIndex = 0, progress: typing.Any = None) -> Brdf:
-    """
-    the Brdf evaluated on a (θh, θd, φd) Rusinkiewicz grid at bin centres, as a table
+    the Brdf evaluated on a (θh, θd, φd) Rusinkiewicz grid at bin centres, as a table (symmetry: table.h)
     """
 def trial(brdf: Brdf, spec: str, *, measure_speed: bool = True, max_theta: typing.SupportsFloat | typing.SupportsIndex = 80.0, threads: typing.SupportsInt | typing.SupportsIndex = 0, over: str = 'grid', directions: typing.SupportsInt | typing.SupportsIndex = 262144, seed: typing.SupportsInt | typing.SupportsIndex = 1, progress: typing.Any = None) -> Trial:
     """

@@ -16,6 +16,7 @@ const Feature kFactored{"factored", 2};
 const Feature kWarpedThetaD{"factored.warped-theta-d", 2};
 // Readers without it refuse float16 factors by this name rather than misreading them.
 const Feature kFloat16{"factored.float16", 2};
+const Feature kFullPhiD{"factored.full-phi-d", 3};
 
 std::vector<Feature> needs(const Brdf& brdf) {
     const auto* f = dynamic_cast<const FactoredBrdf*>(&brdf);
@@ -24,6 +25,7 @@ std::vector<Feature> needs(const Brdf& brdf) {
     std::vector<Feature> out{kFactored};
     if (f->factors().grid.theta_d_warp != 0.0) out.push_back(kWarpedThetaD);
     if (f->factors().dtype == FactorDtype::F16) out.push_back(kFloat16);
+    if (!f->factors().grid.reciprocal()) out.push_back(kFullPhiD);
     return out;
 }
 
@@ -42,6 +44,7 @@ void write(h5::WriteNode& rep, const Brdf& brdf) {
     rep.attr("bin_position", std::string(g.position == BinPosition::Centre ? "centre" : "start"));
     rep.attr("theta_h_axis", std::string("sqrt"));
     write_theta_d_axis(rep, g);
+    write_phi_d_axis(rep, g);
     rep.attr("method", std::string(factor_method_name(f.method)));
     rep.attr("space", std::string(factor_space_name(f.space)));
     rep.attr("layout", std::string(factor_layout_name(f.layout)));
@@ -95,7 +98,8 @@ std::unique_ptr<Brdf> read(const h5::ReadNode& rep, const ReadContext&) {
         if (d < 1 || d > static_cast<std::uint64_t>(GridSpec::kMaxAxis))
             bad("grid axis " + std::to_string(d) + " outside 1.." + std::to_string(GridSpec::kMaxAxis));
     f.grid = GridSpec{static_cast<int>(dims[0]), static_cast<int>(dims[1]), static_cast<int>(dims[2]),
-                      position == "centre" ? BinPosition::Centre : BinPosition::Start, read_theta_d_warp(rep)};
+                      position == "centre" ? BinPosition::Centre : BinPosition::Start, read_theta_d_warp(rep),
+                      read_phi_d_symmetry(rep)};
     const std::uint64_t rows = static_cast<std::uint64_t>(f.rows()), cols = static_cast<std::uint64_t>(f.columns());
     const std::uint64_t rank = rep.u64("rank");
     if (rank < 1 || rank > std::min(rows, cols))
@@ -147,7 +151,7 @@ void source_info(const Brdf& brdf, SourceInfo& info) {
 }  // namespace
 
 void register_factored(std::vector<const StorageModule*>& out) {
-    static const StorageModule m{"factored", {kFactored, kWarpedThetaD, kFloat16}, &needs, &write, &read, &source_info};
+    static const StorageModule m{"factored", {kFactored, kWarpedThetaD, kFloat16, kFullPhiD}, &needs, &write, &read, &source_info};
     out.push_back(&m);
 }
 

@@ -24,6 +24,7 @@ namespace {
 
 const Feature kPca{"pca", 2};
 const Feature kPcaExternal{"pca.external-basis", 2};
+const Feature kFullPhiD{"pca.full-phi-d", 3};
 // The name of the mapping pca.h defines, so a future mapping is a new name rather than a misreading.
 constexpr const char* kTransform = "log-cosine-median";
 
@@ -32,8 +33,10 @@ const char* position_name(BinPosition p) { return p == BinPosition::Centre ? "ce
 std::vector<Feature> needs(const Brdf& brdf) {
     const auto* p = dynamic_cast<const PcaBrdf*>(&brdf);
     if (!p) return {};
-    if (p->basis_storage() == PcaBrdf::BasisStorage::Embedded) return {kPca};
-    return {kPca, kPcaExternal};
+    std::vector<Feature> out{kPca};
+    if (p->basis_storage() != PcaBrdf::BasisStorage::Embedded) out.push_back(kPcaExternal);
+    if (!p->basis().grid().reciprocal()) out.push_back(kFullPhiD);
+    return out;
 }
 
 std::vector<std::uint64_t> grid_shape(const GridSpec& g) {
@@ -52,6 +55,7 @@ void write(h5::WriteNode& rep, const Brdf& brdf) {
     rep.attr("grid", std::span<const std::uint64_t>(g));
     rep.attr("bin_position", std::string(position_name(basis.grid().position)));
     rep.attr("theta_h_axis", std::string("sqrt"));
+    write_phi_d_axis(rep, basis.grid());
     rep.attr("transform", std::string(kTransform));
     rep.attr("epsilon", basis.epsilon());
     rep.attr("k", std::uint64_t(p.k()));
@@ -90,9 +94,10 @@ void hash_array(Sha256& h, std::span<const T> values) {
 std::string basis_sha256(const GridSpec& g, double epsilon, std::span<const float> median, std::span<const float> mean,
                          std::span<const float> components, std::span<const double> variances) {
     char record[256];
-    std::snprintf(record, sizeof record, "brdfz pca basis 1\ngrid %dx%dx%d %s\ntransform %s %.17g\nk_max %zu\n",
-                  g.n_theta_h, g.n_theta_d, g.n_phi_d, position_name(g.position), kTransform, epsilon,
-                  variances.size());
+    // A basis over the full φd circle says so in its grid line (a reciprocal one's record is unchanged).
+    std::snprintf(record, sizeof record, "brdfz pca basis 1\ngrid %dx%dx%d %s%s\ntransform %s %.17g\nk_max %zu\n",
+                  g.n_theta_h, g.n_theta_d, g.n_phi_d, position_name(g.position), g.reciprocal() ? "" : " phi_d full",
+                  kTransform, epsilon, variances.size());
     Sha256 h;
     h.update(record, std::strlen(record));
     hash_array(h, median);
@@ -172,7 +177,7 @@ std::unique_ptr<Brdf> read(const h5::ReadNode& rep, const ReadContext& ctx) {
     const std::string transform = rep.str("transform");
     if (transform != kTransform) bad("unknown transform '" + transform + "'");
     const GridSpec grid{static_cast<int>(dims[0]), static_cast<int>(dims[1]), static_cast<int>(dims[2]),
-                        position == "centre" ? BinPosition::Centre : BinPosition::Start};
+                        position == "centre" ? BinPosition::Centre : BinPosition::Start, 0.0, read_phi_d_symmetry(rep)};
     const double epsilon = rep.f64("epsilon");
     const std::uint64_t k = rep.u64("k"), k_max = rep.u64("k_max");
     if (k_max < 1 || k > k_max) bad("k = " + std::to_string(k) + " and k_max = " + std::to_string(k_max) + " are inconsistent");
@@ -214,7 +219,7 @@ void source_info(const Brdf& brdf, SourceInfo& info) {
 }  // namespace
 
 void register_pca(std::vector<const StorageModule*>& out) {
-    static const StorageModule m{"pca", {kPca, kPcaExternal}, &needs, &write, &read, &source_info};
+    static const StorageModule m{"pca", {kPca, kPcaExternal, kFullPhiD}, &needs, &write, &read, &source_info};
     out.push_back(&m);
 }
 

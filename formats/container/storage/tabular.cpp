@@ -20,6 +20,7 @@ const Feature kFloat32{"tabular.float32", 1};
 const Feature kFloat16{"tabular.float16", 2};
 const Feature kUint8Log{"tabular.uint8-log", 2};
 const Feature kWarpedThetaD{"tabular.warped-theta-d", 2};
+const Feature kFullPhiD{"tabular.full-phi-d", 3};
 
 const char* position_name(BinPosition p) { return p == BinPosition::Centre ? "centre" : "start"; }
 
@@ -29,7 +30,10 @@ std::vector<Feature> needs(const Brdf& brdf) {
     if (!t && !c) return {};
     std::vector<Feature> out{kTabular, t ? kFloat32 : c->table().dtype() == TableDtype::F16 ? kFloat16 : kUint8Log};
     // Only a warped grid needs the feature, so linear tables stay readable by readers without it.
-    if ((t ? t->table().grid() : c->table().grid()).theta_d_warp != 0.0) out.push_back(kWarpedThetaD);
+    const GridSpec& g = t ? t->table().grid() : c->table().grid();
+    if (g.theta_d_warp != 0.0) out.push_back(kWarpedThetaD);
+    // Likewise φd over [0, 2π): a reader without the feature refuses the table instead of folding it.
+    if (!g.reciprocal()) out.push_back(kFullPhiD);
     return out;
 }
 
@@ -40,6 +44,7 @@ void write_grid(h5::WriteNode& rep, const GridSpec& g) {
     rep.attr("bin_position", std::string(position_name(g.position)));
     rep.attr("theta_h_axis", std::string("sqrt"));
     write_theta_d_axis(rep, g);
+    write_phi_d_axis(rep, g);
 }
 
 std::vector<std::uint64_t> values_shape(const GridSpec& g) {
@@ -104,7 +109,7 @@ std::unique_ptr<Brdf> read(const h5::ReadNode& rep, const ReadContext& ctx) {
 
     const double warp = read_theta_d_warp(rep);
     const GridSpec grid{static_cast<int>(dims[0]), static_cast<int>(dims[1]), static_cast<int>(dims[2]),
-                        position == "centre" ? BinPosition::Centre : BinPosition::Start, warp};
+                        position == "centre" ? BinPosition::Centre : BinPosition::Start, warp, read_phi_d_symmetry(rep)};
     const h5::Dataset values = rep.dataset("values");
     const h5::DType type = dtype == "float32" ? h5::DType::F32 : dtype == "float16" ? h5::DType::F16 : h5::DType::U8;
     if (values.type() != type || values.shape() != values_shape(grid))
@@ -197,8 +202,20 @@ double read_theta_d_warp(const h5::ReadNode& rep) {
     return warp;
 }
 
+void write_phi_d_axis(h5::WriteNode& rep, const GridSpec& g) {
+    if (!g.reciprocal()) rep.attr("phi_d_axis", std::string("full"));
+}
+
+Symmetry read_phi_d_symmetry(const h5::ReadNode& rep) {
+    if (!rep.has_attr("phi_d_axis")) return Symmetry::Reciprocal;
+    const std::string axis = rep.str("phi_d_axis");
+    if (axis != "full") throw FormatError(rep.file(), rep.path() + ": unknown phi_d_axis '" + axis + "'");
+    return Symmetry::None;
+}
+
 void register_tabular(std::vector<const StorageModule*>& out) {
-    static const StorageModule m{"tabular", {kTabular, kFloat32, kFloat16, kUint8Log, kWarpedThetaD}, &needs, &write, &read, &source_info};
+    static const StorageModule m{"tabular", {kTabular, kFloat32, kFloat16, kUint8Log, kWarpedThetaD, kFullPhiD},
+                                 &needs, &write, &read, &source_info};
     out.push_back(&m);
 }
 

@@ -77,12 +77,17 @@ public:
     virtual std::size_t nbytes() const = 0;
     // One line saying what this is, e.g. "tabular 90x90x180 float32 (linear lookup)".
     virtual std::string describe() const = 0;
-    // The largest elevation (radians) of wi and of wo up to which the values are data rather than
-    // extrapolation: tabulate() extrapolates beyond it by clamping the elevations and compare() does
-    // not count pairs beyond it, so the source's own extrapolation neither shapes a compressed
-    // representation nor judges it. π/2 (everywhere) unless the source knows better (RGL files pad
-    // their θi range: formats/rgl.h).
+    // The largest elevation (radians) of the incident direction wi up to which the values are data
+    // rather than extrapolation: tabulate() extrapolates beyond it by clamping the incident elevation,
+    // and compare() does not count pairs beyond it (over the grid, whose bins stand for both (wi, wo)
+    // and (wo, wi), neither θi nor θo beyond it), so the source's own extrapolation neither shapes a
+    // compressed representation nor judges it. π/2 (everywhere) unless the source knows better (RGL
+    // files pad their θi range: formats/rgl.h).
     virtual double measured_theta_max() const { return std::numbers::pi / 2; }
+    // True when eval(wi, wo) == eval(wo, wi) by construction (a table whose grid folds φd by
+    // reciprocity), so that tabulating onto a reciprocal grid needs one side of each pair. False unless
+    // a representation knows better; measured data are not exactly reciprocal (RGL files).
+    virtual bool reciprocal() const { return false; }
 
     // The Rusinkiewicz grid a gridded representation is defined on (tables, compact tables,
     // factorisations, PCA), for callers that sample a BRDF on its own grid; nullptr otherwise.

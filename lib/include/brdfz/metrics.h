@@ -94,6 +94,13 @@ void direction_pairs(std::uint64_t first, std::uint64_t seed, double theta_i_max
 // Over::Directions (measurements are judged at their own points).
 Metrics compare(const MeasurementSet& reference, const Brdf& approx, const MetricOptions& options = {});
 
+// How far a BRDF is from reciprocal: the metrics of f(wo, wi) against f(wi, wo) over options.directions
+// pairs uniform in solid angle (options.seed), both elevations below max_theta_deg and within the
+// measured range (so that neither side is the BRDF's own extrapolation); options.over is not used.
+// cos_rmse_rel.mean is "the reciprocity error" `brdfz info` and `validate` report: 0 for a table on a
+// reciprocal grid, 0.1-1 for real RGL files at grazing angles.
+Metrics reciprocity_error(const Brdf& brdf, const MetricOptions& options = {});
+
 // Speed of batch eval on one thread, in direction pairs per second: the median of `reps` timed runs
 // over the same `pairs` uniformly random hemisphere pairs (fixed seed), after one untimed warm-up.
 double eval_rate(const Brdf& brdf, std::size_t pairs = std::size_t{1} << 16, int reps = 5);

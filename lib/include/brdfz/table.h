@@ -3,7 +3,9 @@
 // Axes (MERL's, at any resolution):
 //   θh ∈ [0, π/2) on a square-root axis: bin i covers [(i/n)²·π/2, ((i+1)/n)²·π/2);
 //   θd ∈ [0, π/2) linear, or optionally warped towards grazing (GridSpec::theta_d_warp);
-//   φd ∈ [0, π) linear, folded by reciprocity (φd ~ φd + π).
+//   φd ∈ [0, π) linear, folded by reciprocity (φd ~ φd + π: the pair with wi and wo exchanged), or with
+//   Symmetry::None ∈ [0, 2π) linear, for data whose f(wi, wo) differs from f(wo, wi) (real RGL
+//   measurements at grazing angles).
 // Bin index = φd + nφd·(θd + nθd·θh), MERL's order.
 // Nearest lookup is floor() of the continuous bin coordinate with MERL's exact arithmetic, so it picks
 // bit-identically the bin MERL's published lookup picks. Where each bin's value sits for
@@ -49,15 +51,27 @@ inline double phi_d_to_u(double phi_d, int n) {
     if (phi_d < 0.0) phi_d += std::numbers::pi;
     return phi_d / std::numbers::pi * n;
 }
+// φd in (-π, π] on the full circle [0, 2π] (Symmetry::None).
+inline double full_phi_d_to_u(double phi_d, int n) {
+    if (phi_d < 0.0) phi_d += 2.0 * std::numbers::pi;
+    return phi_d / (2.0 * std::numbers::pi) * n;
+}
 inline double u_to_theta_h(double u, int n) { return (u / n) * (u / n) * (std::numbers::pi / 2.0); }
 inline double u_to_theta_d(double u, int n) { return u / n * (std::numbers::pi / 2.0); }
 // Inverse of the warped map by bisection (it is increasing): setup only, never in a lookup.
 double u_to_theta_d(double u, int n, double w);
 inline double u_to_phi_d(double u, int n) { return u / n * std::numbers::pi; }
+inline double u_to_full_phi_d(double u, int n) { return u / n * (2.0 * std::numbers::pi); }
 // Nearest bin of a coordinate: floor, clamped to [0, n-1]; NaN goes to 0 (fmax drops NaN) so the
 // int conversion is always defined.
 inline int bin_of(double u, int n) { return static_cast<int>(std::fmin(std::fmax(u, 0.0), n - 1.0)); }
 }  // namespace axis
+
+// What the φd axis folds (see the top of this file). Reciprocal: f(wi, wo) and f(wo, wi) share a bin;
+// a non-reciprocal source is tabulated as the mean of the two (tabulate.h). None: φd over [0, 2π).
+enum class Symmetry { Reciprocal, None };
+const char* symmetry_name(Symmetry s);            // "reciprocal", "none"
+Symmetry parse_symmetry(const std::string& name);  // ValueError otherwise
 
 struct GridSpec {
     int n_theta_h = 90;
@@ -65,6 +79,7 @@ struct GridSpec {
     int n_phi_d = 180;
     BinPosition position = BinPosition::Centre;
     double theta_d_warp = 0.0;  // axis::theta_d_to_u's w; 0: MERL's linear θd axis
+    Symmetry symmetry = Symmetry::Reciprocal;
 
     static constexpr int kMaxAxis = 4096;  // bound on any axis, checked before allocating
     // Bound on the bins of any grid, checked before allocating: 2^26 bins, a float32 RGB table of
@@ -84,7 +99,16 @@ struct GridSpec {
     double theta_h_at(int ih) const { return axis::u_to_theta_h(ih + sample_offset(), n_theta_h); }
     double theta_d_at(int id) const { return axis::u_to_theta_d(id + sample_offset(), n_theta_d, theta_d_warp); }
     double theta_d_to_u(double theta_d) const { return axis::theta_d_to_u(theta_d, n_theta_d, theta_d_warp); }
-    double phi_d_at(int ip) const { return axis::u_to_phi_d(ip + sample_offset(), n_phi_d); }
+    double phi_d_at(int ip) const {
+        return reciprocal() ? axis::u_to_phi_d(ip + sample_offset(), n_phi_d)
+                            : axis::u_to_full_phi_d(ip + sample_offset(), n_phi_d);
+    }
+    // φd in (-π, π] -> continuous bin coordinate in [0, n_phi_d].
+    double phi_d_to_u(double phi_d) const {
+        return reciprocal() ? axis::phi_d_to_u(phi_d, n_phi_d) : axis::full_phi_d_to_u(phi_d, n_phi_d);
+    }
+    bool reciprocal() const { return symmetry == Symmetry::Reciprocal; }
+    double phi_d_range() const { return reciprocal() ? std::numbers::pi : 2.0 * std::numbers::pi; }
     // Throws ValueError unless every axis is in [1, kMaxAxis], bins() <= kMaxBins (the message gives
     // the table's bytes) and theta_d_warp in [0, kMaxWarp].
     void validate() const;

@@ -1,9 +1,13 @@
 // The virtual gonioreflectometer: evaluate any Brdf at the sample positions of a Rusinkiewicz grid.
 // Bins whose wi or wo falls below the horizon are marked invalid (MERL leaves them unmeasured too).
-// Where wi or wo lies beyond the source's measured_theta_max() (brdf.h), a bin takes the source's value
-// at their elevations clamped to it, azimuths kept: constant extrapolation, continuous at the edge of
-// the data, where the source's own extrapolation can be orders of magnitude off (RGL files).
-// Sources are taken as isotropic: bins are evaluated at φh = 0.
+// Sources are taken as isotropic: bins are evaluated at φh = 0. On a reciprocal grid (table.h) a bin
+// holds the pair (wi, wo) and its exchange (wo, wi): the mean of f at the two, unless the source is
+// reciprocal (Brdf::reciprocal) and one evaluation gives both.
+// A source with a measured range (measured_theta_max() < π/2, brdf.h) is evaluated with the incident
+// elevation clamped to that range and the outgoing one to max(range, outgoing_theta_max_deg), azimuths
+// kept: constant extrapolation, continuous at the edge of the data, where the source's own
+// extrapolation can be orders of magnitude off (RGL files beyond their last θi), and where measured
+// radiance over a vanishing cosθo makes f noise (RGL files at θo → 90°: 10^5 against 10^2).
 #pragma once
 
 #include <array>
@@ -35,12 +39,20 @@ struct TabulateOptions {
     // bins (below the horizon: invalid), clamps negative results to 0 (counted in `clamped`), and takes
     // at most 2^21 points (ValueError beyond).
     enum class Filter { Box, LeastSquares } filter = Filter::Box;
+    // LeastSquares (and factored.h's fit=lsq, which takes its points from here): how the points weigh.
+    // Bins: each point once (the fine grid's bins), the metrics over the grid; the square-root θh axis
+    // crowds them near specular half vectors. SolidAngle: each by the solid angle of the pairs it stands
+    // for (dωi dωo = 4 cosθd sinθd sinθh dθh dθd dφh dφd), the metrics over directions (metrics.h).
+    enum class FitWeight { Bins, SolidAngle } fit_weight = FitWeight::Bins;
     // Box filter: points with θi or θo above this angle are left out of a bin's mean unless the bin has
-    // no other valid point. LeastSquares: such points, and points beyond the source's
-    // measured_theta_max(), weigh a tenth in the fit. Grazing values are the least reliable (extrapolated in RGL files) and can be
+    // no other valid point. LeastSquares: such points, and points evaluated at a clamped incident
+    // elevation (beyond the source's measured_theta_max()), weigh a tenth in the fit. Grazing values are the least reliable (extrapolated in RGL files) and can be
     // orders of magnitude larger than the rest (10^5 against 0.3 in RGL's paper_white), so they would
     // dominate the mean. 90: no cut.
     double box_max_theta_deg = 80.0;
+    // Sources with a measured range: outgoing elevations above max(this, measured_theta_max()) are
+    // evaluated at it (see the top of this file).
+    double outgoing_theta_max_deg = 80.0;
     int threads = 0;  // 0: one per hardware thread
     // Called with the fraction done (0..1] after each θh slice, from a worker thread under a lock.
     std::function<void(double)> progress;
@@ -50,9 +62,9 @@ struct TabulateOptions {
 struct Tabulated {
     Table table;
     ValidityCounts counts;
-    // Bins (points, when supersampled) above the horizon whose wi or wo lies beyond
-    // brdf.measured_theta_max(), hence evaluated at clamped elevations (not in counts, whose classes
-    // the container stores).
+    // Bins (points, when supersampled) above the horizon evaluated at a clamped elevation (see the top of
+    // this file; on a reciprocal grid of a non-reciprocal source, in either of the two evaluations), not
+    // in counts, whose classes the container stores.
     std::size_t extrapolated = 0;
 };
 

@@ -1,7 +1,8 @@
 // Physical plausibility checks of a BRDF (`brdfz validate`, Python brdfz.validate), each counting what
 // it tested and what failed and keeping the worst offending direction pairs:
 //   non-negativity  a table's stored values, or f at every bin of a grid for other representations;
-//   reciprocity     f(wi, wo) against f(wo, wi) on a fixed set of direction pairs;
+//   reciprocity     f(wi, wo) against f(wo, wi) on a fixed set of direction pairs, and the
+//                   reciprocity error over direction pairs (metrics.h) as a number;
 //   energy          hemispherical reflectance ≤ 1 + tolerance at a set of elevations, both as the
 //                   directional albedo ∫ f(wi, wo) cosθi dωi at θo and, for light arriving at θi,
 //                   ∫ f(wi, wo) cosθo dωo (they differ only for non-reciprocal data).
@@ -10,6 +11,7 @@
 #pragma once
 
 #include <cstddef>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -40,6 +42,9 @@ struct ValidationCheck {
     std::string f_name, g_name;  // what an offence's f and g hold (g_name empty: g is not used)
     std::size_t tested = 0, failed = 0;
     std::vector<ValidationOffence> worst;  // the worst first, at most ValidateOptions::worst
+    // reciprocity: the source's reciprocity error, reciprocity_error()'s cos_rmse_rel (metrics.h);
+    // none for the other checks.
+    std::optional<double> error;
     bool ok() const { return failed == 0; }
 };
 

@@ -27,7 +27,7 @@
 namespace brdfz::detail {
 
 // The start of a table's describe(): "tabular 90x90x180", or "bivariate 90x90" for one φd bin, and
-// ", theta_d warp 0.6" on a warped θd axis.
+// ", theta_d warp 0.6" on a warped θd axis, ", symmetry none" with φd over [0, 2π).
 inline std::string table_shape(const GridSpec& g) {
     std::string warp;
     if (g.theta_d_warp != 0.0) {
@@ -37,7 +37,7 @@ inline std::string table_shape(const GridSpec& g) {
     }
     return (g.n_phi_d == 1 ? "bivariate " + std::to_string(g.n_theta_h) + "x" + std::to_string(g.n_theta_d)
                            : "tabular " + g.str()) +
-           warp;
+           warp + (g.reciprocal() ? "" : ", symmetry none");
 }
 
 // Continuous bin coordinates (θh, θd, φd) of a direction pair on a grid.
@@ -50,13 +50,13 @@ inline BinCoords bin_coords(const GridSpec& g, const Vec3& wi, const Vec3& wo) {
     const Vec3 h = half_vector(wi, wo);
     const Vec3 d = difference_vector(wi, half_frame(h));
     return {axis::theta_h_to_u(elevation(h), g.n_theta_h), g.theta_d_to_u(elevation(d)),
-            axis::phi_d_to_u(std::atan2(d.y, d.x), g.n_phi_d)};
+            g.phi_d_to_u(std::atan2(d.y, d.x))};
 }
 
 // bin_coords without asin, atan2 or a normalisation: every angle is an arctangent of two lengths
 // in one (arbitrary) scale, from s = wi + wo, the unnormalised half vector:
 //   θh = atan(|s_xy| / s_z),  θd = atan(|wi × s| / wi·s),
-//   φd = atan(d_y / d_x) with d_x, d_y (half_frame's) both multiplied by |s|·|s_xy| > 0.
+//   φd = atan(d_y / d_x) with d_x, d_y (half_frame's) both multiplied by |s|·|s_xy| > 0 (phi_d_coord).
 // Within 5e-8 bins of bin_coords (angles to 2.2e-10 relative; rounding ~1e-16 / sinθd in φd), except
 // where φd is ill-conditioned (θh or θd below 1e-6): there up is kIllConditioned, beyond any grid, for
 // the callers to fall back to bin_coords. Branch-free, so the compiler vectorises it across pairs.
@@ -71,6 +71,15 @@ constexpr double kIllConditioned = 1e300;
     return w == 0.0 ? ud_linear : ud_warped;
 }
 
+// φd's bin coordinate from (y, x), d_y and d_x in any one positive scale: fast_half_turn_angle folds
+// the angle into [0, π] (a reciprocal grid's axis); the full circle (Symmetry::None) adds π where
+// d_y < 0. Selects, not branches, and on a reciprocal grid the arithmetic of the folded axis exactly.
+[[gnu::always_inline]] inline double phi_d_coord(const GridSpec& g, double y, double x) {
+    const bool full = !g.reciprocal();
+    const double phi = fast_half_turn_angle(y, x) + ((full & (y < 0.0)) ? std::numbers::pi : 0.0);
+    return phi * (full ? 0.5 / std::numbers::pi : 1.0 / std::numbers::pi) * g.n_phi_d;
+}
+
 // Always inlined: a call per pair would keep the callers' coordinate loops from vectorising.
 [[gnu::always_inline]] inline BinCoords fast_bin_coords(const GridSpec& g, const Vec3& wi, const Vec3& wo) {
     const Vec3 s = wi + wo;
@@ -81,10 +90,9 @@ constexpr double kIllConditioned = 1e300;
     const double sin_d = std::sqrt(dot(cr, cr));  // sinθd·|s|
     const double theta_h = fast_half_turn_angle(rxy, s.z);
     const double theta_d = fast_half_turn_angle(sin_d, dot(wi, s));
-    const double phi_d = fast_half_turn_angle(-cr.z * len, s.z * (wi.x * s.x + wi.y * s.y) - wi.z * rxy2);
+    const double up = phi_d_coord(g, -cr.z * len, s.z * (wi.x * s.x + wi.y * s.y) - wi.z * rxy2);
     constexpr double kMinSin = 1e-6;
     const bool sure = (rxy > kMinSin * len) & (sin_d > kMinSin * len);
-    const double up = phi_d * (1.0 / std::numbers::pi) * g.n_phi_d;
     return {std::sqrt(theta_h * (2.0 / std::numbers::pi)) * g.n_theta_h, theta_d_coord(g, theta_d, dot(wi, s) / len),
             std::max(up, sure ? 0.0 : kIllConditioned)};
 }
@@ -139,7 +147,7 @@ inline Span clamped_span(double c, int n) {
     return {i0, i1, c - i0};
 }
 
-// c is in [-0.5, n] (φd folded to [0, π], minus the sample offset) or NaN: one wrap, not fmod.
+// c is in [-0.5, n] (φd over the axis' range, minus the sample offset) or NaN: one wrap, not fmod.
 inline Span periodic_span(double c, int n) {
     if (c < 0.0) c += n;
     if (!(c < n)) c = 0.0;  // c == n after rounding, or NaN

@@ -29,14 +29,13 @@ namespace brdfz::detail {
     const double dx = cos_o * sin_h - a * cos_h, dy = sin_o * sin_p, dz = a * sin_h + cos_o * cos_h;
     const double sin_d = std::sqrt(dx * dx + dy * dy);
     const double theta_d = fast_half_turn_angle(sin_d, dz);
-    const double phi_d = fast_half_turn_angle(dy, dx);
     // θh through the same arctangent as fast_bin_coords rather than the drawn y: the polynomial's error
     // (up to 6e-11 relative) is then the same in both, where y·n differs from eval's coordinate by up
     // to ~4e-9 bins, which moved the weight 6e-9 (relative) off eval's on a glossy table.
     const double theta_h = fast_half_turn_angle(sin_h, cos_h);
     constexpr double kMinSin = 1e-6;
     const bool sure = (sin_h > kMinSin) & (sin_d > kMinSin);
-    const double up = phi_d * (1.0 / std::numbers::pi) * g.n_phi_d;
+    const double up = phi_d_coord(g, dy, dx);
     // dz is cosθd: wi is a unit vector in h's frame.
     return {std::sqrt(theta_h * (2.0 / std::numbers::pi)) * g.n_theta_h, theta_d_coord(g, theta_d, dz),
             std::max(up, sure ? 0.0 : kIllConditioned)};

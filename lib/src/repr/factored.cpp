@@ -170,7 +170,8 @@ std::string FactoredBrdf::describe() const {
            factor_space_name(f_.space) + " space, layout " + factor_layout_name(f_.layout) + ", " +
            factor_colour_name(f_.colour) + " colour, on " + f_.grid.str() + " (bin " +
            (f_.grid.position == BinPosition::Start ? "start" : "centre") +
-           warp + (f_.dtype == FactorDtype::F16 ? "), float16 factors" : "), float32 factors");
+           warp + (f_.grid.reciprocal() ? "" : ", symmetry none") +
+           (f_.dtype == FactorDtype::F16 ? "), float16 factors" : "), float32 factors");
 }
 
 Table FactoredBrdf::reconstruct(std::size_t* clamped) const {

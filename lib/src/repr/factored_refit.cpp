@@ -281,6 +281,7 @@ void refit(const Brdf& source, const Factors& start, const FactorOptions& o, Sol
     TabulateOptions tab;
     tab.grid = g;
     tab.supersample = {o.supersample, o.supersample, o.supersample};
+    tab.fit_weight = o.fit_weight;
     tab.threads = o.threads;
     const detail::FitPoints fp = detail::fit_points(source, tab, kOutsideScale);
     const std::size_t points = fp.wi.size();

@@ -355,7 +355,7 @@ PcaBrdf::PcaBrdf(std::shared_ptr<const PcaBasis> basis, std::vector<float> coeff
 std::string PcaBrdf::describe() const {
     const PcaBasis& b = *basis_;
     std::string s = "pca k=" + std::to_string(k()) + " of a " + std::to_string(b.k_max()) + "-component basis on " +
-                    b.grid().str() + " (basis ";
+                    b.grid().str() + (b.grid().reciprocal() ? "" : ", symmetry none") + " (basis ";
     s += storage_ == BasisStorage::Embedded ? "embedded" : "referenced";
     if (!b.origin().sha256.empty()) s += ", sha256 " + b.origin().sha256.substr(0, 12);
     return s + "), " + lookup_name(table_.lookup()) + " lookup";

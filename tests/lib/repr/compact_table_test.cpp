@@ -569,13 +569,15 @@ TEST_CASE("compact tables of real RGL data: quantisation costs little against re
         return;
     }
     const Loaded src = load(file.string());
-    // bench/README.md, "Compact tables": 0.28 % (45x45x90 float16) and 1.5 % (90x90x180 u8log), where
-    // the float32 table on the same grid is 0.28 % and 0.17 %.
-    const double f32 = compare(*src.brdf, *compress(*src.brdf, "tabular:res=45x45x90").brdf).cos_rmse_rel.mean;
-    const double f16 = compare(*src.brdf, *compress(*src.brdf, "tabular:res=45x45x90,dtype=f16").brdf).cos_rmse_rel.mean;
+    // On the full φd circle (the data are not quite reciprocal, and the metric grid's reference is one side
+    // of each pair): float16 a rounding away from float32, u8log's steps a little more.
+    const double f32 =
+        compare(*src.brdf, *compress(*src.brdf, "tabular:res=45x45x180,symmetry=none").brdf).cos_rmse_rel.mean;
+    const double f16 =
+        compare(*src.brdf, *compress(*src.brdf, "tabular:res=45x45x180,symmetry=none,dtype=f16").brdf).cos_rmse_rel.mean;
     CHECK(f32 < 0.01);
     CHECK(std::fabs(f16 - f32) < 1e-3);  // 11 significant bits: a rounding away
-    const Compressed u8 = compress(*src.brdf, "tabular:dtype=u8log");
+    const Compressed u8 = compress(*src.brdf, "tabular:res=90x90x360,symmetry=none,dtype=u8log");
     CHECK(compare(*src.brdf, *u8.brdf).cos_rmse_rel.mean < 0.02);
     // The φd mean with grazing points left out (tabulate.h): 2.3 % here, 16 % when they dominated.
     CHECK(compare(*src.brdf, *compress(*src.brdf, "bivariate:res=90x90").brdf).cos_rmse_rel.mean < 0.03);
@@ -591,19 +593,23 @@ TEST_CASE("warped θd tables of real RGL data: below the linear axis's error at 
     const Loaded src = load(file.string());
     MetricOptions coarse;  // half the metric grid's resolution on each axis: an eighth of the points
     coarse.grid = GridSpec{45, 45, 90, BinPosition::Start};
-    const Compressed linear = compress(*src.brdf, "tabular:res=12x20x6,dtype=u8log,filter=lsq");
-    const Compressed warped = compress(*src.brdf, "tabular:res=12x20x6,dtype=u8log,filter=lsq,dwarp=0.8");
+    // The full φd circle, so that the non-reciprocity this grid cannot follow (a reciprocal table holds
+    // the mean of the two sides) does not swamp what the axis changes.
+    const Compressed linear = compress(*src.brdf, "tabular:res=12x20x12,dtype=u8log,filter=lsq,symmetry=none");
+    const Compressed warped = compress(*src.brdf, "tabular:res=12x20x12,dtype=u8log,filter=lsq,dwarp=0.8,symmetry=none");
     CHECK(warped.brdf->nbytes() == linear.brdf->nbytes());
     const double e_linear = compare(*src.brdf, *linear.brdf, coarse).cos_rmse_rel.mean;
     const double e_warped = compare(*src.brdf, *warped.brdf, coarse).cos_rmse_rel.mean;
     CAPTURE(e_linear, e_warped);
-    CHECK(e_warped < 0.9 * e_linear);  // measured: 5.5 % -> 4.5 %
+    CHECK(e_warped < 0.9 * e_linear);  // measured: 4.7 % -> 3.7 %
 }
 
-TEST_CASE("≤ 16 KB within 2 %: tabular:res=24x28x8,dtype=u8log,filter=lsq,dwarp=0.8 on the RGL files", "[compact][data][rgl][warp][heavy]") {
-    // bench/README.md, "RGL: the measured range, and the ≤ 16 KB / 2 % target": 1.81 / 0.69 / 2.78 / 1.99 %
-    // (cc_ibiza_sunset, paper_white, satin_rosaline, vch_golden_yellow); satin_rosaline misses.
-    const char* spec = "tabular:res=24x28x8,dtype=u8log,filter=lsq,dwarp=0.8";
+TEST_CASE("16,200 B: tabular:res=24x28x8,dtype=u8log,filter=lsq,dwarp=0.8,symmetry=none on the RGL files",
+          "[compact][data][rgl][warp][heavy]") {
+    // On the full φd circle (a reciprocal table of these files holds the mean of the two sides, which the
+    // metric grid's one-sided reference counts as error): 3.25 / 1.09 / 1.55 / 1.68 % on the grid
+    // (cc_ibiza_sunset, paper_white, satin_rosaline, vch_golden_yellow); cc_ibiza_sunset misses 2 %.
+    const char* spec = "tabular:res=24x28x8,dtype=u8log,filter=lsq,dwarp=0.8,symmetry=none";
     for (const char* name : {"cc_ibiza_sunset", "paper_white", "satin_rosaline", "vch_golden_yellow"}) {
         INFO(name);
         const std::filesystem::path file = test::rgl_file(name);
@@ -615,12 +621,14 @@ TEST_CASE("≤ 16 KB within 2 %: tabular:res=24x28x8,dtype=u8log,filter=lsq,dwar
         const Compressed c = compress(*src.brdf, spec);
         CHECK(c.brdf->nbytes() <= 16384);
         const double e = compare(*src.brdf, *c.brdf).cos_rmse_rel.mean;
-        const double e_linear =
-            compare(*src.brdf, *compress(*src.brdf, "tabular:res=24x28x8,dtype=u8log,filter=lsq").brdf).cos_rmse_rel.mean;
+        const double e_linear = compare(*src.brdf, *compress(*src.brdf, "tabular:res=24x28x8,dtype=u8log,filter=lsq,"
+                                                                             "symmetry=none")
+                                                             .brdf)
+                                    .cos_rmse_rel.mean;
         CAPTURE(e, e_linear);
         const std::string n = name;
-        CHECK(e < (n == "satin_rosaline" ? 0.03 : 0.02));
-        // The warp is for glossy grazing peaks; on paper_white the linear axis does better (0.58 %).
+        CHECK(e < (n == "cc_ibiza_sunset" ? 0.035 : 0.02));
+        // The warp is for glossy grazing peaks; on paper_white the linear axis does better (0.97 %).
         if (n != "paper_white") CHECK(e < e_linear);
     }
 }

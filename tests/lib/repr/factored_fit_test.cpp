@@ -376,7 +376,8 @@ TEST_CASE("factored fit=lsq: RGL satin_rosaline, a small grid", "[factored][lsq]
     CHECK(eb < 0.9 * ea);
 }
 
-// The default candidate (select.cpp) that meets #4's target on satin_rosaline: ≤ 16 KB within 2 % (~15 s).
+// A default candidate (select.cpp) on the full φd circle: ≤ 16 KB within 2 % on the grid (~30 s). Over
+// directions, where satin_rosaline's non-reciprocity shows, 3.3 % (bench/README.md, "Neural-BRDF peer").
 TEST_CASE("factored fit=lsq, dtype=f16: RGL satin_rosaline within 2 % at 14,944 bytes", "[factored][lsq][data][rgl][heavy]") {
     const std::filesystem::path file = test::rgl_file("satin_rosaline");
     if (!std::filesystem::exists(file)) {
@@ -384,9 +385,14 @@ TEST_CASE("factored fit=lsq, dtype=f16: RGL satin_rosaline within 2 % at 14,944 
         return;
     }
     const Loaded l = load(file.string());
-    const Compressed c = compress(*l.brdf, "svd:rank=8,space=cos,colour=shared,res=64x48x18,dwarp=0.9,fit=lsq,dtype=f16");
+    const Compressed c =
+        compress(*l.brdf, "svd:rank=8,space=cos,colour=shared,res=64x24x36,dwarp=0.9,fit=lsq,symmetry=none,dtype=f16");
     CHECK(c.brdf->nbytes() == 14944);
     const Metrics m = compare(*l.brdf, *c.brdf);
-    CAPTURE(m.cos_rmse_rel.mean, c.build_seconds);
-    CHECK(m.cos_rmse_rel.mean < 0.02);  // bench/README.md: 1.82 %
+    MetricOptions over;
+    over.over = Over::Directions;
+    const Metrics d = compare(*l.brdf, *c.brdf, over);
+    CAPTURE(m.cos_rmse_rel.mean, d.cos_rmse_rel.mean, c.build_seconds);
+    CHECK(m.cos_rmse_rel.mean < 0.02);  // 1.29 %
+    CHECK(d.cos_rmse_rel.mean < 0.04);  // 3.30 %
 }

@@ -290,16 +290,18 @@ TEST_CASE("factored: a warped θd axis lowers the error on RGL satin_rosaline", 
     const Loaded l = load(file.string());
     MetricOptions coarse;  // half the metric grid's resolution on each axis: an eighth of the points
     coarse.grid = GridSpec{45, 45, 90, BinPosition::Start};
-    // bench/README.md: 3.94 % linear, 2.73 % warped on the full metric grid, 14,520 bytes either way.
-    const Compressed linear = compress(*l.brdf, "svd:rank=6,space=cos,colour=shared,res=90x32x16");
-    const Compressed warped = compress(*l.brdf, "svd:rank=6,space=cos,colour=shared,res=90x32x16,dwarp=0.9");
+    // On the full φd circle (a reciprocal grid holds the mean of the two sides, which the metric grid's
+    // one-sided reference counts as error), 14,520 bytes either way.
+    const Compressed linear = compress(*l.brdf, "svd:rank=6,space=cos,colour=shared,res=90x16x32,symmetry=none");
+    const Compressed warped =
+        compress(*l.brdf, "svd:rank=6,space=cos,colour=shared,res=90x16x32,dwarp=0.9,symmetry=none");
     CHECK(warped.brdf->nbytes() == 14520);
     CHECK(warped.brdf->nbytes() == linear.brdf->nbytes());
     const Metrics m = compare(*l.brdf, *warped.brdf, coarse);
     const double e_linear = compare(*l.brdf, *linear.brdf, coarse).cos_rmse_rel.mean, e_warped = m.cos_rmse_rel.mean;
     CAPTURE(e_linear, e_warped);
-    CHECK(e_warped < 0.6 * e_linear);  // on this coarser metric grid: 4.3 % -> 2.3 %
-    CHECK(e_warped < 0.03);
+    CHECK(e_warped < 0.6 * e_linear);  // on this coarser metric grid: 9.6 % -> 5.2 %
+    CHECK(e_warped < 0.06);
 }
 
 namespace {

@@ -60,6 +60,8 @@ class Grid:
         self.nh, self.nd, self.np = int(g["n_theta_h"]), int(g["n_theta_d"]), int(g["n_phi_d"])
         self.offset = 0.5 if g["position"] == "centre" else 0.0
         self.warp = float(g["theta_d_warp"])
+        if g["symmetry"] != "reciprocal":  # the ports fold φd by reciprocity, as MERL's grid does
+            raise Unsupported(f"a grid with symmetry={g['symmetry']}")
         self.phi_span = PI  # φd folded by reciprocity (table.h)
         self.bins = self.nh * self.nd * self.np
         if 3 * self.bins >= _MAX_INDEX:

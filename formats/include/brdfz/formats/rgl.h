@@ -36,8 +36,9 @@
 // Measured range: the files tabulate θi up to ~78-85° and pad the range to 90° with a copy of the
 // last measured slice's rgb table, so beyond that slice's θi eval extrapolates (Mitsuba alike), and
 // the factor D(m)/(4σ(wi))/cosθo lets such values reach 10^3-10^4 at grazing angles against at most a
-// few hundred inside. measured_theta_max() is that θi (the instrument's limit, taken for θo too, by reciprocity);
-// eval still returns Mitsuba's values beyond it, but tabulate() and compare() do not use them.
+// few hundred inside. measured_theta_max() is that θi (the instrument's limit; wo's side is measured
+// over the hemisphere); eval still returns Mitsuba's values beyond it, but tabulate() and compare() do
+// not use them.
 // Like Mitsuba, nothing is clamped: real files hold slightly negative RGB values, and eval returns
 // slightly negative f_r where they dominate. Where the result would not be finite (a zero sigma,
 // an empty VNDF row, f overflowing at wo.z → 0, a NaN or infinite direction), eval returns 0.

@@ -114,6 +114,7 @@ public:
     int channels() const override { return 3; }
     std::size_t nbytes() const override { return table_.nbytes(); }
     std::string describe() const override;
+    bool reciprocal() const override { return table_.grid().reciprocal(); }
     const GridSpec* grid() const override { return &table_.grid(); }
 
 protected:

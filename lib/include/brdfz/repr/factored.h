@@ -54,6 +54,7 @@
 #include "brdfz/sample/halfvector.h"
 #include "brdfz/sample/lazy.h"
 #include "brdfz/table.h"
+#include "brdfz/tabulate.h"
 
 namespace brdfz {
 
@@ -130,6 +131,7 @@ public:
     int channels() const override { return 3; }
     std::size_t nbytes() const override;
     std::string describe() const override;
+    bool reciprocal() const override { return f_.grid.reciprocal(); }
     const GridSpec* grid() const override { return &f_.grid; }
 
 protected:
@@ -176,6 +178,8 @@ struct FactorOptions {
     FactorFit fit = FactorFit::Samples;
     int supersample = 2;      // fit=lsq: the fine grid's points per bin and axis
     int fit_iterations = 20;  // fit=lsq: the refit's cap (same tolerance)
+    // fit=lsq: how its points weigh (tabulate.h): as the grid's bins, or by solid angle.
+    TabulateOptions::FitWeight fit_weight = TabulateOptions::FitWeight::Bins;
     FactorDtype dtype = FactorDtype::F32;
     int threads = 0;          // 0: one per hardware thread
     // Fraction done (0..1] after each iteration, from the calling thread.

@@ -136,6 +136,7 @@ public:
     // The basis is shared and reports its own size (PcaBasis::nbytes).
     std::size_t nbytes() const override { return coefficients_.size() * sizeof(float) + kBasisRefBytes; }
     std::string describe() const override;
+    bool reciprocal() const override { return table_.reciprocal(); }
     const GridSpec* grid() const override { return &basis_->grid(); }
 
     static constexpr std::size_t kBasisRefBytes = 32;

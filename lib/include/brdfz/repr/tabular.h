@@ -34,6 +34,7 @@ public:
     int channels() const override { return 3; }
     std::size_t nbytes() const override { return table_.bins() * 3 * sizeof(float); }
     std::string describe() const override;
+    bool reciprocal() const override { return table_.grid().reciprocal(); }
     const GridSpec* grid() const override { return &table_.grid(); }
     const Table* stored_table() const override { return &table_; }
 

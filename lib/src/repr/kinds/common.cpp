@@ -29,6 +29,16 @@ double theta_d_warp_option(const ReprSpec& spec) {
     return w;
 }
 
+Symmetry symmetry_option(const ReprSpec& spec, Symmetry fallback) {
+    return parse_symmetry(spec.get_choice("symmetry", symmetry_name(fallback), {"reciprocal", "none"}));
+}
+
+TabulateOptions::FitWeight weight_option(const ReprSpec& spec, bool lsq) {
+    if (!lsq && spec.has("weight")) throw ValueError(spec.kind() + ": weight= belongs to the least-squares fit (lsq)");
+    return spec.get_choice("weight", "bins", {"bins", "solid"}) == "solid" ? TabulateOptions::FitWeight::SolidAngle
+                                                                           : TabulateOptions::FitWeight::Bins;
+}
+
 Tabulated tabulate_noted(const Brdf& source, const TabulateOptions& tab, Compressed& out) {
     tab.grid.validate();
     Tabulated t = tabulate(source, tab);

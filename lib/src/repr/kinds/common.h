@@ -13,6 +13,12 @@ namespace brdfz::kinds {
 
 inline const SpecKey kLookupKey{"lookup", "linear", "linear|nearest: interpolation of the stored grid"};
 inline const SpecKey kWarpKey{"dwarp", "0", "in [0, 0.95]: θd bins narrowing towards grazing (0: linear axis)"};
+inline const SpecKey kSymmetryKey{"symmetry", "reciprocal",
+                                  "reciprocal|none: φd over [0, π), a pair and its exchange sharing a bin (their mean), "
+                                  "or over [0, 2π), non-reciprocal data kept"};
+inline const SpecKey kWeightKey{"weight", "bins",
+                                "bins|solid: the lsq fit's points weighed as the grid's bins, or by solid angle (the "
+                                "metrics over directions)"};
 
 // What tabulating `source` left out or changed.
 void note_tabulation(const Brdf& source, const Tabulated& t, Compressed& out);
@@ -20,6 +26,10 @@ void note_tabulation(const Brdf& source, const Tabulated& t, Compressed& out);
 Lookup lookup_option(const ReprSpec& spec);
 // dwarp=W (GridSpec::theta_d_warp).
 double theta_d_warp_option(const ReprSpec& spec);
+// symmetry=reciprocal|none (GridSpec::symmetry), `fallback` when absent.
+Symmetry symmetry_option(const ReprSpec& spec, Symmetry fallback = Symmetry::Reciprocal);
+// weight=bins|solid (TabulateOptions::FitWeight), a key of the least-squares fits only (`lsq`).
+TabulateOptions::FitWeight weight_option(const ReprSpec& spec, bool lsq);
 
 // tabulate(source, tab) (its grid validated first), with the notes it leaves in `out`.
 Tabulated tabulate_noted(const Brdf& source, const TabulateOptions& tab, Compressed& out);

@@ -1,5 +1,5 @@
 // Kinds `svd` and `nmf` (repr/factored.h): a table factored in a transform space, on the source's own
-// grid when it is a table and no res= is given, else tabulated on res.
+// grid when it is a table and neither res= nor another symmetry= is given, else tabulated on res.
 #include "brdfz/errors.h"
 #include "brdfz/repr/factored.h"
 #include "brdfz/repr/tabular.h"
@@ -22,9 +22,11 @@ Compressed build_factored(FactorMethod method, const Brdf& source, const ReprSpe
         throw ValueError(spec.kind() + ": ss= and fit_iterations= belong to fit=lsq");
     fo.supersample = spec.get_int("ss", fo.supersample, 1, 16);
     fo.fit_iterations = spec.get_int("fit_iterations", fo.fit_iterations, 1, 10000);
+    fo.fit_weight = weight_option(spec, lsq);
     fo.dtype = parse_factor_dtype(spec.get_choice("dtype", "f32", {"f32", "f16"}));
     const Table* table = source.stored_table();
-    const bool resample = !table || spec.has("res");
+    const Symmetry symmetry = symmetry_option(spec, table ? table->grid().symmetry : Symmetry::Reciprocal);
+    const bool resample = !table || spec.has("res") || symmetry != table->grid().symmetry;
     const std::vector<int> res = spec.get_dims("res", {90, 90, 180});
     const double warp = theta_d_warp_option(spec);
     if (warp != 0.0 && !resample) throw ValueError(spec.kind() + ": dwarp= applies to the res= grid; give res= as well");
@@ -37,7 +39,7 @@ Compressed build_factored(FactorMethod method, const Brdf& source, const ReprSpe
     Factored factored;
     if (resample) {
         TabulateOptions tab;
-        tab.grid = GridSpec{res[0], res[1], res[2], BinPosition::Centre, warp};
+        tab.grid = GridSpec{res[0], res[1], res[2], BinPosition::Centre, warp, symmetry};
         tab.threads = options.threads;
         const Tabulated t = tabulate_noted(source, tab, out);
         factored = factor(source, t.table, fo);
@@ -77,7 +79,9 @@ std::vector<SpecKey> keys(const char* iterations) {
             {"fit", "samples", "samples|lsq: factor the grid's samples, or refit through eval's interpolation (needs res)"},
             {"ss", "2", "fit=lsq: points per bin and axis, 1-16"},
             {"fit_iterations", "20", "fit=lsq: the refit's iteration cap"},
-            {"dtype", "f32", "f32|f16: stored factors (f16: half the bytes)"}};
+            {"dtype", "f32", "f32|f16: stored factors (f16: half the bytes)"},
+            {"symmetry", "(a table source's own, else reciprocal)", kSymmetryKey.help},
+            kWeightKey};
 }
 
 }  // namespace

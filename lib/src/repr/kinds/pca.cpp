@@ -12,11 +12,17 @@ Compressed build(const Brdf& source, const ReprSpec& spec, const CompressOptions
     const int k = spec.get_int("k", 12, 1, 1 << 16);
     const Lookup lookup = lookup_option(spec);
     const bool embed = spec.get_choice("store", "reference", {"reference", "embed"}) == "embed";
+    const bool confirm_symmetry = spec.has("symmetry");
+    const Symmetry symmetry = symmetry_option(spec);
     spec.finish();
     if (file.empty()) throw ValueError("pca: name the basis file (brdfz pca-train makes one), e.g. pca:basis=merl.brdfz,k=12");
     if (!options.load_pca_basis)
         throw ValueError("pca: basis files are read through brdfz::formats (CompressOptions::load_pca_basis is unset)");
     std::shared_ptr<const PcaBasis> basis = options.load_pca_basis(file);
+    // The basis fixes the grid, its φd axis included: the key can only confirm it.
+    if (confirm_symmetry && symmetry != basis->grid().symmetry)
+        throw ValueError("pca: symmetry=" + std::string(symmetry_name(symmetry)) + " but basis " + file + " has symmetry " +
+                         symmetry_name(basis->grid().symmetry) + " (brdfz pca-train --symmetry)");
     if (k > basis->k_max())
         throw ValueError("pca: k = " + std::to_string(k) + " but basis " + file + " has " +
                          std::to_string(basis->k_max()) + " components");
@@ -49,7 +55,8 @@ void register_pca(std::vector<ReprKind>& out) {
                    {{"basis", "(required)", "the basis file (.brdfz)"},
                     {"k", "12", "coefficients kept, at most the basis's components"},
                     {"store", "reference", "reference|embed: refer to the basis file or embed the basis"},
-                    kLookupKey},
+                    kLookupKey,
+                    {"symmetry", "(the basis's)", "reciprocal|none: must be the basis's φd axis (brdfz pca-train --symmetry)"}},
                    build});
 }
 

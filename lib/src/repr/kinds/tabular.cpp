@@ -15,11 +15,13 @@ const SpecKey kSupersample{"ss", "1 (3 with filter=lsq)", "points per bin and ax
 
 // Tabulates `source` on `grid` (box-filtered by `supersample`) and keeps the table in `dtype`.
 Compressed build_table(const Brdf& source, const GridSpec& grid, std::array<int, 3> supersample,
-                       TabulateOptions::Filter filter, TableDtype dtype, Lookup lookup, const CompressOptions& options) {
+                       TabulateOptions::Filter filter, TabulateOptions::FitWeight weight, TableDtype dtype,
+                       Lookup lookup, const CompressOptions& options) {
     TabulateOptions tab;
     tab.grid = grid;
     tab.supersample = supersample;
     tab.filter = filter;
+    tab.fit_weight = weight;
     tab.threads = options.threads;
     tab.progress = options.progress;
     Compressed out;
@@ -53,10 +55,12 @@ Compressed build_tabular(const Brdf& source, const ReprSpec& spec, const Compres
     const Lookup lookup = lookup_option(spec);
     const TabulateOptions::Filter filter = filter_option(spec, lookup);
     const int ss = supersample_option(spec, filter);
+    const TabulateOptions::FitWeight weight = weight_option(spec, filter == TabulateOptions::Filter::LeastSquares);
     const double warp = theta_d_warp_option(spec);
+    const Symmetry symmetry = symmetry_option(spec);
     spec.finish();
-    return build_table(source, GridSpec{res[0], res[1], res[2], BinPosition::Centre, warp}, {ss, ss, ss}, filter,
-                       dtype, lookup, options);
+    return build_table(source, GridSpec{res[0], res[1], res[2], BinPosition::Centre, warp, symmetry}, {ss, ss, ss},
+                       filter, weight, dtype, lookup, options);
 }
 
 Compressed build_bivariate(const Brdf& source, const ReprSpec& spec, const CompressOptions& options) {
@@ -65,11 +69,15 @@ Compressed build_bivariate(const Brdf& source, const ReprSpec& spec, const Compr
     const Lookup lookup = lookup_option(spec);
     const TabulateOptions::Filter filter = filter_option(spec, lookup);
     const int ss = supersample_option(spec, filter);
+    const TabulateOptions::FitWeight weight = weight_option(spec, filter == TabulateOptions::Filter::LeastSquares);
     const int phi = spec.get_int("phi", 180, 1, GridSpec::kMaxAxis);
     const double warp = theta_d_warp_option(spec);
+    // (θh, θd) do not change when wi and wo are exchanged: the φd mean is reciprocal either way, and
+    // symmetry=none only spreads its phi values over [0, 2π).
+    const Symmetry symmetry = symmetry_option(spec);
     spec.finish();
-    return build_table(source, GridSpec{res[0], res[1], 1, BinPosition::Centre, warp}, {ss, ss, phi}, filter, dtype,
-                       lookup, options);
+    return build_table(source, GridSpec{res[0], res[1], 1, BinPosition::Centre, warp, symmetry}, {ss, ss, phi}, filter,
+                       weight, dtype, lookup, options);
 }
 
 }  // namespace
@@ -78,7 +86,8 @@ void register_tabular(std::vector<ReprKind>& out) {
     out.push_back({"tabular",
                    "a Rusinkiewicz (θh, θd, φd) table resampled on res, square-root θh axis",
                    "",
-                   {{"res", "90x90x180", "bins θh x θd x φd"}, kDtype, kLookupKey, kFilter, kSupersample, kWarpKey},
+                   {{"res", "90x90x180", "bins θh x θd x φd"}, kDtype, kLookupKey, kFilter, kSupersample, kWarpKey,
+                    kSymmetryKey, kWeightKey},
                    build_tabular});
     out.push_back({"bivariate",
                    "a (θh, θd) table without the φd axis, the source averaged over phi values of φd",
@@ -89,7 +98,9 @@ void register_tabular(std::vector<ReprKind>& out) {
                     kLookupKey,
                     kFilter,
                     kSupersample,
-                    kWarpKey},
+                    kWarpKey,
+                    kSymmetryKey,
+                    kWeightKey},
                    build_bivariate});
 }
 
