@@ -210,7 +210,9 @@ ValidityCounts save(const Brdf& brdf, const std::string& path, const SaveOptions
     if (format == "merl") return save_table(brdf, options, [&](const Table& t) { merl::write(path, t); });
     if (format == "rgl") {
         ValidityCounts written;
-        written.valid = rgl::write(path, brdf);
+        rgl::WriteOptions w;
+        w.n_phi_i = options.rgl_phi_i;
+        written.valid = rgl::write(path, brdf, w);
         return written;
     }
     if (format == "exr") return save_table(brdf, options, [&](const Table& t) { exr::write(path, t); });

@@ -1,7 +1,8 @@
 // brdfz convert IN OUT: between every readable and writable format, from the extensions or --from /
 // --to. A representation the output format cannot hold is tabulated (on --res, default 90x90x180).
 //   read:  .binary (MERL), .bsdf (RGL), .brdfz, .exr, .json (analytic model)
-//   write: .binary, .bsdf (isotropic RGB, for Mitsuba 3 and pbrt-v4), .brdfz, .exr, .json (analytic only)
+//   write: .binary, .bsdf (RGB, for Mitsuba 3 and pbrt-v4; anisotropic with --phi-i), .brdfz, .exr, .json
+//          (analytic only)
 #include <iostream>
 
 #include "commands.h"
@@ -13,6 +14,7 @@ void add_convert(CLI::App& app) {
     struct Args {
         std::string in, out, res, from, to;
         LoadOptions load;
+        int phi_i = 1;
     };
     auto args = std::make_shared<Args>();
     CLI::App* cmd = app.add_subcommand("convert", "convert between formats (merl, rgl, brdfz, exr, json)");
@@ -21,11 +23,14 @@ void add_convert(CLI::App& app) {
     cmd->add_option("--res", args->res, "table resolution NHxNDxNP (default: the input's, or 90x90x180)");
     cmd->add_option("--from", args->from, "input format (default: from the extension of IN)");
     cmd->add_option("--to", args->to, "output format (default: from the extension of OUT)");
+    cmd->add_option("--phi-i", args->phi_i,
+                    ".bsdf output: φi slices (1: isotropic, the default; 3..4096: an anisotropic file)");
     add_load_options(cmd, args->load);
     cmd->callback([args] {
         const Loaded in = load_as(args->from.empty() ? format_of(args->in) : args->from, args->in, args->load);
         SaveOptions save_options;
         save_options.format = args->to;
+        save_options.rgl_phi_i = args->phi_i;
         save_options.source = args->in;
         save_options.source_format = in.info.format;
         if (!args->res.empty()) save_options.grid = parse_resolution(args->res);

@@ -1,10 +1,12 @@
 // RglBrdf: evaluation and sampling of the Dupuy-Jakob parameterisation the way Mitsuba 3's
 // `measured` plugin does them (see rgl.h for the direction mapping, the cosine and the sampler).
+#include <algorithm>
 #include <cmath>
 #include <numbers>
 
 #include "brdfz/errors.h"
 #include "brdfz/formats/rgl.h"
+#include "aniso.h"
 #include "marginal2d.h"
 
 namespace brdfz::rgl {
@@ -70,21 +72,19 @@ RglBrdf::RglBrdf(Tensors tensors) : tensors_(std::move(tensors)) {
     check_finite("theta_i", t.theta_i);
     for (std::size_t k = 1; k < n_theta; ++k)
         if (!(t.theta_i[k - 1] < t.theta_i[k])) throw ValueError("rgl: theta_i is not strictly increasing");
+    const std::size_t n_slices = std::max<std::size_t>(t.phi_i.size(), 1) * n_theta;
     check_grids("ndf", t.ndf, 1);
     check_grids("sigma", t.sigma, 1);
-    check_grids("vndf", t.vndf, n_theta);
-    check_grids("rgb", t.rgb, 3 * n_theta);
+    check_grids("vndf", t.vndf, n_slices);
+    check_grids("rgb", t.rgb, 3 * n_slices);
     check_finite("ndf", t.ndf.values);
     check_finite("sigma", t.sigma.values);
     check_finite("vndf", t.vndf.values);
     if (!t.luminance.values.empty()) {
-        check_grids("luminance", t.luminance, n_theta);
+        check_grids("luminance", t.luminance, n_slices);
         if (t.luminance.rows != t.rgb.rows || t.luminance.cols != t.rgb.cols)
             throw ValueError("rgl: luminance grid is not shaped like the rgb grid");
         check_finite("luminance", t.luminance.values);
-        luminance_ = std::make_unique<const detail::Marginal2D>("rgl: luminance", t.luminance.values,
-                                                                t.luminance.slices, t.luminance.rows,
-                                                                t.luminance.cols);
     }
     // Mitsuba would return NaN wherever such a value contributes; 0 keeps eval finite.
     for (float& v : t.rgb.values)
@@ -93,6 +93,15 @@ RglBrdf::RglBrdf(Tensors tensors) : tensors_(std::move(tensors)) {
     // (in the RGL-EPFL files a copy of the last measured slice's rgb table, at 90° less a float ulp).
     const bool padded = n_theta > 1 && t.theta_i.back() >= std::numbers::pi / 2 - 1e-6;
     measured_theta_max_ = t.theta_i[n_theta - (padded ? 2 : 1)];
+    if (t.phi_i.size() > 1) {
+        aniso_ = std::make_unique<const detail::Anisotropic>(t);
+        return;
+    }
+    if (!t.luminance.values.empty()) {
+        luminance_ = std::make_unique<const detail::Marginal2D>("rgl: luminance", t.luminance.values,
+                                                                t.luminance.slices, t.luminance.rows,
+                                                                t.luminance.cols);
+    }
     vndf_ = std::make_unique<const detail::Marginal2D>("rgl: vndf", t.vndf.values, t.vndf.slices, t.vndf.rows,
                                                        t.vndf.cols);
 }
@@ -101,7 +110,7 @@ RglBrdf::~RglBrdf() = default;
 
 std::size_t RglBrdf::nbytes() const {
     const Tensors& t = tensors_;
-    const std::size_t floats = t.theta_i.size() + t.ndf.values.size() + t.sigma.values.size() +
+    const std::size_t floats = t.phi_i.size() + t.theta_i.size() + t.ndf.values.size() + t.sigma.values.size() +
                                t.vndf.values.size() + t.luminance.values.size() + t.rgb.values.size();
     return sizeof(float) * floats;
 }
@@ -109,7 +118,8 @@ std::size_t RglBrdf::nbytes() const {
 std::string RglBrdf::describe() const {
     const Tensors& t = tensors_;
     const auto grid = [](const Grids& g) { return std::to_string(g.rows) + "x" + std::to_string(g.cols); };
-    return "rgl isotropic rgb " + std::to_string(t.theta_i.size()) + " theta_i x " + grid(t.rgb) + " (vndf " +
+    const std::string phi = aniso_ ? "anisotropic rgb " + std::to_string(t.phi_i.size()) + " phi_i x " : "isotropic rgb ";
+    return "rgl " + phi + std::to_string(t.theta_i.size()) + " theta_i x " + grid(t.rgb) + " (vndf " +
            grid(t.vndf) + ", ndf " + grid(t.ndf) + ", sigma " + grid(t.sigma) + (t.jacobian ? "" : ", no jacobian") +
            (luminance_ ? "" : ", no luminance") + "; Mitsuba 'measured' evaluation and sampling)";
 }
@@ -122,6 +132,7 @@ void RglBrdf::eval_batch(const Vec3* wi, const Vec3* wo, Rgb* out, std::size_t n
 }
 
 Rgb RglBrdf::eval_one(const Vec3& wi, const Vec3& wo) const {
+    if (aniso_) return aniso_->eval(wi, wo);
     // Brdf::eval checks only z > 0; a NaN or infinite component has no meaningful value.
     if (!finite(wi) || !finite(wo)) return {0.0, 0.0, 0.0};
     const Tensors& t = tensors_;
@@ -154,6 +165,7 @@ Rgb RglBrdf::eval_one(const Vec3& wi, const Vec3& wo) const {
 }
 
 BrdfSample RglBrdf::sample_above(const Vec3& wo, double u1, double u2) const {
+    if (aniso_) return aniso_->sample(wo, u1, u2);
     if (!finite(wo)) return {};
     // wo plays the file's incident direction (rgl.h); u in Mitsuba's order, its sample2 swapped.
     const detail::SliceWeights w = detail::slice_weights(tensors_.theta_i, elevation(wo));
@@ -171,6 +183,7 @@ BrdfSample RglBrdf::sample_above(const Vec3& wo, double u1, double u2) const {
 }
 
 double RglBrdf::pdf_above(const Vec3& wo, const Vec3& wi) const {
+    if (aniso_) return aniso_->pdf(wo, wi);
     if (!finite(wo) || !finite(wi)) return 0.0;
     const detail::SliceWeights w = detail::slice_weights(tensors_.theta_i, elevation(wo));
     const Microfacet mf = microfacet(wo, wi);

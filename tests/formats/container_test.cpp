@@ -359,6 +359,17 @@ TEST_CASE("RGL tensors round-trip through .brdfz bit for bit", "[container][rgl]
     test::TempDir dir;
     std::vector<std::unique_ptr<rgl::RglBrdf>> sources;
     sources.push_back(std::make_unique<rgl::RglBrdf>(small_tensors()));
+    {  // anisotropic: the same grids over 2 φi slices
+        rgl::Tensors t = small_tensors();
+        t.phi_i = {-3.0f, 0.5f, 3.0f};
+        for (rgl::Grids* g : {&t.vndf, &t.rgb, &t.luminance}) {
+            const std::vector<float> one = g->values;
+            for (int k = 0; k < 2; ++k)
+                for (float v : one) g->values.push_back(v * (1.5f + k));
+            g->slices *= 3;
+        }
+        sources.push_back(std::make_unique<rgl::RglBrdf>(std::move(t)));
+    }
     const fs::path shared = fs::path(BRDFZ_SHARED_DIR) / "data" / "rgl";
     std::error_code ec;
     if (fs::is_directory(shared, ec)) {
@@ -377,6 +388,8 @@ TEST_CASE("RGL tensors round-trip through .brdfz bit for bit", "[container][rgl]
         const auto* back = dynamic_cast<const rgl::RglBrdf*>(r.brdf.get());
         REQUIRE(back);
         const rgl::Tensors &a = src->tensors(), &b = back->tensors();
+        CHECK(a.phi_i == b.phi_i);
+        CHECK((r.meta.min_reader_version == 4) == (a.phi_i.size() > 1));
         CHECK(a.theta_i == b.theta_i);
         CHECK(a.ndf.values == b.ndf.values);
         CHECK(a.sigma.values == b.sigma.values);
