@@ -1,6 +1,8 @@
 #include "brdfz/compress.h"
 
+#include <algorithm>
 #include <chrono>
+#include <functional>
 #include <cstdio>
 #include <numbers>
 #include <optional>
@@ -10,6 +12,7 @@
 #include "brdfz/repr/compact_table.h"
 #include "brdfz/formats/pca_basis.h"
 #include "brdfz/repr/pca.h"
+#include "brdfz/repr/phi_h.h"
 #include "brdfz/repr/factored.h"
 #include "brdfz/repr/tabular.h"
 #include "brdfz/tabulate.h"
@@ -100,6 +103,20 @@ Symmetry symmetry_option(const ReprSpec& spec, Symmetry fallback = Symmetry::Rec
     return parse_symmetry(spec.get_choice("symmetry", symmetry_name(fallback), {"reciprocal", "none"}));
 }
 
+// phih=N slices along φh (repr/phi_h.h), each built by build_slice from the rotated source with the
+// slices' φd symmetry; the slices' notes once each.
+Compressed build_phi_h(const Brdf& source, int n, PhiHSymmetry symmetry,
+                       const std::function<Compressed(const Brdf&, Symmetry)>& build_slice) {
+    Compressed out;
+    out.brdf = tabulate_phi_h(source, n, symmetry, [&](const Brdf& slice) {
+        Compressed c = build_slice(slice, slice_symmetry(symmetry));
+        for (std::string& note : c.notes)
+            if (std::find(out.notes.begin(), out.notes.end(), note) == out.notes.end()) out.notes.push_back(std::move(note));
+        return std::move(c.brdf);
+    });
+    return out;
+}
+
 Compressed build_tabular(const Brdf& source, const ReprSpec& spec, const CompressOptions& options) {
     const std::vector<int> res = spec.get_dims("res", {90, 90, 180});
     const TableDtype dtype = dtype_option(spec);
@@ -108,10 +125,16 @@ Compressed build_tabular(const Brdf& source, const ReprSpec& spec, const Compres
     const int ss = supersample_option(spec, filter);
     const TabulateOptions::FitWeight weight = weight_option(spec, filter == TabulateOptions::Filter::LeastSquares);
     const double warp = theta_d_warp_option(spec);
-    const Symmetry symmetry = symmetry_option(spec);
+    const int phih = spec.get_int("phih", 1, 1, GridSpec::kMaxAxis);
+    const std::string symmetry = spec.get_choice("symmetry", "reciprocal", {"reciprocal", "none", "bilateral"});
     spec.finish();
-    return build_table(source, GridSpec{res[0], res[1], res[2], BinPosition::Centre, warp, symmetry}, {ss, ss, ss},
-                       filter, weight, dtype, lookup, options);
+    const auto table = [&](const Brdf& from, Symmetry s) {
+        return build_table(from, GridSpec{res[0], res[1], res[2], BinPosition::Centre, warp, s}, {ss, ss, ss}, filter,
+                           weight, dtype, lookup, options);
+    };
+    if (phih > 1) return build_phi_h(source, phih, parse_phi_h_symmetry(symmetry), table);
+    if (symmetry == "bilateral") throw ValueError("tabular: symmetry=bilateral folds the φh axis: it needs phih >= 2");
+    return table(source, parse_symmetry(symmetry));
 }
 
 // Romeiro et al. 2008's bivariate table: θh × θd, the source averaged over phi=N values of φd.
@@ -291,6 +314,8 @@ constexpr Kind kKinds[] = {
 
 Compressed compress(const Brdf& source, const std::string& text, const CompressOptions& options) {
     const ReprSpec spec = ReprSpec::parse(text);
+    if (spec.has("phih") && spec.kind() != "tabular")
+        throw ValueError("phih is not supported by " + spec.kind() + ": only tabular has a φh axis");
     for (const Kind& kind : kKinds)
         if (spec.kind() == kind.name) return timed(spec, [&] { return kind.build(source, spec, options); });
     std::string known;
