@@ -5,7 +5,7 @@ namespace detail {
 
 std::span<const StorageModule* const> storage_modules() {
     static const StorageModule* const kModules[] = {&tabular_storage(), &rgl_storage(), &analytic_storage(),
-                                                    &pca_storage(), &factored_storage()};
+                                                    &pca_storage(), &factored_storage(), &phi_h_storage()};
     return kModules;
 }
 

@@ -34,6 +34,7 @@ const StorageModule& rgl_storage();
 const StorageModule& analytic_storage();
 const StorageModule& pca_storage();
 const StorageModule& factored_storage();
+const StorageModule& phi_h_storage();
 
 // Every module, in the order the writer tries them.
 std::span<const StorageModule* const> storage_modules();
