@@ -220,6 +220,19 @@ Compressed build_pca(const Brdf& source, const ReprSpec& spec, const CompressOpt
 // own grid when it is a table and neither res= nor another symmetry= is given, else tabulated on res
 // (default 90x90x180), with symmetry= as for tables and dwarp=W its θd axis warped as for tables (bench/README.md: satin_rosaline at 90x32x16 rank 6,
 // 3.94 -> 2.96 %).
+// What a factorisation did, for the user.
+void note_factoring(FactorMethod method, const FactorReport& r, bool lsq, Compressed& out) {
+    out.notes.push_back(std::string(factor_method_name(method)) + ": " + std::to_string(r.iterations) + " iterations, " +
+                        (r.converged ? "converged" : "iteration cap reached") + ", weighted residual " +
+                        std::to_string(r.residual) + " over " + std::to_string(r.valid_bins) + " valid bins");
+    if (lsq)
+        out.notes.push_back("fit=lsq: " + std::to_string(r.fit_iterations) + " iterations through the lookup over " +
+                            std::to_string(r.fit_points) + " points, weighted residual " +
+                            std::to_string(r.fit_residual_start) + " -> " + std::to_string(r.fit_residual));
+    if (r.clamped > 0)
+        out.notes.push_back(std::to_string(r.clamped) + " reconstructed values below 0 at the grid's samples (clamped to 0 at eval)");
+}
+
 Compressed build_factored(FactorMethod method, const Brdf& source, const ReprSpec& spec, const CompressOptions& options) {
     FactorOptions fo;
     fo.method = method;
@@ -237,8 +250,16 @@ Compressed build_factored(FactorMethod method, const Brdf& source, const ReprSpe
     fo.fit_weight = weight_option(spec, lsq);
     fo.dtype = parse_factor_dtype(spec.get_choice("dtype", "f32", {"f32", "f16"}));
     const auto* tabular = dynamic_cast<const TabularBrdf*>(&source);
-    const Symmetry symmetry = symmetry_option(spec, tabular ? tabular->table().grid().symmetry : Symmetry::Reciprocal);
-    const bool resample = !tabular || spec.has("res") || symmetry != tabular->table().grid().symmetry;
+    const int phih = spec.get_int("phih", 1, 1, GridSpec::kMaxAxis);
+    const std::string symmetry_text =
+        spec.get_choice("symmetry", symmetry_name(tabular ? tabular->table().grid().symmetry : Symmetry::Reciprocal),
+                        {"reciprocal", "none", "bilateral"});
+    if (phih == 1 && symmetry_text == "bilateral")
+        throw ValueError(spec.kind() + ": symmetry=bilateral folds the φh axis: it needs phih >= 2");
+    const Symmetry symmetry = phih > 1 ? Symmetry::None : parse_symmetry(symmetry_text);
+    // A φh axis tabulates each slice from the rotated source.
+    const bool resample =
+        phih > 1 || !tabular || spec.has("res") || symmetry != tabular->table().grid().symmetry;
     const std::vector<int> res = spec.get_dims("res", {90, 90, 180});
     const double warp = theta_d_warp_option(spec);
     if (warp != 0.0 && !resample) throw ValueError(spec.kind() + ": dwarp= applies to the res= grid; give res= as well");
@@ -247,29 +268,24 @@ Compressed build_factored(FactorMethod method, const Brdf& source, const ReprSpe
     spec.finish();
     fo.threads = options.threads;
     fo.progress = options.progress;
-    Compressed out;
-    Factored factored;
-    if (resample) {
+    const auto factor_on_grid = [&](const Brdf& from, Symmetry s) {
+        Compressed out;
         TabulateOptions tab;
-        tab.grid = GridSpec{res[0], res[1], res[2], BinPosition::Centre, warp, symmetry};
+        tab.grid = GridSpec{res[0], res[1], res[2], BinPosition::Centre, warp, s};
         tab.grid.validate();
         tab.threads = options.threads;
-        Tabulated t = tabulate(source, tab);
-        note_tabulation(source, t, out);
-        factored = factor(source, t.table, fo);
-    } else {
-        factored = factor(tabular->table(), fo);
-    }
-    const FactorReport& r = factored.report;
-    out.notes.push_back(std::string(factor_method_name(method)) + ": " + std::to_string(r.iterations) + " iterations, " +
-                        (r.converged ? "converged" : "iteration cap reached") + ", weighted residual " +
-                        std::to_string(r.residual) + " over " + std::to_string(r.valid_bins) + " valid bins");
-    if (lsq)
-        out.notes.push_back("fit=lsq: " + std::to_string(r.fit_iterations) + " iterations through the lookup over " +
-                            std::to_string(r.fit_points) + " points, weighted residual " +
-                            std::to_string(r.fit_residual_start) + " -> " + std::to_string(r.fit_residual));
-    if (r.clamped > 0)
-        out.notes.push_back(std::to_string(r.clamped) + " reconstructed values below 0 at the grid's samples (clamped to 0 at eval)");
+        Tabulated t = tabulate(from, tab);
+        note_tabulation(from, t, out);
+        Factored factored = factor(from, t.table, fo);
+        note_factoring(method, factored.report, lsq, out);
+        out.brdf = std::move(factored.brdf);
+        return out;
+    };
+    if (phih > 1) return build_phi_h(source, phih, parse_phi_h_symmetry(symmetry_text), factor_on_grid);
+    if (resample) return factor_on_grid(source, symmetry);
+    Compressed out;
+    Factored factored = factor(tabular->table(), fo);
+    note_factoring(method, factored.report, lsq, out);
     out.brdf = std::move(factored.brdf);
     return out;
 }
@@ -314,8 +330,8 @@ constexpr Kind kKinds[] = {
 
 Compressed compress(const Brdf& source, const std::string& text, const CompressOptions& options) {
     const ReprSpec spec = ReprSpec::parse(text);
-    if (spec.has("phih") && spec.kind() != "tabular")
-        throw ValueError("phih is not supported by " + spec.kind() + ": only tabular has a φh axis");
+    if (spec.has("phih") && spec.kind() != "tabular" && spec.kind() != "svd" && spec.kind() != "nmf")
+        throw ValueError("phih is not supported by " + spec.kind() + ": only tabular, svd and nmf have a φh axis");
     for (const Kind& kind : kKinds)
         if (spec.kind() == kind.name) return timed(spec, [&] { return kind.build(source, spec, options); });
     std::string known;
