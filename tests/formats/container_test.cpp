@@ -644,7 +644,8 @@ TEST_CASE("Tables with a φh axis round-trip through .brdfz bit for bit", "[cont
     const AnalyticBrdf source("lambert+ggx_aniso", {0.3, 0.2, 0.1, 1, 1, 1, 0.15, 0.4, 0.5});
     for (const char* spec : {"tabular:res=8x4x8,phih=4,symmetry=none", "tabular:res=8x4x8,phih=3,symmetry=bilateral",
                              "tabular:res=8x4x8,phih=4,symmetry=reciprocal,dtype=f16",
-                             "tabular:res=8x4x8,phih=2,symmetry=none,dtype=u8log"}) {
+                             "tabular:res=8x4x8,phih=2,symmetry=none,dtype=u8log",
+                             "svd:rank=2,res=8x4x8,phih=3,symmetry=none", "nmf:rank=2,res=8x4x8,phih=2,symmetry=bilateral"}) {
         INFO(spec);
         const Compressed c = compress(source, spec);
         const fs::path p = dir.path / "stack.brdfz";

@@ -185,6 +185,7 @@ TEST_CASE("phih: svd and nmf factor each φh slice", "[phih][factored]") {
                      e_mirror = over_directions(source, *mirror.brdf);
         INFO("over directions: one factorisation " << e_flat << ", 16 φh slices " << e_stack << ", 8 bilateral "
                                                    << e_mirror);
+        // Measured: one factorisation 0.54 (both), 16 φh slices 0.061 (svd) and 0.072 (nmf).
         CHECK(e_flat > 0.3);
         CHECK(e_stack < 0.15);
         CHECK(e_mirror < 0.15);
