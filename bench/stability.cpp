@@ -10,9 +10,12 @@
 //   sampler   sampler_variance_ratio (albedo.h) at θo = 60°: the samples the representation's sampler
 //             needs, against cosine sampling, for the same noise in the albedo estimate, with a
 //             relative spread of 0.1 counting as ideal. Variance blow-up: > 1.5
-// Writes a CSV (one row per method and material) and prints a Markdown summary; docs/stability.md
-// holds the study's tables and what was fixed.
-//   stability [--out stability.csv] [--spec SPEC]... [FILE...]
+// Writes a CSV (one row per method and material) and a line per row on stderr. scripts/stability runs
+// it once per (material, spec) as brdfz.batch tasks and draws the Markdown table and heat map from
+// the rows (brdfz.stability); docs/stability.md holds the study's tables and what was fixed.
+//   stability [--out stability.csv] [--spec SPEC]... [--synthetic NAME|none]... [--list] [FILE...]
+// --synthetic: only these synthetic classes (default: all; none: only the files). --list: the
+// synthetic classes and the default specs, one per line ("synthetic NAME", "spec SPEC").
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -57,11 +60,15 @@ std::unique_ptr<Brdf> table_of(const Brdf& b) {
     return std::make_unique<TabularBrdf>(tabulate(b).table);
 }
 
-// Synthetic classes: analytic truths tabulated at MERL resolution (what a measurement would give).
-std::vector<Material> synthetic() {
+const std::vector<std::string> kSynthetic = {"diffuse", "plastic", "metal", "mirror", "retro", "sheen", "holes", "noisy"};
+
+// Synthetic classes: analytic truths tabulated at MERL resolution (what a measurement would give);
+// the `wanted` ones of kSynthetic, in its order.
+std::vector<Material> synthetic(const std::vector<std::string>& wanted) {
     std::vector<Material> out;
+    const auto want = [&](const char* name) { return std::find(wanted.begin(), wanted.end(), name) != wanted.end(); };
     const auto add = [&](std::string name, std::string cls, const char* model, std::vector<double> p) {
-        out.push_back({std::move(name), std::move(cls), table_of(AnalyticBrdf(model, std::move(p)))});
+        if (want(name.c_str())) out.push_back({std::move(name), std::move(cls), table_of(AnalyticBrdf(model, std::move(p)))});
     };
     add("diffuse", "diffuse", "lambert", {0.6, 0.5, 0.4});
     add("plastic", "glossy plastic", "lambert+ggx_dielectric", {0.3, 0.05, 0.05, 1, 1, 1, 0.12, 1.5});
@@ -70,7 +77,7 @@ std::vector<Material> synthetic() {
     add("retro", "retro-reflective", "lambert+lafortune", {0.1, 0.1, 0.1, 0.8, 0.8, 0.8, 1.0, 1.0, 30});
     add("sheen", "fabric-like sheen", "lambert+lafortune", {0.3, 0.1, 0.1, 0.6, 0.3, 0.3, -1.0, 0.2, 6});
     // Missing bins: the plastic with every bin of 30% of the (θh, θd) cells unmeasured.
-    {
+    if (want("holes")) {
         Table t = tabulate(AnalyticBrdf("lambert+ggx_dielectric", {0.3, 0.05, 0.05, 1, 1, 1, 0.12, 1.5})).table;
         std::mt19937_64 rng(5);
         std::uniform_real_distribution<double> u(0.0, 1.0);
@@ -82,7 +89,7 @@ std::vector<Material> synthetic() {
         out.push_back({"holes", "missing bins", std::make_unique<TabularBrdf>(std::move(t))});
     }
     // Noisy: the metal with 20% multiplicative noise and an additive floor that dips below zero.
-    {
+    if (want("noisy")) {
         Table t = tabulate(AnalyticBrdf("ggx_conductor", {1, 1, 1, 0.15, 0.18, 0.42, 1.37, 3.42, 2.35, 1.77})).table;
         std::mt19937_64 rng(6);
         std::normal_distribution<double> n(0.0, 1.0);
@@ -140,15 +147,45 @@ std::string num(double v) {
 }  // namespace
 
 int main(int argc, char** argv) {
-    bench::SweepArgs args = bench::parse_sweep_args(argc, argv, "stability.csv", kDefaultSpecs);
+    // --synthetic and --list here, the sweep's own arguments in parse_sweep_args.
+    std::vector<char*> rest = {argv[0]};
+    std::vector<std::string> wanted;
+    bool none = false;
+    for (int i = 1; i < argc; ++i) {
+        const std::string a = argv[i];
+        if (a == "--list") {
+            for (const std::string& n : kSynthetic) std::printf("synthetic %s\n", n.c_str());
+            for (const std::string& spec : kDefaultSpecs) std::printf("spec %s\n", spec.c_str());
+            return 0;
+        }
+        if (a == "--synthetic" && i + 1 < argc) {
+            const std::string name = argv[++i];
+            if (name == "none") {
+                none = true;
+            } else if (std::find(kSynthetic.begin(), kSynthetic.end(), name) != kSynthetic.end()) {
+                wanted.push_back(name);
+            } else {
+                std::fprintf(stderr, "stability: no synthetic class '%s' (--list shows them)\n", name.c_str());
+                return 2;
+            }
+        } else {
+            rest.push_back(argv[i]);
+        }
+    }
+    if (wanted.empty() && !none) wanted = kSynthetic;
+    bench::SweepArgs args = bench::parse_sweep_args(static_cast<int>(rest.size()), rest.data(), "stability.csv", kDefaultSpecs);
     const std::vector<std::string>& specs = args.specs;
     std::vector<fs::path>& files = args.files;
     const std::string& out_path = args.out;
-    std::vector<Material> materials = synthetic();
-    for (const fs::path& f : files) materials.push_back({f.stem().string(), "real: " + f.extension().string(), load(f.string()).brdf});
+    std::vector<Material> materials = synthetic(wanted);
+    try {
+        for (const fs::path& f : files) materials.push_back({f.stem().string(), "real: " + f.extension().string(), load(f.string()).brdf});
+    } catch (const Error& e) {
+        std::fprintf(stderr, "stability: %s\n", e.what());
+        return 1;
+    }
 
     const Scene grazing = view_scene(75.0, 88.0), normal = view_scene(0.0, 30.0);
-    std::vector<Row> rows;
     std::ofstream csv(out_path);
     csv << "material,class,repr,status,bytes,cos_rmse_rel,log_rmse,grazing_ratio,sampler_variance_ratio,bad_values,"
            "eval_pairs_per_s,build_s,flags\n";
@@ -198,28 +235,9 @@ int main(int argc, char** argv) {
                 << num(r.sampler) << "," << r.bad << "," << num(r.rate) << "," << num(r.seconds) << "," << '"' << flags
                 << '"' << "\n";
             csv.flush();
-            rows.push_back(std::move(r));
         }
     }
 
-    // Markdown: methods down, materials across, cos_rmse_rel with the failure flags.
-    std::printf("| method |");
-    for (const Material& m : materials) std::printf(" %s |", m.name.c_str());
-    std::printf("\n|---|");
-    for (std::size_t k = 0; k < materials.size(); ++k) std::printf("---|");
-    std::printf("\n");
-    for (const std::string& spec : specs) {
-        std::printf("| `%s` |", spec.c_str());
-        for (const Material& m : materials)
-            for (const Row& r : rows)
-                if (r.material == m.name && r.spec == spec) {
-                    std::string cell = r.status.rfind("error: ", 0) == 0 ? "fails" : num(r.cos_rel);
-                    for (const std::string& f : r.flags)
-                        if (f != "failed") cell += " ⚠ " + f;
-                    std::printf(" %s |", cell.c_str());
-                }
-        std::printf("\n");
-    }
     std::fprintf(stderr, "wrote %s\n", out_path.c_str());
     return 0;
 }

@@ -1,183 +1,126 @@
 #include "brdfz/formats/io.h"
 
 #include <algorithm>
-#include <cmath>
 #include <filesystem>
-#include <limits>
+#include <fstream>
 
 #include "brdfz/errors.h"
-#include "brdfz/formats/container.h"
-#include "brdfz/formats/exr.h"
-#include "brdfz/formats/alta.h"
-#include "brdfz/formats/cornell.h"
-#include "brdfz/formats/merl.h"
-#include "brdfz/formats/model_json.h"
-#include "brdfz/formats/rgl.h"
-#include "brdfz/formats/rgl_writer.h"
-#include "brdfz/tabulate.h"
+#include "brdfz/formats/pca_basis.h"
+#include "brdfz/formats/registry.h"
 
 namespace brdfz {
+namespace formats {
+// Generated from the folders formats/*/ that hold a format.cpp (cmake/registry.cmake).
+void register_all(std::vector<Format>& out);
+}  // namespace formats
+
 namespace {
 
-// Range of a table's valid values.
-void value_range(const Table& t, SourceInfo& info) {
-    double lo = std::numeric_limits<double>::infinity(), hi = -lo;
-    for (std::size_t k = 0; k < 3 * t.bins(); ++k) {
-        const float v = t.data()[k];
-        if (std::isnan(v)) continue;
-        lo = std::min<double>(lo, v);
-        hi = std::max<double>(hi, v);
-    }
-    info.min_value = lo <= hi ? lo : 0.0;
-    info.max_value = lo <= hi ? hi : 0.0;
-}
+bool readable(const Format& f) { return f.read || f.read_measurements; }
 
-Loaded load_merl(const std::string& path, const LoadOptions& options) {
-    merl::ReadResult r = merl::read(path, options.position);
-    const GridSpec& g = r.table.grid();
-    Loaded out;
-    out.info.format = "merl";
-    out.info.dims = {static_cast<std::size_t>(g.n_theta_h), static_cast<std::size_t>(g.n_theta_d),
-                     static_cast<std::size_t>(g.n_phi_d)};
-    out.info.counts = r.counts;
-    value_range(r.table, out.info);
-    out.brdf = std::make_unique<TabularBrdf>(std::move(r.table), options.lookup);
+// "x (.a, .b)" for every format `accepts`.
+template <typename Accepts>
+std::string extension_list(Accepts accepts) {
+    std::string out;
+    for (const Format& f : all_formats()) {
+        if (!accepts(f)) continue;
+        for (const std::string& ext : f.extensions) out += (out.empty() ? "" : ", ") + ext;
+    }
     return out;
 }
 
-Loaded load_rgl(const std::string& path) {
-    rgl::ReadResult r = rgl::read(path);
-    Loaded out;
-    out.info.format = "rgl";
-    out.info.dims = std::move(r.dims);
-    out.info.counts = r.counts;
-    out.info.min_value = r.min_value;
-    out.info.max_value = r.max_value;
-    out.brdf = std::move(r.brdf);
-    return out;
+const Format* by_extension(const std::string& path) {
+    const std::string ext = std::filesystem::path(path).extension().string();
+    for (const Format& f : all_formats())
+        if (std::find(f.extensions.begin(), f.extensions.end(), ext) != f.extensions.end()) return &f;
+    return nullptr;
 }
 
-Loaded load_brdfz(const std::string& path, const LoadOptions& options) {
-    container::ReadResult r = container::read(path, options.lookup);
-    Loaded out;
-    out.info.format = "brdfz";
-    out.info.counts = r.meta.achieved.counts;
-    if (const auto* t = dynamic_cast<const TabularBrdf*>(r.brdf.get())) {
-        const GridSpec& g = t->table().grid();
-        out.info.dims = {static_cast<std::size_t>(g.n_theta_h), static_cast<std::size_t>(g.n_theta_d),
-                         static_cast<std::size_t>(g.n_phi_d)};
-        value_range(t->table(), out.info);
+const Format& named(const std::string& name, const std::string& path) {
+    const Format* f = find_format(name);
+    if (!f) {
+        std::string known;
+        for (const Format& g : all_formats()) known += (known.empty() ? "" : ", ") + g.name;
+        throw UnsupportedError(path, "unknown format '" + name + "' (known: " + known + ")");
     }
-    out.brdf = std::move(r.brdf);
-    return out;
+    return *f;
 }
 
-// An analytic model file: dims is its parameter count, the range that of its parameter values.
-Loaded load_json(const std::string& path) {
-    auto model = std::make_unique<AnalyticBrdf>(model_json::read(path));
-    Loaded out;
-    out.info.format = "json";
-    out.info.dims = {model->params().size()};
-    out.info.counts.valid = model->params().size();
-    const auto [lo, hi] = std::minmax_element(model->params().begin(), model->params().end());
-    out.info.min_value = *lo;
-    out.info.max_value = *hi;
-    out.brdf = std::move(model);
-    return out;
-}
-
-// Table formats: a table on the requested grid (or its own) is written as it is, anything else is
-// tabulated first. MERL and EXR files know only the linear θd axis and the reciprocal φd axis, so a
-// warped table is tabulated too, and a table over the full φd circle onto half as many φd bins over
-// [0, π) (each the mean of the pair and its exchange, tabulate.h).
-template <typename Write>
-ValidityCounts save_table(const Brdf& brdf, const SaveOptions& options, const Write& write) {
-    if (options.grid && !options.grid->reciprocal())
-        throw ValueError("MERL and EXR tables fold phi_d by reciprocity: a grid with symmetry none needs .brdfz");
-    const auto* table = dynamic_cast<const TabularBrdf*>(&brdf);
-    const auto plain = [](const GridSpec& g) { return g.theta_d_warp == 0.0 && g.reciprocal(); };
-    if (table && plain(table->table().grid()) && (!options.grid || *options.grid == table->table().grid())) {
-        write(table->table());
-        ValidityCounts written;
-        written.valid = table->table().valid_bins();
-        return written;
-    }
-    TabulateOptions t;
-    t.grid = options.grid.value_or(GridSpec{});
-    if (table && !options.grid) {  // its own grid on the linear θd axis and the reciprocal φd axis
-        t.grid = table->table().grid();
-        t.grid.theta_d_warp = 0.0;
-        if (!t.grid.reciprocal()) t.grid.n_phi_d = std::max(1, t.grid.n_phi_d / 2);
-        t.grid.symmetry = Symmetry::Reciprocal;
-    }
-    t.threads = options.threads;
-    t.progress = options.progress;
-    Tabulated tab = tabulate(brdf, t);
-    write(tab.table);
-    return tab.counts;
-}
+const Format& detected(const std::string& path) { return named(detect_format(path), path); }
 
 }  // namespace
 
-std::string format_of(const std::string& path) {
-    const std::string ext = std::filesystem::path(path).extension().string();
-    if (ext == ".binary") return "merl";
-    if (ext == ".bsdf") return "rgl";
-    if (ext == ".brdfz") return "brdfz";
-    if (ext == ".exr") return "exr";
-    if (ext == ".brdf") return "cornell";
-    if (ext == ".dat") return "alta";
-    if (ext == ".json") return "json";
-    throw FormatError(path, "unknown file extension '" + ext + "' (expected .binary, .bsdf, .brdfz, .brdf, .dat or .json)");
+const std::vector<Format>& all_formats() {
+    static const std::vector<Format> all = [] {
+        std::vector<Format> out;
+        formats::register_all(out);
+        std::sort(out.begin(), out.end(), [](const Format& a, const Format& b) { return a.name < b.name; });
+        return out;
+    }();
+    return all;
 }
 
-Loaded load(const std::string& path, const LoadOptions& options) { return load_as(format_of(path), path, options); }
+const Format* find_format(std::string_view name) {
+    for (const Format& f : all_formats())
+        if (f.name == name) return &f;
+    return nullptr;
+}
+
+std::string format_of(const std::string& path, Access access) {
+    const Format* f = by_extension(path);
+    const bool write = access == Access::Write;
+    if (f && (write ? f->write != nullptr : readable(*f))) return f->name;
+    const std::string ext = std::filesystem::path(path).extension().string();
+    const std::string expected = write ? extension_list([](const Format& g) { return g.write != nullptr; })
+                                       : extension_list(readable);
+    if (f) throw UnsupportedError(path, std::string(write ? "writing " : "reading ") + f->name + " files is not supported (" +
+                                            (write ? "writable" : "readable") + ": " + expected + ")");
+    throw FormatError(path, "unknown file extension '" + ext + "' (expected " + expected + ")");
+}
+
+std::string detect_format(const std::string& path) {
+    if (const Format* f = by_extension(path); f && readable(*f)) return f->name;
+    const std::string ext = std::filesystem::path(path).extension().string();
+    const std::string expected = extension_list(readable);
+    std::error_code ec;
+    const std::uintmax_t size = std::filesystem::file_size(path, ec);
+    // Only regular files are opened: a FIFO would block the open.
+    if (ec) throw FormatError(path, "unknown file extension '" + ext + "' (expected " + expected + ")");
+    std::ifstream in(path, std::ios::binary);
+    if (!in) throw FormatError(path, "unknown file extension '" + ext + "' (expected " + expected + ")");
+    std::string head(Format::kSniffBytes, '\0');
+    in.read(head.data(), static_cast<std::streamsize>(head.size()));
+    head.resize(static_cast<std::size_t>(in.gcount()));
+    std::vector<std::string> matches;
+    for (const Format& f : all_formats())
+        if (readable(f) && f.sniff && f.sniff(head, size)) matches.push_back(f.name);
+    if (matches.size() == 1) return matches.front();
+    if (matches.empty())
+        throw FormatError(path, "unknown file extension '" + ext + "' and contents of no known format (expected " +
+                                    expected + ")");
+    throw FormatError(path, "unknown file extension '" + ext + "', and the contents fit both " + matches[0] + " and " +
+                                matches[1] + ": name the format");
+}
+
+Loaded load(const std::string& path, const LoadOptions& options) { return load_as(detect_format(path), path, options); }
 
 Loaded load_as(const std::string& format, const std::string& path, const LoadOptions& options) {
-    if (format == "merl") return load_merl(path, options);
-    if (format == "rgl") return load_rgl(path);
-    if (format == "brdfz") return load_brdfz(path, options);
-    if (format == "exr") {
-        Loaded out;
-        out.info.format = "exr";
-        Table t = exr::read(path);
-        const GridSpec& g = t.grid();
-        out.info.dims = {static_cast<std::size_t>(g.n_theta_h), static_cast<std::size_t>(g.n_theta_d),
-                         static_cast<std::size_t>(g.n_phi_d)};
-        out.info.counts.valid = t.valid_bins();
-        value_range(t, out.info);
-        out.brdf = std::make_unique<TabularBrdf>(std::move(t), options.lookup);
-        return out;
-    }
-    if (format == "json") return load_json(path);
-    if (format == "cornell" || format == "alta")
-        throw UnsupportedError(path, "a " + format + " file holds scattered measurements, not a BRDF: it can be the " +
+    const Format& f = named(format, path);
+    if (f.read) return f.read(path, options);
+    if (f.read_measurements)
+        throw UnsupportedError(path, "a " + f.name + " file holds scattered measurements, not a BRDF: it can be the " +
                                          "reference of a comparison or be fitted, not evaluated");
-    throw UnsupportedError(path, "reading " + format + " files is not supported");
+    throw UnsupportedError(path, "reading " + f.name + " files is not supported");
 }
 
-bool holds_measurements(const std::string& path) {
-    const std::string format = format_of(path);
-    return format == "cornell" || format == "alta";
-}
+bool holds_measurements(const std::string& path) { return detected(path).read_measurements != nullptr; }
 
 LoadedMeasurements load_measurements(const std::string& path) {
-    const std::string format = format_of(path);
-    LoadedMeasurements out;
-    out.info.format = format;
-    if (format == "cornell") {
-        cornell::ReadResult r = cornell::read(path);
-        out.info.dims = {r.records, r.wavelengths.size()};
-        out.info.counts = r.counts;
-        out.set = std::move(r.set);
-    } else if (format == "alta") {
-        alta::ReadResult r = alta::read(path);
-        out.info.dims = {r.rows, static_cast<std::size_t>(r.set.channels)};
-        out.info.counts = r.counts;
-        out.set = std::move(r.set);
-    } else {
-        throw UnsupportedError(path, "a " + format + " file holds a BRDF, not scattered measurements: load it with load()");
-    }
+    const Format& f = detected(path);
+    if (!f.read_measurements)
+        throw UnsupportedError(path, "a " + f.name + " file holds a BRDF, not scattered measurements: load it with load()");
+    LoadedMeasurements out = f.read_measurements(path);
+    out.info.format = f.name;
     // Readers keep only finite samples, and at least one.
     out.info.min_value = out.info.max_value = out.set.samples.front().f[0];
     for (const Measurement& m : out.set.samples)
@@ -189,34 +132,22 @@ LoadedMeasurements load_measurements(const std::string& path) {
 }
 
 ValidityCounts save(const Brdf& brdf, const std::string& path, const SaveOptions& options) {
-    const std::string format = options.format.empty() ? format_of(path) : options.format;
-    if (format == "brdfz") {
-        container::WriteOptions w;
-        w.source = options.source;
-        w.source_format = options.source_format;
-        w.grid = options.grid;
-        w.threads = options.threads;
-        w.progress = options.progress;
-        w.build_spec = options.build_spec;
-        w.source_metrics = options.source_metrics;
-        return container::write(path, brdf, w).counts;
-    }
-    if (format == "json") {
-        const auto* model = dynamic_cast<const AnalyticBrdf*>(&brdf);
-        if (!model) throw UnsupportedError(path, "only analytic models can be written as .json (brdfz fit makes them)");
-        model_json::write(path, *model);
-        return {};
-    }
-    if (format == "merl") return save_table(brdf, options, [&](const Table& t) { merl::write(path, t); });
-    if (format == "rgl") {
-        ValidityCounts written;
-        rgl::WriteOptions w;
-        w.n_phi_i = options.rgl_phi_i;
-        written.valid = rgl::write(path, brdf, w);
-        return written;
-    }
-    if (format == "exr") return save_table(brdf, options, [&](const Table& t) { exr::write(path, t); });
-    throw UnsupportedError(path, "writing " + format + " files is not supported");
+    const Format& f = named(options.format.empty() ? format_of(path, Access::Write) : options.format, path);
+    if (!f.write) throw UnsupportedError(path, "writing " + f.name + " files is not supported");
+    return f.write(brdf, path, options);
+}
+
+ValidityCounts convert(const std::string& in, const std::string& out, const ConvertOptions& options) {
+    const Loaded loaded = load_as(options.from.empty() ? detect_format(in) : options.from, in, options.load);
+    SaveOptions save_options = options.save;
+    save_options.source = in;
+    save_options.source_format = loaded.info.format;
+    return save(*loaded.brdf, out, save_options);
+}
+
+CompressOptions with_file_access(CompressOptions options) {
+    options.load_pca_basis = [](const std::string& path) { return container::read_pca_basis(path); };
+    return options;
 }
 
 }  // namespace brdfz

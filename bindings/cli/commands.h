@@ -15,5 +15,7 @@ void add_sample(CLI::App& app);
 void add_fit(CLI::App& app);
 void add_compress(CLI::App& app);
 void add_pca_train(CLI::App& app);
+void add_formats(CLI::App& app);
+void add_representations(CLI::App& app);
 
 }  // namespace brdfz::cli

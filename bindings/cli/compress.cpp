@@ -124,7 +124,7 @@ void add_compress(CLI::App& app) {
         if (args->automatic && !(args->max_error > 0.0)) throw ValueError("compress --auto: give --max-error E > 0");
         // Check what can be checked before spending time on loading and building.
         if (!args->automatic) ReprSpec::parse(args->repr);
-        format_of(args->out);
+        format_of(args->out, Access::Write);
         SelectOptions select;
         if (args->automatic) {
             select.max_error = args->max_error;
@@ -133,6 +133,7 @@ void add_compress(CLI::App& app) {
             if (!args->scene.empty()) select.scene = build_scene(scene_json::read(args->scene));
         }
         TrialOptions options;
+        options.compress = with_file_access(options.compress);
         options.compress.threads = args->threads;
         options.metrics = args->metrics;
         options.metrics.threads = args->threads;

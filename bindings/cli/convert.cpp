@@ -1,8 +1,6 @@
-// brdfz convert IN OUT: between every readable and writable format, from the extensions or --from /
-// --to. A representation the output format cannot hold is tabulated (on --res, default 90x90x180).
-//   read:  .binary (MERL), .bsdf (RGL), .brdfz, .exr, .json (analytic model)
-//   write: .binary, .bsdf (RGB, for Mitsuba 3 and pbrt-v4; anisotropic with --phi-i), .brdfz, .exr, .json
-//          (analytic only)
+// brdfz convert IN OUT: between every readable and writable format (`brdfz formats`), from the
+// extensions or --from / --to. A representation the output format cannot hold is tabulated (on --res,
+// default 90x90x180).
 #include <iostream>
 
 #include "commands.h"
@@ -17,7 +15,7 @@ void add_convert(CLI::App& app) {
         int phi_i = 1;
     };
     auto args = std::make_shared<Args>();
-    CLI::App* cmd = app.add_subcommand("convert", "convert between formats (merl, rgl, brdfz, exr, json)");
+    CLI::App* cmd = app.add_subcommand("convert", "convert between formats (brdfz formats lists them)");
     cmd->add_option("IN", args->in, "input file")->required();
     cmd->add_option("OUT", args->out, "output file")->required();
     cmd->add_option("--res", args->res, "table resolution NHxNDxNP (default: the input's, or 90x90x180)");
@@ -27,16 +25,15 @@ void add_convert(CLI::App& app) {
                     ".bsdf output: φi slices (1: isotropic, the default; 3..4096: an anisotropic file)");
     add_load_options(cmd, args->load);
     cmd->callback([args] {
-        const Loaded in = load_as(args->from.empty() ? format_of(args->in) : args->from, args->in, args->load);
-        SaveOptions save_options;
-        save_options.format = args->to;
-        save_options.rgl_phi_i = args->phi_i;
-        save_options.source = args->in;
-        save_options.source_format = in.info.format;
-        if (!args->res.empty()) save_options.grid = parse_resolution(args->res);
-        save_options.progress = progress_bar("tabulating");
-        const ValidityCounts c = save(*in.brdf, args->out, save_options);
-        std::cout << "wrote " << args->out << ": " << c.valid << " valid bins";
+        ConvertOptions options;
+        options.from = args->from;
+        options.load = args->load;
+        options.save.format = args->to;
+        options.save.rgl_phi_i = args->phi_i;
+        if (!args->res.empty()) options.save.grid = parse_resolution(args->res);
+        options.save.progress = progress_bar("tabulating");
+        const ValidityCounts c = convert(args->in, args->out, options);
+        std::cout << "wrote " << args->out << ": " << c.valid << " valid entries";
         if (c.below_horizon) std::cout << ", " << c.below_horizon << " below the horizon";
         if (c.clamped) std::cout << ", " << c.clamped << " negative clamped to 0";
         if (c.negative + c.nan + c.inf)

@@ -31,18 +31,10 @@ void print_measurement_info(const std::string& path, const LoadedMeasurements& m
         os << "\n";
         return;
     }
-    std::string dims;
-    for (std::size_t d : info.dims) dims += (dims.empty() ? "" : "x") + std::to_string(d);
-    os << path << "\n"
-       << "  format     " << info.format << "\n"
-       << "  dims       " << dims << (info.format == "cornell" ? " (records x wavelengths)\n" : " (rows x values)\n")
-       << "  stored as  " << describe << "\n"
-       << "  nbytes     " << nbytes << "\n"
-       << "  valid      " << info.counts.valid << "\n"
-       << "  negative   " << info.counts.negative << " (kept)\n"
-       << "  nan        " << info.counts.nan << " (dropped)\n"
-       << "  inf        " << info.counts.inf << " (dropped)\n"
-       << "  horizon    " << info.counts.below_horizon << " on or below the horizon (dropped)\n"
+    print_source_lines(os, path, info, describe, nbytes,
+                       {info.format == "cornell" ? " (records x wavelengths)" : " (rows x values)", " (kept)",
+                        " (dropped)", " (dropped)"});
+    os << "  horizon    " << info.counts.below_horizon << " on or below the horizon (dropped)\n"
        << "  range      [" << number(info.min_value) << ", " << number(info.max_value) << "] 1/sr\n"
        << "  albedo     not defined for scattered samples (no BRDF to integrate)\n";
 }
@@ -63,7 +55,7 @@ void add_info(CLI::App& app) {
     cmd->callback([args] {
         if (holds_measurements(args->file))
             print_measurement_info(args->file, load_measurements(args->file), args->json, std::cout);
-        else if (format_of(args->file) == "brdfz") {
+        else if (detect_format(args->file) == "brdfz") {
             const container::Metadata meta = container::read_metadata(args->file);
             print_info(args->file, load(args->file, args->load), args->json, std::cout, &meta);
         } else

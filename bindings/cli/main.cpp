@@ -18,6 +18,8 @@ int main(int argc, char** argv) {
     brdfz::cli::add_fit(app);
     brdfz::cli::add_compress(app);
     brdfz::cli::add_pca_train(app);
+    brdfz::cli::add_formats(app);
+    brdfz::cli::add_representations(app);
     try {
         app.parse(argc, argv);
     } catch (const CLI::ParseError& e) {

@@ -12,81 +12,10 @@
 
 namespace brdfz::cli {
 
-std::string number(double v, bool json) {
-    if (json && !std::isfinite(v)) return "null";
+std::string number(double v) {
     char buf[32];
     std::snprintf(buf, sizeof buf, "%.17g", v);
     return buf;
-}
-
-void JsonWriter::separate() {
-    if (after_key_) {
-        after_key_ = false;
-        return;
-    }
-    if (!first_.back()) os_ << ", ";
-    first_.back() = false;
-}
-
-JsonWriter& JsonWriter::begin_object() {
-    separate();
-    os_ << "{";
-    first_.push_back(true);
-    return *this;
-}
-JsonWriter& JsonWriter::end_object() {
-    first_.pop_back();
-    os_ << "}";
-    return *this;
-}
-JsonWriter& JsonWriter::begin_array() {
-    separate();
-    os_ << "[";
-    first_.push_back(true);
-    return *this;
-}
-JsonWriter& JsonWriter::end_array() {
-    first_.pop_back();
-    os_ << "]";
-    return *this;
-}
-JsonWriter& JsonWriter::key(const std::string& k) {
-    value(k);
-    os_ << ": ";
-    after_key_ = true;
-    return *this;
-}
-JsonWriter& JsonWriter::value(double v) {
-    separate();
-    os_ << number(v, true);
-    return *this;
-}
-JsonWriter& JsonWriter::value(std::size_t v) {
-    separate();
-    os_ << v;
-    return *this;
-}
-JsonWriter& JsonWriter::value(bool v) {
-    separate();
-    os_ << (v ? "true" : "false");
-    return *this;
-}
-JsonWriter& JsonWriter::value(const std::string& v) {
-    separate();
-    os_ << '"';
-    for (char c : v) {
-        if (c == '"' || c == '\\') {
-            os_ << '\\' << c;
-        } else if (static_cast<unsigned char>(c) < 0x20) {
-            char buf[8];
-            std::snprintf(buf, sizeof buf, "\\u%04x", c);
-            os_ << buf;
-        } else {
-            os_ << c;
-        }
-    }
-    os_ << '"';
-    return *this;
 }
 
 std::function<void(double)> progress_bar(const std::string& label) {

@@ -1,5 +1,5 @@
-// Output helpers shared by the subcommands: a small JSON writer, number formatting, progress display
-// and the options every loading command takes.
+// Output helpers shared by the subcommands: number formatting, progress display and the options
+// every loading command takes.
 #pragma once
 
 #include <CLI/CLI.hpp>
@@ -9,34 +9,16 @@
 #include <vector>
 
 #include "brdfz/formats/io.h"
+#include "brdfz/formats/json_writer.h"
 #include "brdfz/metrics.h"
 
 namespace brdfz::cli {
 
-// Shortest text that reads back to the same double ("%.17g"); non-finite values as JSON null when
-// `json` is set.
-std::string number(double v, bool json = false);
+// Shortest text that reads back to the same double ("%.17g").
+std::string number(double v);
 
-// Streaming JSON: objects and arrays nest; commas are placed automatically.
-class JsonWriter {
-public:
-    explicit JsonWriter(std::ostream& os) : os_(os) {}
-    JsonWriter& begin_object();
-    JsonWriter& end_object();
-    JsonWriter& begin_array();
-    JsonWriter& end_array();
-    JsonWriter& key(const std::string& k);
-    JsonWriter& value(double v);
-    JsonWriter& value(std::size_t v);
-    JsonWriter& value(const std::string& v);
-    JsonWriter& value(bool v);
-
-private:
-    void separate();
-    std::ostream& os_;
-    std::vector<bool> first_{true};
-    bool after_key_ = false;
-};
+// The --json reports, one line each.
+using JsonWriter = json::Writer;
 
 // "label NN%" on stderr while a long operation runs, only when stderr is a terminal.
 std::function<void(double)> progress_bar(const std::string& label);

@@ -76,7 +76,7 @@ void add_pca_train(CLI::App& app) {
     cmd->add_flag("--json", args->json, "print the report as JSON");
     add_load_options(cmd, args->load);
     cmd->callback([args] {
-        if (format_of(args->out) != "brdfz") throw ValueError(args->out + ": a basis is written as a .brdfz file");
+        if (format_of(args->out, Access::Write) != "brdfz") throw ValueError(args->out + ": a basis is written as a .brdfz file");
         const std::vector<std::string> files = training_files(args->in);
         if (files.size() < 2) throw ValueError("pca-train needs at least 2 materials, got " + std::to_string(files.size()));
         const auto start = std::chrono::steady_clock::now();
@@ -88,11 +88,11 @@ void add_pca_train(CLI::App& app) {
         const auto loading = progress_bar("loading");
         for (std::size_t i = 0; i < files.size(); ++i) {
             Loaded l = load(files[i], args->load);
-            auto* t = dynamic_cast<TabularBrdf*>(l.brdf.get());
-            if (!grid) grid = t ? t->table().grid() : GridSpec{};
+            const Table* t = l.brdf->stored_table();
+            if (!grid) grid = t ? t->grid() : GridSpec{};
             if (!args->symmetry.empty()) grid->symmetry = parse_symmetry(args->symmetry);
-            if (t && t->table().grid() == *grid) {
-                tables.push_back(t->table());
+            if (t && t->grid() == *grid) {
+                tables.push_back(*t);
             } else {
                 TabulateOptions tab;
                 tab.grid = *grid;

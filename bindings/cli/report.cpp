@@ -16,6 +16,15 @@ std::string fixed(double v, const char* fmt = "%.6g") {
     return buf;
 }
 
+// Tables hold f_r in 1/sr; RGL files their own units; analytic models parameters.
+std::string range_text(const SourceInfo& info) {
+    if (!info.has_range) return "- (nothing stored is a value of f_r)";
+    const std::string range = "[" + fixed(info.min_value) + ", " + fixed(info.max_value) + "]";
+    if (info.dims_of == "parameters") return range + " (parameter values)";
+    if (info.format == "rgl" || info.dims_of.rfind("rgb tensor", 0) == 0) return range + " (stored values)";
+    return range + " 1/sr";
+}
+
 
 // Container metadata (formats/SPEC.md): provenance, conventions, versions, achieved figures, datasets.
 void container_json(JsonWriter& j, const container::Metadata& m) {
@@ -88,10 +97,30 @@ void write_source_keys(JsonWriter& j, const std::string& path, const SourceInfo&
     j.key("dims").begin_array();
     for (std::size_t d : info.dims) j.value(d);
     j.end_array();
+    j.key("dims_of").value(info.dims_of);
     j.key("valid").value(info.counts.valid);
     j.key("negative").value(info.counts.negative);
     j.key("nan").value(info.counts.nan);
     j.key("inf").value(info.counts.inf);
+    if (info.format == "rgl") j.key("luminance_negative").value(info.luminance_negative);
+}
+
+void print_source_lines(std::ostream& os, const std::string& path, const SourceInfo& info, const std::string& describe,
+                        std::size_t nbytes, const SourceNotes& notes) {
+    std::string dims;
+    for (std::size_t d : info.dims) dims += (dims.empty() ? "" : "x") + std::to_string(d);
+    os << path << "\n"
+       << "  format     " << info.format << "\n"
+       << "  dims       " << dims << (notes.dims.empty() && !info.dims_of.empty() ? " (" + info.dims_of + ")" : notes.dims)
+       << "\n"
+       << "  stored as  " << describe << "\n"
+       << "  nbytes     " << nbytes << "\n"
+       << "  valid      " << info.counts.valid << "\n"
+       << "  negative   " << info.counts.negative << notes.negative << "\n"
+       << "  nan        " << info.counts.nan << notes.nan << "\n"
+       << "  inf        " << info.counts.inf << notes.inf << "\n";
+    if (info.luminance_negative > 0)
+        os << "  luminance  " << info.luminance_negative << " negative values (the sampling density), taken as 0\n";
 }
 
 void print_info(const std::string& path, const Loaded& loaded, bool json, std::ostream& os,
@@ -112,6 +141,7 @@ void print_info(const std::string& path, const Loaded& loaded, bool json, std::o
         write_source_keys(j, path, info);
         j.key("min").value(info.min_value);
         j.key("max").value(info.max_value);
+        j.key("range_stored").value(info.has_range);
         j.key("nbytes").value(loaded.brdf->nbytes());
         j.key("channels").value(static_cast<std::size_t>(loaded.brdf->channels()));
         j.key("describe").value(loaded.brdf->describe());
@@ -133,19 +163,8 @@ void print_info(const std::string& path, const Loaded& loaded, bool json, std::o
         os << "\n";
         return;
     }
-    std::string dims;
-    for (std::size_t d : info.dims) dims += (dims.empty() ? "" : "x") + std::to_string(d);
-    os << path << "\n"
-       << "  format     " << info.format << "\n"
-       << "  dims       " << dims << "\n"
-       << "  stored as  " << loaded.brdf->describe() << "\n"
-       << "  nbytes     " << loaded.brdf->nbytes() << "\n"
-       << "  valid      " << info.counts.valid << "\n"
-       << "  negative   " << info.counts.negative << "\n"
-       << "  nan        " << info.counts.nan << "\n"
-       << "  inf        " << info.counts.inf << "\n"
-       << "  range      [" << fixed(info.min_value) << ", " << fixed(info.max_value) << "]"
-       << (info.format == "merl" || info.format == "exr" || info.format == "brdfz" ? " 1/sr\n" : " (stored values)\n")
+    print_source_lines(os, path, info, loaded.brdf->describe(), loaded.brdf->nbytes());
+    os << "  range      " << range_text(info) << "\n"
        << "  albedo     theta_o      r        g        b         sampled (" << kAlbedoSamples
        << " samples)  r, g, b ± stderr\n";
     for (std::size_t k = 0; k < std::size(kAlbedoAnglesDeg); ++k) {

@@ -20,6 +20,15 @@ inline constexpr std::size_t kAlbedoSamples = 65536;
 // The keys every `info --json` starts with: file, format, dims and the validity counts.
 void write_source_keys(JsonWriter& j, const std::string& path, const SourceInfo& info);
 
+// The lines every `info` text starts with: the path, format, dims, what the data is stored as, its
+// size and the validity counts. `notes` follow the dims and the counts (what they count, what became
+// of such values).
+struct SourceNotes {
+    std::string dims, negative, nan, inf;
+};
+void print_source_lines(std::ostream& os, const std::string& path, const SourceInfo& info, const std::string& describe,
+                        std::size_t nbytes, const SourceNotes& notes = {});
+
 void print_info(const std::string& path, const Loaded& loaded, bool json, std::ostream& os,
                 const container::Metadata* container = nullptr);
 void print_metrics(const Metrics& m, bool json, std::ostream& os, Over over = Over::Grid);

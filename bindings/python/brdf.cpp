@@ -191,9 +191,9 @@ std::tuple<Array, Array, Array> sample(const Brdf& brdf, const ArrayArg& wo_obj,
 // A table's values as a read-only float32 view of shape (θh, θd, φd, 3) that keeps the Brdf alive;
 // invalid entries are NaN (the table's validity mask).
 std::optional<py::array_t<float>> table_view(const BrdfPtr& brdf) {
-    const auto* tabular = dynamic_cast<const TabularBrdf*>(brdf.get());
-    if (!tabular) return std::nullopt;
-    const Table& t = tabular->table();
+    const Table* stored = brdf->stored_table();
+    if (!stored) return std::nullopt;
+    const Table& t = *stored;
     const GridSpec& g = t.grid();
     const py::ssize_t f = sizeof(float);
     py::array_t<float> view({g.n_theta_h, g.n_theta_d, g.n_phi_d, 3},
@@ -226,6 +226,12 @@ void bind_brdf(py::module_& m) {
         .def("describe", &Brdf::describe, "one line saying what this is")
         .def_property_readonly("table", &table_view, "a table's values (θh, θd, φd, 3) float32, NaN where invalid; None otherwise")
         .def_property_readonly("parameters", &parameters, "an analytic model's parameters by name; None otherwise")
+        .def("parts", &brdf_parts,
+             "the representation's stored arrays and parameters as a dict ('kind': tabular, compact, factored, pca "
+             "or analytic), read-only; None for kinds without parts (RGL files, scattered measurements)")
+        .def("sampler_parts", &sampler_parts,
+             "the tables of the sampler sample() and pdf() use ('kind': halfvector or lobes), built on first "
+             "use; None for kinds without them")
         .def("__repr__", [](const Brdf& b) { return "<brdfz.Brdf " + b.describe() + ">"; });
 }
 

@@ -6,6 +6,7 @@
 #include <filesystem>
 #include <functional>
 #include <memory>
+#include <optional>
 #include <string>
 
 #include "brdfz/brdf.h"
@@ -23,6 +24,10 @@ using BrdfPtr = std::shared_ptr<Brdf>;
 void bind_brdf(py::module_& m);
 void bind_operations(py::module_& m);
 void bind_select(py::module_& m);
+
+// Brdf.parts() and Brdf.sampler_parts() (parts.cpp): a dict, or None for kinds without parts.
+std::optional<py::dict> brdf_parts(const BrdfPtr& brdf);
+std::optional<py::dict> sampler_parts(const BrdfPtr& brdf);
 
 // The metric options every measuring function takes (metrics.h): max_theta in degrees, over "grid" or
 // "directions", the number of direction pairs and their seed.

@@ -1,4 +1,4 @@
-// Module-level functions: load / save / convert, compress, fit, metrics, tabulate, albedo. Each
+// Module-level functions: load / save / convert, compress, fit, metrics, tabulate, albedo, validate. Each
 // releases the GIL while the library works; long ones take a progress callable (module.h).
 #include <pybind11/numpy.h>
 #include <pybind11/stl.h>
@@ -15,10 +15,12 @@
 #include "brdfz/errors.h"
 #include "brdfz/fit/fit.h"
 #include "brdfz/formats/io.h"
+#include "brdfz/formats/registry.h"
 #include "brdfz/metrics.h"
 #include "brdfz/repr/analytic/model.h"
 #include "brdfz/repr/tabular.h"
 #include "brdfz/tabulate.h"
+#include "brdfz/validate.h"
 #include "module.h"
 
 namespace brdfz::python {
@@ -56,7 +58,7 @@ BrdfPtr load_brdf(const Path& path, const std::string& format, const LoadOptions
     return reading(path, [&] {
         py::gil_scoped_release release;
         const std::string p = path.string();
-        return BrdfPtr(load_as(format.empty() ? format_of(p) : format, p, options).brdf);
+        return BrdfPtr(format.empty() ? load(p, options).brdf : load_as(format, p, options).brdf);
     });
 }
 
@@ -68,6 +70,43 @@ py::dict counts_dict(const ValidityCounts& c) {
     d["inf"] = c.inf;
     d["clamped"] = c.clamped;
     d["below_horizon"] = c.below_horizon;
+    return d;
+}
+
+// save() with the GIL released and progress reported; the written bins' counts.
+py::dict save_counts(const Brdf& brdf, const Path& path, SaveOptions o, py::object progress) {
+    Progress bar(std::move(progress));
+    o.progress = bar.hook();
+    ValidityCounts c;
+    {
+        py::gil_scoped_release release;
+        c = save(brdf, path.string(), o);
+    }
+    bar.rethrow();
+    return counts_dict(c);
+}
+
+py::list rgb_list(const Rgb& v) { return py::cast(std::vector<double>(v.begin(), v.end())); }
+
+// A check as `brdfz validate --json` prints it: ok, tested, failed, and the worst offences with
+// their values under the check's names for them.
+py::dict check_dict(const ValidationCheck& c) {
+    py::list worst;
+    for (const ValidationOffence& o : c.worst) {
+        py::dict w;
+        w["theta_i_deg"] = o.theta_i_deg;
+        w["theta_o_deg"] = o.theta_o_deg;
+        w["dphi_deg"] = o.dphi_deg;
+        w[py::str(c.f_name)] = rgb_list(o.f);
+        if (!c.g_name.empty()) w[py::str(c.g_name)] = rgb_list(o.g);
+        worst.append(w);
+    }
+    py::dict d;
+    d["ok"] = c.ok();
+    d["tested"] = c.tested;
+    d["failed"] = c.failed;
+    if (c.error) d["error"] = *c.error;
+    d["worst"] = worst;
     return d;
 }
 
@@ -150,43 +189,43 @@ void bind_operations(py::module_& m) {
           py::arg("format") = "", "a BRDF file (.binary, .bsdf, .brdfz, .exr, .json; format overrides the extension)");
 
     m.def("save", [](const BrdfPtr& brdf, const Path& path, const Resolution& res, const std::string& format,
-                     int threads, py::object progress) {
+                     int threads, py::object progress, const std::string& build_spec, const std::optional<Path>& source,
+                     const py::object& source_metrics) {
               SaveOptions o;
               if (res) o.grid = grid_of(*res);
               o.format = format;
               o.threads = threads;
-              Progress bar(std::move(progress));
-              o.progress = bar.hook();
-              ValidityCounts c;
-              {
-                  py::gil_scoped_release release;
-                  c = save(*brdf, path.string(), o);
+              o.build_spec = build_spec;
+              if (source) {
+                  o.source = source->string();
+                  o.source_format = detect_format(o.source);
               }
-              bar.rethrow();
-              return counts_dict(c);
+              // An object, not std::optional<Metrics>: Metrics is bound below, after this signature is made.
+              if (!source_metrics.is_none()) o.source_metrics = source_metrics.cast<Metrics>();
+              return save_counts(*brdf, path, o, std::move(progress));
           },
           py::arg("brdf"), py::arg("path"), py::kw_only(), py::arg("res") = py::none(), py::arg("format") = "",
-          py::arg("threads") = 0, py::arg("progress") = py::none(),
-          "writes atomically (format from the extension unless given); returns the written bins' counts");
+          py::arg("threads") = 0, py::arg("progress") = py::none(), py::arg("build_spec") = "",
+          py::arg("source") = py::none(), py::arg("source_metrics") = py::none(),
+          "writes atomically (format from the extension unless given); returns the written bins' counts. .brdfz "
+          "keeps provenance: build_spec (the compress() spec), source (the file it came from: name, format and "
+          "SHA-256) and source_metrics (its metrics against that file)");
 
     m.def("convert", [](const Path& src, const Path& dst, const Resolution& res, const std::string& src_format,
                         const std::string& dst_format, const std::string& lookup, const std::string& bin_position,
                         int threads, py::object progress) {
-              const std::string from = src_format.empty() ? format_of(src.string()) : src_format;
-              const BrdfPtr in = load_brdf(src, from, load_options(lookup, bin_position));
-              SaveOptions o;
-              if (res) o.grid = grid_of(*res);
-              o.format = dst_format;
-              o.source = src.string();
-              o.source_format = from;
-              o.threads = threads;
+              ConvertOptions o;
+              o.from = src_format;
+              o.load = load_options(lookup, bin_position);
+              if (res) o.save.grid = grid_of(*res);
+              o.save.format = dst_format;
+              o.save.threads = threads;
               Progress bar(std::move(progress));
-              o.progress = bar.hook();
-              ValidityCounts c;
-              {
+              o.save.progress = bar.hook();
+              const ValidityCounts c = reading(src, [&] {
                   py::gil_scoped_release release;
-                  c = save(*in, dst.string(), o);
-              }
+                  return convert(src.string(), dst.string(), o);
+              });
               bar.rethrow();
               return counts_dict(c);
           },
@@ -203,7 +242,7 @@ void bind_operations(py::module_& m) {
             return "<brdfz.Compressed " + c.spec + ": " + c.brdf->describe() + ", " + std::to_string(c.brdf->nbytes()) + " bytes>";
         });
     m.def("compress", [](const BrdfPtr& brdf, const std::string& spec, int threads, py::object progress) {
-              CompressOptions o;
+              CompressOptions o = with_file_access({});
               o.threads = threads;
               Progress bar(std::move(progress));
               o.progress = bar.hook();
@@ -218,6 +257,30 @@ void bind_operations(py::module_& m) {
           py::arg("brdf"), py::arg("spec"), py::kw_only(), py::arg("threads") = 0, py::arg("progress") = py::none(),
           "builds the representation SPEC names (as `brdfz compress`)");
     m.def("compress_kinds", &compress_kinds);
+    m.def("representations", [] {
+              py::list out;
+              for (const ReprKind& k : representation_kinds()) {
+                  py::list keys;
+                  for (const SpecKey& key : k.keys)
+                      keys.append(py::dict(py::arg("name") = key.name, py::arg("default") = key.default_value,
+                                           py::arg("help") = key.help));
+                  out.append(py::dict(py::arg("kind") = k.name, py::arg("summary") = k.summary,
+                                      py::arg("positional") = k.positional,
+                                      py::arg("measurements") = k.build_measurements != nullptr, py::arg("keys") = keys));
+              }
+              return out;
+          },
+          "the representation kinds compress() builds, as `brdfz representations --json` lists them");
+    m.def("formats", [] {
+              py::list out;
+              for (const Format& f : all_formats())
+                  out.append(py::dict(py::arg("name") = f.name, py::arg("description") = f.description,
+                                      py::arg("extensions") = f.extensions,
+                                      py::arg("reads") = f.read ? "brdf" : f.read_measurements ? "measurements" : "",
+                                      py::arg("writes") = f.write != nullptr));
+              return out;
+          },
+          "the file formats, as `brdfz formats --json` lists them");
 
     py::class_<PerChannel>(m, "ChannelMetrics", "one metric per channel and their mean")
         .def_readonly("r", &PerChannel::r)
@@ -406,6 +469,56 @@ void bind_operations(py::module_& m) {
           },
           py::arg("brdf"), py::arg("theta_o"),
           "directional albedo (quadrature, albedo.h) at θo in radians: shape of theta_o + (3,)");
+
+    py::class_<ValidationCheck>(m, "ValidationCheck", "one plausibility check (validate.h)")
+        .def_readonly("name", &ValidationCheck::name, "non-negativity, reciprocity or energy")
+        .def_readonly("unit", &ValidationCheck::unit, "what was tested: bins, pairs or elevations")
+        .def_readonly("tested", &ValidationCheck::tested)
+        .def_readonly("failed", &ValidationCheck::failed)
+        .def_readonly("error", &ValidationCheck::error,
+                      "reciprocity: the reciprocity error (cos_rmse_rel of f(wo, wi) against f(wi, wo) over directions); "
+                      "None for the other checks")
+        .def_property_readonly("ok", &ValidationCheck::ok)
+        .def_property_readonly("worst", [](const ValidationCheck& c) { return py::list(check_dict(c)["worst"]); },
+                               "the worst offences, worst first: angles in degrees and the values involved")
+        .def("to_dict", &check_dict)
+        .def("__repr__", [](const ValidationCheck& c) {
+            return "<brdfz.ValidationCheck " + c.name + ": " + (c.ok() ? "ok" : "FAIL") + ", " + std::to_string(c.failed) +
+                   " of " + std::to_string(c.tested) + " " + c.unit + " fail>";
+        });
+    py::class_<ValidationReport>(m, "ValidationReport", "the checks of validate(), in order")
+        .def_readonly("checks", &ValidationReport::checks)
+        .def_property_readonly("ok", &ValidationReport::ok)
+        .def("__getitem__", [](const ValidationReport& r, const std::string& name) {
+            for (const ValidationCheck& c : r.checks)
+                if (c.name == name) return c;
+            throw py::key_error(name);
+        })
+        .def("to_dict", [](const ValidationReport& r) {
+            py::dict d;
+            d["ok"] = r.ok();
+            for (const ValidationCheck& c : r.checks) d[py::str(c.name)] = check_dict(c);
+            return d;
+        }, "as `brdfz validate --json` prints it, without the file name")
+        .def("__repr__", [](const ValidationReport& r) {
+            return "<brdfz.ValidationReport " + (r.ok() ? std::string("ok") : "failed: " + r.failed_names()) + ">";
+        });
+    m.def("validate", [](const BrdfPtr& brdf, const std::tuple<int, int, int>& res, const std::vector<double>& theta,
+                         double rtol, double atol, double albedo_tol) {
+              ValidateOptions o;
+              o.grid = grid_of(res);
+              o.theta_deg = theta;
+              o.rtol = rtol;
+              o.atol = atol;
+              o.albedo_tol = albedo_tol;
+              py::gil_scoped_release release;
+              return validate(*brdf, o);
+          },
+          py::arg("brdf"), py::kw_only(), py::arg("res") = std::make_tuple(90, 90, 180),
+          py::arg("theta") = ValidateOptions{}.theta_deg, py::arg("rtol") = 0.05, py::arg("atol") = 1e-3,
+          py::arg("albedo_tol") = 0.01,
+          "non-negativity (a table's values, else f on the res grid), reciprocity (rtol, atol in 1/sr) and "
+          "energy (reflectance <= 1 + albedo_tol at the elevations theta, degrees), as `brdfz validate`");
 }
 
 }  // namespace brdfz::python

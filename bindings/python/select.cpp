@@ -55,6 +55,7 @@ CandidateResult summary_of(const Candidate& c) {
 
 TrialOptions trial_options(bool measure_speed, const MetricOptions& metrics) {
     TrialOptions o;
+    o.compress = with_file_access(o.compress);
     o.measure_speed = measure_speed;
     o.metrics = metrics;
     o.compress.threads = metrics.threads;
@@ -173,7 +174,8 @@ void bind_select(py::module_& m) {
 
     m.def("benchmark_specs", &benchmark_specs, "the settings the compression benchmark sweeps");
     m.def("default_candidates", &default_candidates, "select_representation's candidates, cheapest first");
-    m.def("format_of", &format_of, py::arg("path"), "the format name of a file's extension ('merl', 'rgl', ...)");
+    m.def("format_of", [](const std::string& path) { return format_of(path); }, py::arg("path"),
+          "the format name of a file's extension ('merl', 'rgl', ...)");
 }
 
 }  // namespace brdfz::python

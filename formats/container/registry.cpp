@@ -1,12 +1,21 @@
 #include "storage.h"
 
+#include <algorithm>
+
 namespace brdfz::container {
 namespace detail {
 
+// Generated from container/storage/*.cpp (cmake/registry.cmake).
+void register_all(std::vector<const StorageModule*>& out);
+
 std::span<const StorageModule* const> storage_modules() {
-    static const StorageModule* const kModules[] = {&tabular_storage(), &rgl_storage(), &analytic_storage(),
-                                                    &pca_storage(), &factored_storage(), &phi_h_storage()};
-    return kModules;
+    static const std::vector<const StorageModule*> modules = [] {
+        std::vector<const StorageModule*> out;
+        register_all(out);
+        std::sort(out.begin(), out.end(), [](const StorageModule* a, const StorageModule* b) { return a->type < b->type; });
+        return out;
+    }();
+    return modules;
 }
 
 const StorageModule* find_storage(std::string_view type) {

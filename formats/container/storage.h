@@ -1,8 +1,8 @@
-// Storage modules: one per representation, each in its own file here, listed once in registry.cpp.
-// A module writes one kind of Brdf into the /representation group and reads it back; it names the
-// features (formats/SPEC.md) an object needs, so files record exactly what a reader must understand.
-// Adding a representation: a new file defining its StorageModule, one line in registry.cpp, and its
-// section in formats/SPEC.md.
+// Storage modules: one per representation, each in its own file container/storage/NAME.cpp, which
+// defines `void register_NAME(std::vector<const StorageModule*>&)`; the build finds the file and calls
+// it (cmake/registry.cmake). A module writes one kind of Brdf into the /representation group and reads
+// it back; it names the features (formats/SPEC.md) an object needs, so files record exactly what a
+// reader must understand. Adding a representation: its file here and its section in formats/SPEC.md.
 #pragma once
 
 #include <memory>
@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "brdfz/formats/container.h"
+#include "brdfz/formats/io.h"
 #include "h5.h"
 
 namespace brdfz::container::detail {
@@ -27,16 +28,12 @@ struct StorageModule {
     void (*write)(h5::WriteNode& rep, const Brdf& brdf);
     // FormatError (naming the file and object) for invalid contents; shapes bounded before allocating.
     std::unique_ptr<Brdf> (*read)(const h5::ReadNode& rep, const ReadContext& ctx);
+    // What `brdfz info` says of an object read(): dims and what they count, the range of its values
+    // and its valid entries; info.format and the container's counts are set already.
+    void (*source_info)(const Brdf& brdf, SourceInfo& info);
 };
 
-const StorageModule& tabular_storage();
-const StorageModule& rgl_storage();
-const StorageModule& analytic_storage();
-const StorageModule& pca_storage();
-const StorageModule& factored_storage();
-const StorageModule& phi_h_storage();
-
-// Every module, in the order the writer tries them.
+// Every module, by type name; the writer stores an object with the one whose needs() are not empty.
 std::span<const StorageModule* const> storage_modules();
 const StorageModule* find_storage(std::string_view type);
 

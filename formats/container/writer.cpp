@@ -69,6 +69,11 @@ Achieved write(const std::string& path, const Brdf& brdf, const WriteOptions& op
         achieved.lossless = true;
         if (table) achieved.counts.valid = table->table().valid_bins();
         if (compact) achieved.counts.valid = compact->table().valid_bins();
+        if (!table && !compact) {  // what the module stores: parameters, factors' bins, RGL values
+            SourceInfo info;
+            module->source_info(brdf, info);
+            achieved.counts = info.counts;
+        }
     } else {
         TabulateOptions t;
         t.grid = options.grid.value_or(GridSpec{});
@@ -78,7 +83,7 @@ Achieved write(const std::string& path, const Brdf& brdf, const WriteOptions& op
         achieved.counts = tab.counts;
         tabulated = std::make_unique<TabularBrdf>(std::move(tab.table), table ? table->lookup() : Lookup::Linear);
         stored = tabulated.get();
-        module = &detail::tabular_storage();
+        module = detail::find_storage("tabular");
         if (options.metrics) {
             MetricOptions m;
             m.threads = options.threads;

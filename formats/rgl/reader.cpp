@@ -112,6 +112,11 @@ ReadResult read(const std::string& path) {
     }
     result.min_value = lo <= hi ? lo : 0.0;
     result.max_value = lo <= hi ? hi : 0.0;
+    for (float& v : t.luminance.values)
+        if (v < 0.0f) {
+            ++result.luminance_negative;
+            v = 0.0f;
+        }
 
     try {
         result.brdf = std::make_unique<RglBrdf>(std::move(t));

@@ -129,8 +129,8 @@ double sampler_variance_ratio(const Brdf& brdf, double theta_o, std::size_t n, d
     for (std::size_t k = 0; k < n; ++k) {
         own.add(brdf.sample(wo, u(rng), u(rng)).weight);
         // Cosine-weighted wi: the weight f·cosθi / (cosθi/π) = π·f.
-        const double r = std::sqrt(u(rng)), phi = 2.0 * std::numbers::pi * u(rng);
-        const Rgb f = brdf.eval(Vec3{r * std::cos(phi), r * std::sin(phi), std::sqrt(std::fmax(0.0, 1.0 - r * r))}, wo);
+        const double u1 = u(rng), u2 = u(rng);
+        const Rgb f = brdf.eval(cosine_hemisphere(u1, u2), wo);
         cosine.add({std::numbers::pi * f[0], std::numbers::pi * f[1], std::numbers::pi * f[2]});
     }
     if (!std::isfinite(own.sum_sq) || !std::isfinite(cosine.sum_sq)) return std::numeric_limits<double>::infinity();

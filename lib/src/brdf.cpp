@@ -93,9 +93,7 @@ void Brdf::pdf(std::span<const Vec3> wo, std::span<const Vec3> wi, std::span<dou
 }
 
 BrdfSample Brdf::sample_above(const Vec3&, double u1, double u2) const {
-    // Malley's method: a uniform point on the unit disk lifted to the hemisphere.
-    const double r = std::sqrt(u1), phi = 2.0 * std::numbers::pi * u2;
-    const Vec3 wi{r * std::cos(phi), r * std::sin(phi), std::sqrt(std::fmax(0.0, 1.0 - u1))};
+    const Vec3 wi = cosine_hemisphere(u1, u2);
     return {wi, wi.z / std::numbers::pi, {}};
 }
 

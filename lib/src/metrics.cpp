@@ -8,7 +8,7 @@
 #include <vector>
 
 #include "brdfz/errors.h"
-#include "brdfz/repr/tabular.h"
+#include "brdfz/table.h"
 #include "detail/grid_sweep.h"
 #include "fit/random.h"
 
@@ -81,8 +81,8 @@ bool finite(const Rgb& v) { return std::isfinite(v[0]) && std::isfinite(v[1]) &&
 
 // The grid the metrics are taken on over Over::Grid, validated.
 GridSpec metric_grid(const Brdf& reference, const MetricOptions& options) {
-    const auto* ref_table = dynamic_cast<const TabularBrdf*>(&reference);
-    const GridSpec g = ref_table ? ref_table->table().grid() : options.grid;
+    const Table* ref_table = reference.stored_table();
+    const GridSpec g = ref_table ? ref_table->grid() : options.grid;
     g.validate();
     return g;
 }
@@ -96,7 +96,7 @@ void visit_grid(const Brdf& reference, const MetricOptions& options, int workers
     const double theta_max = reference.measured_theta_max();
     const double min_cos = theta_max < std::numbers::pi / 2 ? std::max(min_cos_of(options), std::cos(theta_max))
                                                             : min_cos_of(options);
-    const auto* ref_table = dynamic_cast<const TabularBrdf*>(&reference);
+    const Table* ref_table = reference.stored_table();
     const GridSpec g = metric_grid(reference, options);
     std::vector<std::vector<Rgb>> ref_f(workers);
     detail::sweep_slices(g, workers, [&](int w, int ih, std::span<const Vec3> wi, std::span<const Vec3> wo) {
@@ -108,8 +108,8 @@ void visit_grid(const Brdf& reference, const MetricOptions& options, int workers
             if (!(wi[k].z > min_cos && wo[k].z > min_cos)) continue;
             Rgb ref = ref_f[w][k];
             if (ref_table) {
-                if (!ref_table->table().valid(base + k)) continue;
-                for (int c = 0; c < 3; ++c) ref[c] = ref_table->table().at(base + k, c);
+                if (!ref_table->valid(base + k)) continue;
+                for (int c = 0; c < 3; ++c) ref[c] = ref_table->at(base + k, c);
             }
             if (!finite(ref)) continue;  // a reference without a value at this bin is not a sample
             keep(w, ih, k, wi[k], wo[k], ref);
@@ -163,7 +163,9 @@ void direction_pairs(std::uint64_t first, std::uint64_t seed, double theta_i_max
 Metrics compare(const Brdf& reference, const Brdf& approx, const MetricOptions& options) {
     const int workers = detail::resolve_threads(options.threads);
     if (options.over == Over::Directions) {
-        const auto [theta_i, theta_o] = direction_cutoffs(reference, options);
+        // Named copies: clang before 16 cannot capture structured bindings in the lambda below.
+        const std::pair<double, double> cutoffs = direction_cutoffs(reference, options);
+        const double theta_i = cutoffs.first, theta_o = cutoffs.second;
         const std::size_t n = options.directions, blocks = (n + kDirectionBlock - 1) / kDirectionBlock;
         std::vector<Sums> sums(blocks);
         struct Buffers {

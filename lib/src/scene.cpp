@@ -100,9 +100,7 @@ Scene build_scene(const SceneDescription& d) {
         for (int k = 0; k < m; ++k) {
             const double u1 = (k % rows + u01(rng)) / rows;
             const double u2 = u01(rng);
-            const double r = std::sqrt(u1), phi = 2.0 * std::numbers::pi * u2;
-            const Vec3 wi{r * std::cos(phi), r * std::sin(phi), std::sqrt(std::max(0.0, 1.0 - u1))};
-            incident.push_back({wi, d.environment.radiance * std::numbers::pi / m, false});
+            incident.push_back({cosine_hemisphere(u1, u2), d.environment.radiance * std::numbers::pi / m, false});
         }
     }
 

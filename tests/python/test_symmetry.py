@@ -35,6 +35,12 @@ def test_info_and_validate_report_the_reciprocity_error(cli, demo_table, rgl_fil
     assert "reciprocity error" in run(cli, "info", path).stdout
     v = json.loads(run(cli, "validate", path, "--json", check=False).stdout)
     assert v["reciprocity"]["error"] == pytest.approx(rgl["reciprocity_error"], rel=1e-12)
+    assert "error" not in v["energy"] and "error" not in v["non-negativity"]
+    assert "      error " in run(cli, "validate", path, check=False).stdout
+    report = brdfz.validate(brdfz.load(path))
+    assert report["reciprocity"].error == pytest.approx(rgl["reciprocity_error"], rel=1e-12)
+    assert report["energy"].error is None
+    assert report.to_dict()["reciprocity"]["error"] == report["reciprocity"].error
 
 
 def test_a_symmetry_none_table_follows_a_non_reciprocal_file(rgl_files, tmp_path):

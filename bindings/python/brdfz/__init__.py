@@ -24,6 +24,7 @@ import tempfile
 from typing import Callable, Mapping, Optional, Sequence, Tuple, Union
 
 from . import _core
+from ._core import __version__
 from ._core import (
     Brdf,
     Candidate,
@@ -37,19 +38,25 @@ from ._core import (
     Selection,
     Trial,
     UnsupportedError,
+    ValidationCheck,
+    ValidationReport,
     albedo,
     benchmark_specs,
     compress_kinds,
     default_candidates,
     format_of,
+    formats,
     load,
+    representations,
+    validate,
 )
 
 __all__ = [
     "Brdf", "Candidate", "ChannelMetrics", "Compressed", "FitReport", "FitResult", "FormatError", "Metrics",
-    "Scene", "Selection", "Trial", "UnsupportedError", "albedo", "benchmark_specs", "compress", "compress_kinds",
-    "convert", "default_candidates", "fit", "format_of", "load", "metric_samples", "metrics", "metrics_at", "read_scene", "reciprocity_error",
-    "save", "tabulate", "trial",
+    "Scene", "Selection", "Trial", "UnsupportedError", "ValidationCheck", "ValidationReport", "albedo",
+    "benchmark_specs", "compress", "compress_kinds", "convert", "default_candidates", "fit", "format_of", "formats",
+    "load", "metric_samples", "metrics", "metrics_at", "read_scene", "reciprocity_error", "representations", "save",
+    "tabulate", "trial", "validate",
 ]
 
 Path = Union[str, os.PathLike]
@@ -84,11 +91,16 @@ def _hook(progress: Progress, label: str) -> Optional[Callable[[float], object]]
 
 
 def save(brdf: Brdf, path: Path, *, res: Optional[Resolution] = None, format: str = "", threads: int = 0,
-         progress: Progress = None) -> dict:
+         progress: Progress = None, build_spec: str = "", source: Optional[Path] = None,
+         source_metrics: Optional[Metrics] = None) -> dict:
     """Writes `brdf` atomically (format from the extension unless `format` names one). A format that
     stores tables tabulates other representations on `res` (default: the table's own grid, or
-    90x90x180). Returns the written bins' validity counts."""
-    return _core.save(brdf, path, res=res, format=format, threads=threads, progress=_hook(progress, "tabulating"))
+    90x90x180). A .brdfz file keeps provenance as ``brdfz compress`` writes it: `build_spec` (the
+    compress() spec that built `brdf`), `source` (the file it was built from: its name, format and
+    SHA-256) and `source_metrics` (its metrics against that file). Returns the written bins' validity
+    counts."""
+    return _core.save(brdf, path, res=res, format=format, threads=threads, progress=_hook(progress, "tabulating"),
+                      build_spec=build_spec, source=source, source_metrics=source_metrics)
 
 
 def convert(src: Path, dst: Path, *, res: Optional[Resolution] = None, src_format: str = "", dst_format: str = "",

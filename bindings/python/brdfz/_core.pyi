@@ -7,7 +7,7 @@ import numpy
 import numpy.typing
 import os
 import typing
-__all__: list[str] = ['Brdf', 'Candidate', 'ChannelMetrics', 'Compressed', 'FitReport', 'FitResult', 'FormatError', 'Metrics', 'Scene', 'Selection', 'Trial', 'UnsupportedError', 'albedo', 'benchmark_specs', 'compress', 'compress_kinds', 'convert', 'default_candidates', 'fit', 'format_of', 'load', 'metric_samples', 'metrics', 'metrics_at', 'read_scene', 'reciprocity_error', 'save', 'select_representation', 'tabulate', 'trial']
+__all__: list[str] = ['Brdf', 'Candidate', 'ChannelMetrics', 'Compressed', 'FitReport', 'FitResult', 'FormatError', 'Metrics', 'Scene', 'Selection', 'Trial', 'UnsupportedError', 'ValidationCheck', 'ValidationReport', 'albedo', 'benchmark_specs', 'compress', 'compress_kinds', 'convert', 'default_candidates', 'fit', 'format_of', 'formats', 'load', 'metric_samples', 'metrics', 'metrics_at', 'read_scene', 'reciprocity_error', 'representations', 'save', 'select_representation', 'tabulate', 'trial', 'validate']
 class FormatError(ValueError):
     pass
 class UnsupportedError(ValueError):
@@ -30,6 +30,10 @@ class Brdf:
         """
         f_r·cosθi at direction pairs -> (N, 3) float64
         """
+    def parts(self) -> dict | None:
+        """
+        the representation's stored arrays and parameters as a dict ('kind': tabular, compact, factored, pca or analytic), read-only; None for kinds without parts (RGL files, scattered measurements)
+        """
     def pdf(self, wo: numpy.typing.NDArray[numpy.floating], wi: numpy.typing.NDArray[numpy.floating]) -> numpy.typing.NDArray[numpy.float64]:
         """
         density of sample(wo, ·) at wi per unit solid angle -> (N,)
@@ -37,6 +41,10 @@ class Brdf:
     def sample(self, wo: numpy.typing.NDArray[numpy.floating], u: numpy.typing.NDArray[numpy.floating]) -> tuple[numpy.typing.NDArray[numpy.float64], numpy.typing.NDArray[numpy.float64], numpy.typing.NDArray[numpy.float64]]:
         """
         draws wi for each wo from u in [0, 1)^2 of shape (N, 2) -> (wi (N, 3), pdf (N,), weight (N, 3)); weight = f·cosθi/pdf, failed samples have pdf 0 and weight 0
+        """
+    def sampler_parts(self) -> dict | None:
+        """
+        the tables of the sampler sample() and pdf() use ('kind': halfvector or lobes), built on first use; None for kinds without them
         """
     @property
     def channels(self) -> int:
@@ -225,6 +233,61 @@ class FitResult:
     @property
     def report(self) -> FitReport:
         ...
+class ValidationCheck:
+    """
+    one plausibility check (validate.h)
+    """
+    def __repr__(self) -> str:
+        ...
+    def to_dict(self) -> dict:
+        ...
+    @property
+    def error(self) -> float | None:
+        """
+        reciprocity: the reciprocity error (cos_rmse_rel of f(wo, wi) against f(wi, wo) over directions); None for the other checks
+        """
+    @property
+    def failed(self) -> int:
+        ...
+    @property
+    def name(self) -> str:
+        """
+        non-negativity, reciprocity or energy
+        """
+    @property
+    def ok(self) -> bool:
+        ...
+    @property
+    def tested(self) -> int:
+        ...
+    @property
+    def unit(self) -> str:
+        """
+        what was tested: bins, pairs or elevations
+        """
+    @property
+    def worst(self) -> list:
+        """
+        the worst offences, worst first: angles in degrees and the values involved
+        """
+class ValidationReport:
+    """
+    the checks of validate(), in order
+    """
+    def __getitem__(self, arg0: str) -> ValidationCheck:
+        ...
+    def __repr__(self) -> str:
+        ...
+    def to_dict(self) -> dict:
+        """
+        as `brdfz validate --json` prints it, without the file name
+        """
+    @property
+    def checks(self) -> list[ValidationCheck]:
+        ...
+    @property
+    def ok(self) -> bool:
+        ...
 class Trial:
     """
     what one representation achieved against its source (select.h)
@@ -352,6 +415,10 @@ def format_of(path: str) -> str:
     """
     the format name of a file's extension ('merl', 'rgl', ...)
     """
+def formats() -> list:
+    """
+    the file formats, as `brdfz formats --json` lists them
+    """
 def load(path: os.PathLike | str | bytes, *, lookup: str = 'linear', bin_position: str = 'centre', format: str = '') -> Brdf:
     """
     a BRDF file (.binary, .bsdf, .brdfz, .exr, .json; format overrides the extension)
@@ -376,9 +443,13 @@ def reciprocity_error(brdf: Brdf, *, max_theta: typing.SupportsFloat | typing.Su
     """
     metrics of f(wo, wi) against f(wi, wo) over direction pairs (cos_rmse_rel.mean: the reciprocity error)
     """
-def save(brdf: Brdf, path: os.PathLike | str | bytes, *, res: tuple[typing.SupportsInt | typing.SupportsIndex, typing.SupportsInt | typing.SupportsIndex, typing.SupportsInt | typing.SupportsIndex] | None = None, format: str = '', threads: typing.SupportsInt | typing.SupportsIndex = 0, progress: typing.Any = None) -> dict:
+def representations() -> list:
     """
-    writes atomically (format from the extension unless given); returns the written bins' counts
+    the representation kinds compress() builds, as `brdfz representations --json` lists them
+    """
+def save(brdf: Brdf, path: os.PathLike | str | bytes, *, res: tuple[typing.SupportsInt | typing.SupportsIndex, typing.SupportsInt | typing.SupportsIndex, typing.SupportsInt | typing.SupportsIndex] | None = None, format: str = '', threads: typing.SupportsInt | typing.SupportsIndex = 0, progress: typing.Any = None, build_spec: str = '', source: os.PathLike | str | bytes | None = None, source_metrics: typing.Any = None) -> dict:
+    """
+    writes atomically (format from the extension unless given); returns the written bins' counts. .brdfz keeps provenance: build_spec (the compress() spec), source (the file it came from: name, format and SHA-256) and source_metrics (its metrics against that file)
     """
 def select_representation(brdf: Brdf, max_error: typing.SupportsFloat | typing.SupportsIndex, *, metric: str = 'log', scene: Scene | None = None, candidates: collections.abc.Sequence[str] = [], measure_speed: bool = True, threads: typing.SupportsInt | typing.SupportsIndex = 0, over: str = 'grid', directions: typing.SupportsInt | typing.SupportsIndex = 262144, seed: typing.SupportsInt | typing.SupportsIndex = 1, on_candidate: typing.Any = None) -> Selection:
     """
@@ -392,3 +463,8 @@ def trial(brdf: Brdf, spec: str, *, measure_speed: bool = True, max_theta: typin
     """
     compress(brdf, spec) and measure it: bytes, metrics, eval speed, build time
     """
+def validate(brdf: Brdf, *, res: tuple[typing.SupportsInt | typing.SupportsIndex, typing.SupportsInt | typing.SupportsIndex, typing.SupportsInt | typing.SupportsIndex] = (90, 90, 180), theta: collections.abc.Sequence[typing.SupportsFloat | typing.SupportsIndex] = [0.0, 10.0, 20.0, 30.0, 40.0, 50.0, 60.0, 70.0, 80.0, 85.0], rtol: typing.SupportsFloat | typing.SupportsIndex = 0.05, atol: typing.SupportsFloat | typing.SupportsIndex = 0.001, albedo_tol: typing.SupportsFloat | typing.SupportsIndex = 0.01) -> ValidationReport:
+    """
+    non-negativity (a table's values, else f on the res grid), reciprocity (rtol, atol in 1/sr) and energy (reflectance <= 1 + albedo_tol at the elevations theta, degrees), as `brdfz validate`
+    """
+__version__: str = '0.1.0'

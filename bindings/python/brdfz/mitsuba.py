@@ -25,10 +25,22 @@ it is Mitsuba's own convention (its `incident` si.wi), so RGL files render as `m
 (the files' adaptive parameterisation is sharp around the incident side it was built for); "light"
 applies the data with the incident light at wi, as brdf.h reads a pair.
 
-Each call hands the lanes to brdfz's batch kernels through numpy, so the plugin cannot be traced
-into a Dr.Jit kernel: in JIT variants (llvm_*) register() and bsdf() switch Dr.Jit's symbolic loops
-and calls off (wavefront mode), which is also what makes those variants fast here, one batch per
-bounce. Scalar variants work too, one direction pair per call. Differentiation is not supported.
+Two implementations behind one interface:
+- native (tables, compact tables, factored, PCA and analytic models, in the JIT variants llvm_ad_rgb
+  and cuda_ad_rgb): the representation's arrays become Dr.Jit arrays and its eval, pdf and sampler
+  are Dr.Jit code (brdfz/_native: the C++ functions ported operation by operation, in double
+  precision like them, on the C++ sampler's own tables), so Mitsuba traces them into its kernels in
+  its default symbolic (megakernel) mode, any number of materials in a scene, and differentiates
+  through them: mi.traverse() lists the differentiable arrays (`values` of a table, `lut` or
+  `half_scales` of a compact one, `u`, `v`, `colour_weights` of factors, `coefficients` of a PCA
+  material, `params` of an analytic model). Sampling keeps the tables of the Brdf it was built from.
+- wavefront (every other kind: RGL-EPFL files, scattered measurements; scalar variants; or
+  native=False): each call hands its lanes to brdfz's C++ batch kernels through numpy. It cannot be
+  traced into a kernel, so building one switches Dr.Jit's symbolic loops and calls off for the process
+  (wavefront mode, one batch per bounce); while one exists, symbolic mode must stay off (a symbolic
+  call traces every live BSDF), and Mitsuba's differentiable integrators (`prb`), which need it, do
+  not run. Scalar variants work too, one pair per call. Not differentiable.
+Spectral, monochrome and polarised variants are not supported (brdfz materials are RGB): ValueError.
 """
 from __future__ import annotations
 
@@ -39,8 +51,10 @@ import mitsuba as mi
 import numpy as np
 
 from . import Brdf, load
+from ._native import Model, Unsupported
+from ._native._bsdf import bsdf_class
 
-_classes: dict = {}
+_classes: dict = {}  # the wavefront class per variant
 
 
 def _use_wavefront_mode() -> None:
@@ -92,17 +106,11 @@ def _class():
         return mi.Vector3f(*a[0]) if scalar else mi.Vector3f(np.ascontiguousarray(a.T))
 
     class BrdfzBSDF(mi.BSDF):
-        """A brdfz Brdf as a Mitsuba BSDF (module docstring: conventions)."""
+        """A brdfz Brdf as a Mitsuba BSDF through numpy (module docstring: conventions)."""
 
-        def __init__(self, props: mi.Properties, brdf: Optional[Brdf] = None, incident: str = "camera"):
+        def __init__(self, props: mi.Properties, brdf: Brdf, incident: str):
             mi.BSDF.__init__(self, props)
-            if brdf is None:
-                if "filename" not in props:
-                    raise ValueError("brdfz BSDF: give 'filename' (a file brdfz.load reads)")
-                brdf = load(str(props["filename"]), lookup=props.get("lookup", "linear"))
-                incident = props.get("incident", incident)
-            if incident not in ("light", "camera"):
-                raise ValueError(f"brdfz BSDF: incident must be 'light' or 'camera', not {incident!r}")
+            _use_wavefront_mode()
             self.brdf = brdf
             self.camera = incident == "camera"
             self.m_components = [mi.BSDFFlags.GlossyReflection | mi.BSDFFlags.FrontSide]
@@ -112,7 +120,7 @@ def _class():
             return ctx.is_enabled(mi.BSDFFlags.GlossyReflection, 0)
 
         def _value(self, view: np.ndarray, light: np.ndarray) -> np.ndarray:
-            """f·cosθ(light), brdfz's wi at the light (default) or at the camera side."""
+            """f·cosθ(light), brdfz's wi at the camera side (the default) or at the light."""
             if self.camera:
                 return self.brdf.eval(view, light) * np.maximum(light[:, 2:3], 0.0)
             return self.brdf.eval_cos(light, view)
@@ -162,16 +170,53 @@ def _class():
     return BrdfzBSDF
 
 
+def _check_variant() -> None:
+    variant = mi.variant()
+    if variant is None:
+        raise ValueError("brdfz.mitsuba: set a Mitsuba variant first (mi.set_variant)")
+    if not mi.is_rgb or mi.is_polarized:
+        raise ValueError(f"brdfz.mitsuba: variant {variant!r} is not supported: brdfz materials are RGB "
+                         "(use llvm_ad_rgb, cuda_ad_rgb or scalar_rgb)")
+
+
+def _make(brdf: Brdf, incident: str, native: Optional[bool], props: Optional["mi.Properties"] = None) -> "mi.BSDF":
+    _check_variant()
+    props = mi.Properties() if props is None else props
+    if incident not in ("light", "camera"):
+        raise ValueError(f"brdfz BSDF: incident must be 'light' or 'camera', not {incident!r}")
+    if native is not False:
+        if not dr.is_jit_v(mi.Float):
+            if native:
+                raise ValueError(f"brdfz.mitsuba: the native bridge needs a JIT variant (llvm_ad_rgb, cuda_ad_rgb), "
+                                 f"not {mi.variant()!r}")
+        else:
+            try:
+                return bsdf_class()(props, Model(brdf), incident)
+            except Unsupported as e:
+                if native:
+                    raise ValueError(f"brdfz.mitsuba: no native port for {e} (RGL files and scattered "
+                                     "measurements take the wavefront bridge: native=None or False)") from None
+    return _class()(props, brdf, incident)
+
+
 def register(name: str = "brdfz") -> None:
     """Registers the plugin `name` for the current Mitsuba variant: {"type": name, "filename": PATH,
-    "lookup": "linear" | "nearest", "incident": "light" | "camera"} loads PATH with brdfz.load."""
-    _use_wavefront_mode()
-    cls = _class()
-    mi.register_bsdf(name, lambda props: cls(props))
+    "lookup": "linear" | "nearest", "incident": "light" | "camera", "native": bool (optional)} loads
+    PATH with brdfz.load and makes it a BSDF as bsdf() does."""
+    _check_variant()
+
+    def plugin(props: "mi.Properties") -> "mi.BSDF":
+        if "filename" not in props:
+            raise ValueError("brdfz BSDF: give 'filename' (a file brdfz.load reads)")
+        brdf = load(str(props["filename"]), lookup=props.get("lookup", "linear"))
+        return _make(brdf, props.get("incident", "camera"), props.get("native", None), props)
+
+    mi.register_bsdf(name, plugin)
 
 
-def bsdf(brdf: Brdf, incident: str = "camera") -> "mi.BSDF":
+def bsdf(brdf: Brdf, incident: str = "camera", native: Optional[bool] = None) -> "mi.BSDF":
     """A Mitsuba BSDF backed by `brdf` (any representation), to place in a scene dictionary;
-    `incident` says which side brdfz's wi is evaluated at (module docstring)."""
-    _use_wavefront_mode()
-    return _class()(mi.Properties(), brdf, incident)
+    `incident` says which side brdfz's wi is evaluated at (module docstring). native=None: Dr.Jit code
+    where the kind and variant allow, the wavefront bridge otherwise; True: native or ValueError;
+    False: the wavefront bridge."""
+    return _make(brdf, incident, native)

@@ -1,12 +1,14 @@
 """Charts of the stability study's CSV (bench/stability): a method × material heat map of
-cos_rmse_rel, each cell marked with its failure signs.
+cos_rmse_rel, each cell marked with its failure signs, and the same as a Markdown table.
 
     python -m brdfz.stability_charts stability.csv [--out DIR]
 
-Writes DIR/stability_heatmap.png (default DIR: the CSV's folder). Cells: colour = cos_rmse_rel (log
-scale, the value printed); a grey cell with "✗" = the build failed; letters = the study's flags:
-B error blow-up, V bad values, G grazing artefacts, S sampler worse than cosine, P the fit's poor-fit
-warning (converged, but the model misses the data), F the fit's status (no_convergence, hit_bounds).
+Writes DIR/stability_heatmap.png and DIR/table.md (default DIR: the CSV's folder). Cells: colour =
+cos_rmse_rel (log scale, the value printed); a grey cell with "✗" = the build failed; letters = the
+study's flags: B error blow-up, V bad values, G grazing artefacts, S sampler worse than cosine, P the
+fit's poor-fit warning (converged, but the model misses the data), F the fit's status
+(no_convergence, hit_bounds). The table prints each cell's cos_rmse_rel ("fails" when the build
+failed) followed by its flags in words.
 """
 from __future__ import annotations
 
@@ -15,7 +17,7 @@ import csv
 import math
 import pathlib
 import sys
-from typing import Optional, Sequence
+from typing import Dict, List, Optional, Sequence
 
 import numpy as np
 
@@ -34,6 +36,35 @@ def flag_letters(flags: str) -> str:
     return "".join(sorted(set(out), key=out.index))
 
 
+def read_rows(csv_path: pathlib.Path) -> List[Dict[str, str]]:
+    with open(csv_path, newline="") as f:
+        reader = csv.DictReader(f)
+        missing = set(COLUMNS) - set(reader.fieldnames or [])
+        if missing:
+            raise ValueError(f"{csv_path}: not a stability CSV (no column {', '.join(sorted(missing))})")
+        return list(reader)
+
+
+def markdown_table(rows: Sequence[Dict[str, str]]) -> str:
+    """Methods down, materials across: cos_rmse_rel with the flags ("fails" for a failed build)."""
+    methods = list(dict.fromkeys(r["repr"] for r in rows))
+    materials = list(dict.fromkeys(r["material"] for r in rows))
+    cells = {(r["repr"], r["material"]): r for r in rows}
+    lines = ["| method | " + " | ".join(materials) + " |", "|---|" + "---|" * len(materials)]
+    for m in methods:
+        out = []
+        for name in materials:
+            r = cells.get((m, name))
+            if r is None:
+                out.append("")
+                continue
+            cell = "fails" if r["status"].startswith("error") else r["cos_rmse_rel"]
+            flags = [f.strip() for f in r["flags"].split(";") if f.strip() and f.strip() != "failed"]
+            out.append(cell + "".join(f" ⚠ {f}" for f in flags))
+        lines.append(f"| `{m}` | " + " | ".join(out) + " |")
+    return "\n".join(lines) + "\n"
+
+
 def heatmap(csv_path: pathlib.Path, png: pathlib.Path) -> pathlib.Path:
     import matplotlib
 
@@ -41,12 +72,7 @@ def heatmap(csv_path: pathlib.Path, png: pathlib.Path) -> pathlib.Path:
     import matplotlib.colors as mcolors
     import matplotlib.pyplot as plt
 
-    with open(csv_path, newline="") as f:
-        reader = csv.DictReader(f)
-        missing = set(COLUMNS) - set(reader.fieldnames or [])
-        if missing:
-            raise ValueError(f"{csv_path}: not a stability CSV (no column {', '.join(sorted(missing))})")
-        rows = list(reader)
+    rows = read_rows(csv_path)
     methods = list(dict.fromkeys(r["repr"] for r in rows))
     materials = list(dict.fromkeys(r["material"] for r in rows))
     value = np.full((len(methods), len(materials)), np.nan)
@@ -96,7 +122,9 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
     src = pathlib.Path(args.csv)
     out = pathlib.Path(args.out) if args.out else src.parent
     out.mkdir(parents=True, exist_ok=True)
-    print(f"wrote {heatmap(src, out / 'stability_heatmap.png')}")
+    table = out / "table.md"
+    table.write_text(markdown_table(read_rows(src)))
+    print(f"wrote {heatmap(src, out / 'stability_heatmap.png')} and {table}")
     return 0
 
 

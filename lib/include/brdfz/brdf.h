@@ -26,6 +26,9 @@
 
 namespace brdfz {
 
+struct GridSpec;
+class Table;
+
 using Rgb = std::array<double, 3>;
 
 struct BrdfSample {
@@ -85,6 +88,13 @@ public:
     // reciprocity), so that tabulating onto a reciprocal grid needs one side of each pair. False unless
     // a representation knows better; measured data are not exactly reciprocal (RGL files).
     virtual bool reciprocal() const { return false; }
+
+    // The Rusinkiewicz grid a gridded representation is defined on (tables, compact tables,
+    // factorisations, PCA), for callers that sample a BRDF on its own grid; nullptr otherwise.
+    virtual const GridSpec* grid() const { return nullptr; }
+    // The float32 table when the representation stores one as it is (TabularBrdf): its bins and
+    // validity are read directly instead of evaluated; nullptr otherwise.
+    virtual const Table* stored_table() const { return nullptr; }
 
 protected:
     // f_r for a pair already known to be above the horizon (wi.z > 0 and wo.z > 0).

@@ -1,26 +1,8 @@
 // compress(): build any compact representation of a Brdf from its ReprSpec text — the one entry
 // point behind `brdfz compress`, Python's brdfz.compress and the budget-driven selection.
 //
-// Kinds (each documented with its options in its own header under repr/):
-//   tabular:res=AxBxC,dtype=f32|f16|u8log[,lookup=linear|nearest,ss=N,filter=box|lsq,dwarp=W]
-//                                           resampled Rusinkiewicz table (repr/tabular.h, compact_table.h),
-//                                           each bin the mean of N³ points (default 1: point samples), or
-//                                           with filter=lsq the least-squares fit of the linear lookup to
-//                                           them (tabulate.h; default N = 3); dwarp=W in [0, 0.95]: θd
-//                                           axis warped towards grazing (table.h; default 0, linear)
-//   bivariate:res=AxB,dtype=...[,lookup=...,ss=N,phi=P,filter=box|lsq,dwarp=W]   (θh, θd) table, the source
-//                                           averaged over P φd values (default 180) and N² points per bin
-//                                           (default 1), or fitted to them (filter=lsq)
-//   analytic:MODEL[,loss=log|cos|cbrt,starts=N,seed=S]   a Ceres fit (fit/fit.h)
-//   pca:basis=FILE,k=K[,store=reference|embed,lookup=linear|nearest]   k coefficients of a shared
-//                                                   basis read from FILE (repr/pca.h)
-//   svd:rank=K,space=linear|cos|log|cbrt,layout=h_dp|hd_p,colour=separate|shared[,res=AxBxC,iterations=N,dwarp=W,
-//       fit=samples|lsq,ss=N,fit_iterations=N,dtype=f32|f16]
-//   nmf:(the same keys)                     low-rank / non-negative factorisation (repr/factored.h);
-//                                           dwarp=W (with res=): the res grid's θd axis warped as for tables;
-//                                           fit=lsq (with res=): the factors refitted through eval's
-//                                           interpolation to N³ points per bin (ss=N, default 2), as
-//                                           filter=lsq fits tables; dtype=f16: float16 factors (half the bytes)
+// Kinds register themselves (ReprKind below): `brdfz representations` lists them with their keys,
+// docs/repr-specs.md documents them, and each kind's builder lives in lib/src/repr/kinds/.
 #pragma once
 
 #include <functional>
@@ -34,10 +16,15 @@
 
 namespace brdfz {
 
+class PcaBasis;
+
 struct CompressOptions {
     int threads = 0;  // 0: one per hardware thread
     // Fraction done (0..1]; may be called from worker threads, under a lock.
     std::function<void(double)> progress;
+    // Reads the PCA basis a spec names (pca:basis=FILE). The core reads no files: brdfz::formats
+    // supplies the reader (formats/io.h, with_file_access()); unset, a pca spec is a ValueError.
+    std::function<std::shared_ptr<const PcaBasis>(const std::string& path)> load_pca_basis;
 };
 
 struct Compressed {
@@ -54,7 +41,26 @@ Compressed compress(const Brdf& source, const std::string& spec, const CompressO
 // them; ValueError for any other kind.
 Compressed compress(const MeasurementSet& source, const std::string& spec, const CompressOptions& options = {});
 
-// The kinds compress() knows, for help texts.
+// A representation kind, registered from its own file lib/src/repr/kinds/NAME.cpp, which defines
+// `void brdfz::kinds::register_NAME(std::vector<ReprKind>&)`; the build finds the file and calls it
+// (cmake/registry.cmake), so no central file lists kinds.
+struct ReprKind {
+    std::string name;                 // the spec's KIND
+    std::string summary;              // one line: what it is
+    std::string positional;           // what a positional argument names (analytic: "MODEL"); empty: none
+    std::vector<SpecKey> keys;        // every key the builder reads, with defaults and help
+    Compressed (*build)(const Brdf& source, const ReprSpec& spec, const CompressOptions& options) = nullptr;
+    // Scattered measurements; nullptr when the kind needs a BRDF it can evaluate anywhere.
+    Compressed (*build_measurements)(const MeasurementSet& source, const ReprSpec& spec,
+                                     const CompressOptions& options) = nullptr;
+};
+
+// Every registered kind, in name order.
+const std::vector<ReprKind>& representation_kinds();
+// nullptr for an unknown name.
+const ReprKind* find_representation_kind(const std::string& name);
+
+// The kinds' names, for help texts.
 std::vector<std::string> compress_kinds();
 
 }  // namespace brdfz

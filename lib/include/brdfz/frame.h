@@ -26,6 +26,13 @@ inline Vec3 spherical_direction(double theta, double phi) {
     return {s * std::cos(phi), s * std::sin(phi), std::cos(theta)};
 }
 
+// Cosine-weighted direction on the upper hemisphere (pdf cosθ/π) from u1, u2 in [0, 1), by Malley's
+// method: a uniform point on the unit disk (radius √u1, azimuth 2π·u2) lifted to the hemisphere.
+inline Vec3 cosine_hemisphere(double u1, double u2) {
+    const double r = std::sqrt(u1), phi = 2.0 * std::numbers::pi * u2;
+    return {r * std::cos(phi), r * std::sin(phi), std::sqrt(std::fmax(0.0, 1.0 - u1))};
+}
+
 // asin clamped to its domain, so unit vectors that are a rounding error too long stay finite.
 inline double safe_asin(double x) { return std::asin(std::clamp(x, -1.0, 1.0)); }
 

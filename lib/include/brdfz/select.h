@@ -19,7 +19,7 @@ namespace brdfz {
 struct TrialOptions {
     CompressOptions compress;
     MetricOptions metrics;
-    bool measure_speed = true;  // eval_rate() of the result (about 0.1 s)
+    bool measure_speed = true;  // eval_rate() of the result (a short timed batch)
 };
 
 // What one representation achieved against its source (zfp-style: measured, not asked for).

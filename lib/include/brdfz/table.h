@@ -126,8 +126,7 @@ struct ValidityCounts {
 // Memory for a table's values, with kTablePadding zero bytes after the requested ones, so that lookups
 // may read a bin's three floats as one vector of four. Blocks of 4 MiB and more are 2 MiB-aligned and,
 // on Linux, marked for transparent huge pages: lookups and the sampler's weights land anywhere in a
-// 17 MB table, and on 4 KiB pages most of them also missed the TLB (bench/README.md, "Table memory
-// and corner loads").
+// 17 MB table, and on 4 KiB pages most of them would also miss the TLB.
 constexpr std::size_t kTablePadding = 16;
 void* table_memory_allocate(std::size_t bytes);
 void table_memory_free(void* p, std::size_t bytes);  // the same `bytes` as allocated

@@ -1,57 +1,18 @@
-// Parallel loops shared by tabulation, metrics and samplers: a work-stealing loop over items, and a
-// sweep of a Rusinkiewicz grid one θh slice at a time with the direction pair at each bin's sample
-// position (φh = 0: isotropic sources).
+// A sweep of a Rusinkiewicz grid one θh slice at a time, in parallel (detail/parallel.h), with the
+// direction pair at each bin's sample position (φh = 0: isotropic sources).
 #pragma once
 
 #include <algorithm>
-#include <atomic>
-#include <exception>
 #include <functional>
-#include <mutex>
 #include <span>
-#include <thread>
+#include <tuple>
 #include <vector>
 
 #include "brdfz/coords.h"
 #include "brdfz/table.h"
+#include "detail/parallel.h"
 
 namespace brdfz::detail {
-
-inline int resolve_threads(int threads) {
-    if (threads > 0) return threads;
-    return static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
-}
-
-// fn(worker, i) for i in [0, n) on up to `threads` workers (worker < threads). progress(done, n) is
-// called under a lock after each item. The first exception thrown by fn stops the loop and is rethrown.
-template <typename Fn>
-void parallel_for(int n, int threads, Fn&& fn, const std::function<void(int, int)>& progress = nullptr) {
-    const int workers = std::max(1, std::min(resolve_threads(threads), n));
-    std::atomic<int> next{0};
-    std::atomic<bool> failed{false};
-    std::exception_ptr error;
-    std::mutex mutex;
-    int done = 0;
-    auto work = [&](int worker) {
-        for (int i; !failed && (i = next++) < n;) {
-            try {
-                fn(worker, i);
-                std::lock_guard lock(mutex);
-                ++done;
-                if (progress) progress(done, n);
-            } catch (...) {
-                std::lock_guard lock(mutex);
-                if (!error) error = std::current_exception();
-                failed = true;
-            }
-        }
-    };
-    std::vector<std::thread> pool;
-    for (int w = 1; w < workers; ++w) pool.emplace_back(work, w);
-    work(0);
-    for (auto& t : pool) t.join();
-    if (error) std::rethrow_exception(error);
-}
 
 // fn(worker, ih, wi, wo) for every θh slice ih; wi/wo hold the slice's n_theta_d·n_phi_d pairs in
 // bin order.

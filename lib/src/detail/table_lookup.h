@@ -291,9 +291,9 @@ Rgb eval_table(const GridSpec& g, const Values& values, Lookup lookup, const Vec
 // over arrays of numbers, not of structs, so that the branch-free passes vectorise. As many pairs as
 // the sampler draws at once (HalfVectorSampler::kBlock).
 constexpr std::size_t kLookupBlock = 128;
-// How far ahead of its read a linear lookup's eight lines are prefetched. A block of 64 lookups'
-// 512 prefetches at once ran 5–20 % slower at random pairs on a 17.5 MB table (bench/README.md): more
-// misses than the core can track, so the first reads waited behind the last prefetches.
+// How far ahead of its read a linear lookup's eight lines are prefetched: far enough to hide a miss,
+// near enough that the misses in flight stay within what the core can track. A whole block's
+// prefetches at once would outrun it, and the first reads would wait behind the last prefetches.
 constexpr std::size_t kLinearAhead = 16;
 
 // A block's bin coordinates (BinCoords).

@@ -1,17 +1,15 @@
 #include "brdfz/fit/fit.h"
 
 #include <algorithm>
-#include <atomic>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <limits>
 #include <mutex>
 #include <numbers>
-#include <thread>
 
 #include "brdfz/errors.h"
-#include "detail/grid_sweep.h"
+#include "detail/parallel.h"
 #include "fit/random.h"
 #include "fit/residuals.h"
 
@@ -323,20 +321,10 @@ FitResult fit_samples(const MeasurementSet& data, const std::string& model_text,
         starts[k] = space.to_solver(p);
     }
     std::vector<SolveResult> results(options.starts);
-    {
-        std::atomic<int> next{0}, done{0};
-        auto work = [&] {
-            for (int k; (k = next++) < options.starts;) {
-                results[k] = solve(space, coarse, starts[k], 1, options.start_iterations, remaining(), nullptr);
-                progress(0.6 * ++done / options.starts);
-            }
-        };
-        const int workers = std::min(detail::resolve_threads(options.threads), options.starts);
-        std::vector<std::thread> pool;
-        for (int w = 1; w < workers; ++w) pool.emplace_back(work);
-        work();
-        for (auto& t : pool) t.join();
-    }
+    detail::parallel_for(
+        options.starts, options.threads,
+        [&](int, int k) { results[k] = solve(space, coarse, starts[k], 1, options.start_iterations, remaining(), nullptr); },
+        [&](int done, int n) { progress(0.6 * done / n); });
     int best = -1;
     for (int k = 0; k < options.starts; ++k) {
         const ceres::Solver::Summary& s = results[k].summary;

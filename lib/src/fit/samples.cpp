@@ -3,13 +3,12 @@
 #include <algorithm>
 #include <cmath>
 #include <numbers>
-#include <thread>
 #include <vector>
 
 #include "brdfz/coords.h"
 #include "brdfz/errors.h"
-#include "brdfz/repr/tabular.h"
-#include "detail/grid_sweep.h"
+#include "brdfz/table.h"
+#include "detail/parallel.h"
 #include "fit/random.h"
 
 namespace brdfz {
@@ -17,8 +16,8 @@ namespace brdfz {
 GridSamples sample_brdf(const Brdf& brdf, const SampleOptions& options) {
     if (!(options.max_theta_deg > 0.0 && options.max_theta_deg <= 90.0))
         throw ValueError("sample_brdf: max_theta_deg must be in (0, 90]");
-    const auto* table = dynamic_cast<const TabularBrdf*>(&brdf);
-    const GridSpec g = table ? table->table().grid() : options.grid;
+    const Table* table = brdf.stored_table();
+    const GridSpec g = table ? table->grid() : options.grid;
     g.validate();
     const double min_cos = std::fmax(std::cos(options.max_theta_deg * std::numbers::pi / 180.0), 0.0);
 
@@ -57,19 +56,15 @@ GridSamples sample_brdf(const Brdf& brdf, const SampleOptions& options) {
     std::vector<Rgb> f(wi.size());
     if (table) {
         for (std::size_t k = 0; k < bins.size(); ++k)
-            for (int c = 0; c < 3; ++c) f[k][c] = table->table().at(bins[k], c);  // NaN marks invalid
+            for (int c = 0; c < 3; ++c) f[k][c] = table->at(bins[k], c);  // NaN marks invalid
     } else {
         // Sources can be slow to evaluate (RGL): split the batch over threads.
         const std::size_t workers = std::min<std::size_t>(detail::resolve_threads(options.threads), wi.size() / 1024 + 1);
         const std::size_t per = (wi.size() + workers - 1) / workers;
-        std::vector<std::thread> pool;
-        for (std::size_t w = 0; w < workers; ++w) {
+        detail::parallel_for(static_cast<int>(workers), static_cast<int>(workers), [&](int, int w) {
             const std::size_t begin = std::min(wi.size(), w * per), n = std::min(wi.size(), begin + per) - begin;
-            pool.emplace_back([&, begin, n] {
-                brdf.eval(std::span(wi).subspan(begin, n), std::span(wo).subspan(begin, n), std::span(f).subspan(begin, n));
-            });
-        }
-        for (auto& t : pool) t.join();
+            brdf.eval(std::span(wi).subspan(begin, n), std::span(wo).subspan(begin, n), std::span(f).subspan(begin, n));
+        });
     }
 
     out.set.channels = brdf.channels();

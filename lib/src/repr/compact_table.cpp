@@ -29,7 +29,7 @@ inline std::uint16_t half_at(const std::uint8_t* codes, std::size_t i) {
 // Lookup policies (detail/table_lookup.h): the invalid code reads as NaN.
 // Codes are checked on construction (no sign, no infinity, no NaN but the invalid code), so a half
 // decodes as its bits moved into a float's place times 2^112 (rebiasing the exponent), then the scale:
-// two exact multiplies instead of half_to_float's selects, 1.5-2x faster in linear lookups. Subnormal
+// two exact multiplies, where half_to_float's selects would dominate a linear lookup. Subnormal
 // halves (values below 2^-28 of the channel's maximum) pass through float denormals, so they read as 0
 // where the caller runs with denormals-are-zero.
 struct HalfValues {

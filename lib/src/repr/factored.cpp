@@ -175,7 +175,7 @@ Table FactoredBrdf::reconstruct(std::size_t* clamped) const {
     return t;
 }
 
-// Above the L2 cache (512 KiB per core on the machines measured), the blends' factor rows miss it
+// Above the L2 cache (taken as 512 KiB per core), the blends' factor rows miss it
 // and are prefetched a block ahead; below, the prefetches only cost instructions. So do those of a
 // factor within the L1 data cache (32 KiB), which stays there: the full grid's 90 θh rows (h_dp) or
 // 180 φd rows (hd_p).

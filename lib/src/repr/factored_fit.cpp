@@ -9,7 +9,7 @@
 
 #include "brdfz/coords.h"
 #include "brdfz/errors.h"
-#include "detail/grid_sweep.h"
+#include "detail/parallel.h"
 #include "repr/factored_impl.h"
 #include "repr/factored_solve.h"
 
@@ -21,9 +21,6 @@ namespace {
 
 using Mat = detail::FactorMat;
 using Vec = detail::FactorVec;
-using detail::balance;
-using detail::nnls;
-using detail::scale_for_f16;
 using detail::Solved;
 
 // What one side of an alternating step needs, row i of each matrix being row i of that side's factor
@@ -42,8 +39,8 @@ struct ColourSums {
 };
 
 constexpr int kChunks = 32;  // fixed work split, so results do not depend on the thread count
-// Small enough that a masked table factored at full rank is still reproduced (5e-7 relative; 1e-3
-// gave 4e-5), large enough to bound the extrapolation (a 16×16×32 coat, rank 4, log space: 625 -> 7).
+// Small enough that a masked table factored at full rank is still reproduced to float precision,
+// large enough to bound the extrapolation into invalid bins of a log-space factorisation.
 constexpr double kRidge = 1e-5;
 
 // Updates every row of `out` given the other factor F: row i minimises
@@ -55,7 +52,7 @@ constexpr double kRidge = 1e-5;
 // with large opposite components, which extrapolate into the invalid bins and there, through expm1
 // or the cube, far beyond the data (RGL cc_ibiza_sunset at grazing θd, nmf rank 2, log space: values
 // past e^700). In linear and cos space the extrapolation stays linear, eval's ceiling bounds it, and
-// the ridge would cost accuracy (svd rank 4 on a GGX plastic: cos_rmse_rel 0.0003 -> 0.01), so
+// a ridge would only cost accuracy where the data determine the factors, so
 // `ridge` is 0 there. Rows without any valid bin come out 0. A ridge of 1e-10 of the row's own
 // diagonal keeps the equations definite. Its normal equations are G_i ∘ (Σ_c s_c s_cᵀ)
 // with G_i = Σ_j w_ij F_j F_jᵀ: for all rows at once, one product W·P with P_j = vec(F_j F_jᵀ), and
@@ -99,7 +96,7 @@ ColourSums update_side(Mat& out, const Mat& other, const Side& side, const Mat& 
             ridged.diagonal().array() += 1e-10 * a.trace() / static_cast<double>(k) + 1e-300;
             u = out.row(begin + r).transpose();
             if (nonneg) {
-                nnls(ridged, b, u);
+                detail::nnls(ridged, b, u);
             } else {
                 ldlt.compute(ridged);
                 u = ldlt.solve(b);
@@ -144,8 +141,8 @@ void canonical_svd(Solved& r) {
 // the Gram matrix of m's shorter side (at most a few hundred: one of θh, θd, φd or a product with
 // the third), and the other side's as m's product with them / σ. Squaring m's condition number only
 // blurs components far below the leading one, which this start does not need exactly; those below
-// 1e-12 of it are left 0. Instead of BDCSVD: quicker here (tests/lib/factored_test.cpp's real MERL case
-// 23 -> 17 s), and its instantiation was half this file's compile time (58 -> 29 s).
+// 1e-12 of it are left 0. Not BDCSVD: the Gram matrix is small, so this is quicker, and this file is
+// spared the instantiation of Eigen's SVD, which is slow to compile.
 void leading_components(const Mat& m, int k, Mat& u, Mat& v) {
     const bool wide = m.rows() <= m.cols();
     const Eigen::MatrixXd gram = wide ? Eigen::MatrixXd(m * m.transpose()) : Eigen::MatrixXd(m.transpose() * m);
@@ -227,13 +224,13 @@ Solved solve(const Data& d, int k, bool nonneg, const FactorOptions& o, const st
             for (int c = 0; c < channels; ++c) {
                 Vec s = r.s.row(c).transpose();
                 if (nonneg)
-                    nnls(kk, sums.r[c], s);
+                    detail::nnls(kk, sums.r[c], s);
                 else
                     s = kk.ldlt().solve(sums.r[c]);
                 r.s.row(c) = s.transpose();
             }
         }
-        balance(r, channels > 1);
+        detail::balance(r, channels > 1);
         if (!std::isfinite(r.objective) || !r.u.allFinite() || !r.v.allFinite() || !r.s.allFinite())
             throw ValueError(std::string(factor_method_name(o.method)) +
                              ": the factorisation diverged (non-finite values after " + std::to_string(it) +
@@ -346,7 +343,7 @@ Factored factor(const Table& table, const FactorOptions& o) {
         const Data d = prepare(table, o, rows, cols, channels);
         if (d.valid == 0) throw ValueError(std::string(method) + ": the table has no valid bins to factor");
         Solved r = solve(d, k, nonneg, o, step(solve_index));
-        if (o.dtype == FactorDtype::F16) scale_for_f16(r, shared);  // FactoredBrdf rounds them
+        if (o.dtype == FactorDtype::F16) detail::scale_for_f16(r, shared);  // FactoredBrdf rounds them
         report.valid_bins = d.valid;
         report.iterations = std::max(report.iterations, r.iterations);
         report.converged = report.converged && r.converged;

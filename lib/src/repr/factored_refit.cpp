@@ -11,7 +11,7 @@
 
 #include "brdfz/errors.h"
 #include "detail/fit_points.h"
-#include "detail/grid_sweep.h"
+#include "detail/parallel.h"
 #include "detail/table_lookup.h"
 #include "repr/factored_impl.h"
 #include "repr/factored_solve.h"
@@ -21,9 +21,6 @@ namespace {
 
 using Mat = detail::FactorMat;
 using Vec = detail::FactorVec;
-using detail::balance;
-using detail::nnls;
-using detail::scale_for_f16;
 using detail::Solved;
 
 // ---------------------------------------------------------------------------------------------
@@ -251,7 +248,7 @@ void update_mix(Mat& mix, const MixSums& sums, bool nonneg) {
     for (int c = 0; c < 3; ++c) {
         Vec s = mix.row(c).transpose();
         if (nonneg)
-            nnls(kk, Vec(sums.r.col(c)), s);
+            detail::nnls(kk, Vec(sums.r.col(c)), s);
         else
             s = kk.ldlt().solve(sums.r.col(c));
         mix.row(c) = s.transpose();
@@ -337,7 +334,7 @@ void refit(const Brdf& source, const Factors& start, const FactorOptions& o, Sol
         if (shared) update_mix(r.s, sums, nonneg);
         const double previous = objective;
         objective = sums.objective(r.s);
-        balance(r, shared);
+        detail::balance(r, shared);
         report.fit_iterations = it;
         if (!std::isfinite(objective) || !r.u.allFinite() || !r.v.allFinite() || !r.s.allFinite())
             throw ValueError(std::string(method) + " fit=lsq: the refit diverged (non-finite values after " +
@@ -347,7 +344,7 @@ void refit(const Brdf& source, const Factors& start, const FactorOptions& o, Sol
     }
     if (o.dtype == FactorDtype::F16) {
         // Round U, refit V to the rounded U, round V, refit the (float32) colour weights.
-        scale_for_f16(r, shared);
+        detail::scale_for_f16(r, shared);
         r.u = r.u.unaryExpr([](double x) { return to_f16(x); });
         lookup_step(r.v, vs, r.u, us, r.s, pts, nonneg, o.threads, method);
         r.v = r.v.unaryExpr([](double x) { return to_f16(x); });

@@ -2,6 +2,7 @@
 
 #include <charconv>
 #include <cmath>
+#include <stdexcept>
 
 #include "brdfz/errors.h"
 
@@ -58,7 +59,22 @@ std::string ReprSpec::str() const {
     return out;
 }
 
+void ReprSpec::declare(const std::vector<SpecKey>& keys, bool takes_positional) {
+    declared_ = &keys;
+    if (!positional_.empty() && !takes_positional) {
+        for (const SpecKey& k : keys)
+            if (k.name == positional_)
+                throw ValueError(kind_ + ": option " + positional_ + " needs a value (" + positional_ + "=...)");
+        throw ValueError(kind_ + ": unknown option(s) " + positional_);
+    }
+}
+
 const std::string* ReprSpec::find(const std::string& key) const {
+    if (declared_) {
+        bool known = false;
+        for (const SpecKey& k : *declared_) known = known || k.name == key;
+        if (!known) throw std::logic_error(kind_ + ": the builder reads key '" + key + "', which the kind does not declare");
+    }
     for (std::size_t i = 0; i < options_.size(); ++i)
         if (options_[i].first == key) {
             if (i < used_.size()) used_[i] = true;

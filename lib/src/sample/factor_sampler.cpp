@@ -64,9 +64,9 @@ AzimuthRange azimuth_range(double cos_o, double sin_o, double s) {
 
 // φ in [0, phi_max] with A·φ + B·sinφ = target (increasing there: its derivative is wi.z ≥ 0), by Newton's
 // method kept inside a shrinking bracket. Converged when Newton's own step is small, tested before the
-// bracket's safeguard: after it, a converged step that landed on the bracket's edge became a bisection
-// away from the root (13.8 iterations per draw, now 5.0). sin and cos from the table (2 ulp): libm's
-// sincos was half of sample()'s instructions.
+// bracket's safeguard, which would turn a converged step that lands on the bracket's edge into a
+// bisection away from the root. sin and cos come from the table (2 ulp): libm's sincos would dominate
+// the cost of a draw.
 double solve_azimuth(const AzimuthRange& r, double target) {
     const detail::SinCosTable& table = detail::half_turn_sincos();
     double lo = 0.0, hi = r.phi_max, phi = r.phi_max * target / (0.5 * r.norm);

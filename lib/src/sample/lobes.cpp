@@ -37,11 +37,6 @@ struct Basis {
     Vec3 to_world(const Vec3& v) const { return v.x * t + v.y * b + v.z * n; }
 };
 
-Vec3 cosine_hemisphere(double u1, double u2) {
-    const double r = std::sqrt(u1), phi = 2.0 * kPi * u2;
-    return {r * std::cos(phi), r * std::sin(phi), std::sqrt(std::fmax(0.0, 1.0 - u1))};
-}
-
 // Direction at polar angle cosine c (around +z) and azimuth 2π u.
 Vec3 around_z(double c, double u) {
     const double s = std::sqrt(std::fmax(0.0, 1.0 - c * c)), phi = 2.0 * kPi * u;

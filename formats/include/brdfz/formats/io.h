@@ -1,11 +1,6 @@
-// Format-independent loading and saving: the format comes from the file extension.
-//   .binary  MERL table            (read, write)
-//   .bsdf    RGL-EPFL tensor_file  (read; write isotropic RGB: brdfz/formats/rgl_writer.h)
-//   .brdfz   brdfz container       (read, write; formats/SPEC.md)
-//   .exr     OpenEXR table mosaic  (read, write; brdfz/formats/exr.h)
-//   .brdf    Cornell spectral measurements  (read with load_measurements)
-//   .dat     ALTA text measurements         (read with load_measurements)
-//   .json    analytic model                 (read, write; docs/model-json.md)
+// Format-independent loading and saving: the format comes from the file extension (or, for an
+// extension no format claims, from the file's first bytes). The formats are those registered in
+// brdfz/formats/registry.h; `brdfz formats` lists them.
 #pragma once
 
 #include <functional>
@@ -15,6 +10,7 @@
 #include <vector>
 
 #include "brdfz/brdf.h"
+#include "brdfz/compress.h"
 #include "brdfz/measurements.h"
 #include "brdfz/metrics.h"
 #include "brdfz/repr/tabular.h"
@@ -32,6 +28,13 @@ struct SourceInfo {
     // class as cornell.h / alta.h define them, range of the kept samples' f_r in 1/sr.
     ValidityCounts counts;
     double min_value = 0, max_value = 0;
+    // What dims counts when it is not a stored array's shape (.json and .brdfz objects: "parameters",
+    // "grid of the rank-4 svd factors"); empty otherwise.
+    std::string dims_of;
+    // False when nothing stored is a value to take a range of (factors): min_value and max_value are 0.
+    bool has_range = true;
+    // RGL: negative values of the `luminance` tensor, taken as 0 (rgl.h, ReadResult); 0 otherwise.
+    std::size_t luminance_negative = 0;
 };
 
 struct Loaded {
@@ -68,8 +71,13 @@ struct SaveOptions {
     int rgl_phi_i = 1;
 };
 
-// "merl" / "rgl" / "cornell" / "alta" from the extension; FormatError naming the file otherwise.
-std::string format_of(const std::string& path);
+// The format a path's extension names: for Access::Read a format that reads it, for Access::Write
+// one that writes it. FormatError naming the file and the extensions that would do otherwise.
+enum class Access { Read, Write };
+std::string format_of(const std::string& path, Access access = Access::Read);
+// As format_of for reading, but an extension no format claims is resolved from the file's first
+// bytes (Format::sniff); FormatError when none or several match.
+std::string detect_format(const std::string& path);
 
 Loaded load(const std::string& path, const LoadOptions& options = {});
 // As load, for a named format ("merl", "rgl", "brdfz", ...) whatever the extension. A .brdfz table
@@ -77,13 +85,27 @@ Loaded load(const std::string& path, const LoadOptions& options = {});
 Loaded load_as(const std::string& format, const std::string& path, const LoadOptions& options = {});
 
 // True when the file's format holds scattered measurements (Cornell .brdf, ALTA .dat), which
-// load_measurements reads and load rejects; FormatError for an unknown extension.
+// load_measurements reads and load rejects; FormatError for an unknown format.
 bool holds_measurements(const std::string& path);
 
 // Cornell .brdf or ALTA .dat; UnsupportedError for formats that hold a BRDF (use load).
 LoadedMeasurements load_measurements(const std::string& path);
 
-// Writes atomically; returns the counts of what was written.
+// Writes atomically; returns the counts of what was written: table bins, or a stored representation's
+// entries (parameters, the factors' grid bins, an RGL file's rgb values).
 ValidityCounts save(const Brdf& brdf, const std::string& path, const SaveOptions& options = {});
+
+struct ConvertOptions {
+    std::string from;   // the input's format; empty: detected (detect_format)
+    LoadOptions load;
+    SaveOptions save;   // the output's format, grid, threads, progress; convert() sets source and source_format
+};
+
+// load → save: any readable file into any writable format (a representation the output format
+// cannot hold is tabulated, on save.grid); returns the counts of what was written.
+ValidityCounts convert(const std::string& in, const std::string& out, const ConvertOptions& options = {});
+
+// `options` with the file access compress() needs to resolve the files a spec names (pca:basis=FILE).
+CompressOptions with_file_access(CompressOptions options);
 
 }  // namespace brdfz

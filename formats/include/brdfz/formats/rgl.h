@@ -122,6 +122,9 @@ struct ReadResult {
     // negative, NaN, Inf. Negative values are kept as they are (Mitsuba does); NaN and Inf are
     // stored as 0. `clamped` stays 0. The file's `valid` bitmask is not used (Mitsuba ignores it).
     ValidityCounts counts;
+    // Negative values of the `luminance` tensor (the sampling density), which real files hold slightly
+    // below 0 where they are ~0; Mitsuba reads them, brdfz samples with them taken as 0.
+    std::size_t luminance_negative = 0;
     double min_value = 0, max_value = 0;  // range of the rgb tensor's finite values; 0, 0 if none
     std::string description;              // the file's `description` field
 };

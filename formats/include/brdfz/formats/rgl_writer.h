@@ -1,4 +1,4 @@
-// Writing RGL-EPFL `.bsdf` files (isotropic RGB), so any brdfz representation can be rendered by
+// Writing RGL-EPFL `.bsdf` files (RGB, isotropic or anisotropic), so any brdfz representation can be rendered by
 // Mitsuba 3's `measured` plugin. The reader and the parameterisation are described in rgl.h.
 //
 // An RglBrdf is written with its own tensors. Any other Brdf is tabulated into the

@@ -115,6 +115,7 @@ public:
     std::size_t nbytes() const override { return table_.nbytes(); }
     std::string describe() const override;
     bool reciprocal() const override { return table_.grid().reciprocal(); }
+    const GridSpec* grid() const override { return &table_.grid(); }
 
 protected:
     Rgb eval_above(const Vec3& wi, const Vec3& wo) const override;

@@ -30,8 +30,8 @@
 // With `lsq` they are then refitted by alternating weighted least squares THROUGH that interpolation
 // (each point's design row is eval's own corner blend: 2 θh rows of U and 4 (θd, φd) rows of V in
 // h_dp) to the source's values at the points of a grid `ss` times finer per axis, as tabulate.h's
-// filter=lsq fits table bins: eval then errs less between the samples (bench/README.md: satin_rosaline,
-// rank 8 on 64x48x18 with float16 factors, 2.07 -> 1.82 %).
+// filter=lsq fits table bins: eval then errs less between the samples, where factors fitted to the
+// samples alone leave the interpolation's error.
 //
 // Storage (dtype=): U and V as float32 or float16 (IEEE binary16: half the bytes, 2^-11 relative
 // rounding; each component's columns scaled to a largest magnitude of 1 first, the scale moved into the
@@ -118,19 +118,20 @@ public:
     // Channel values eval has clamped to 0 so far (svd reconstructions below 0), over all threads.
     std::uint64_t clamped_evaluations() const { return clamped_.load(std::memory_order_relaxed); }
 
-    // A sampler drawn from the factors alone (sample/factor_sampler.h; Lawrence et al. 2004), built in
-    // milliseconds. On the MERL tables its albedo variance is 0.03–0.7x the half-vector sampler's at
-    // normal view but up to ~12x at oblique views where f depends strongly on φh (gold-metallic-paint),
-    // and its draws are ~3x slower (bench/README.md, "Factor sampler"), so sample() does not use it.
+    // A sampler drawn from the factors alone (sample/factor_sampler.h; Lawrence et al. 2004), quick to
+    // build (no evaluation grid). Its azimuth follows cosθi only, so where f depends strongly on φh
+    // (glossy paints at oblique views) its variance is well above the half-vector sampler's, and its
+    // draws are slower: sample() does not use it.
     const FactorSampler& factor_sampler() const;
     // The sampler sample() and pdf() use: the half-vector sampler (CDFs tabulated from eval, exact
-    // pdf), built on first use in 70–400 ms.
+    // pdf), built on first use: it evaluates f on its grid of view slices.
     const HalfVectorSampler& sampler() const;
 
     int channels() const override { return 3; }
     std::size_t nbytes() const override;
     std::string describe() const override;
     bool reciprocal() const override { return f_.grid.reciprocal(); }
+    const GridSpec* grid() const override { return &f_.grid; }
 
 protected:
     Rgb eval_above(const Vec3& wi, const Vec3& wo) const override;

@@ -2,8 +2,11 @@
 // container metadata spell it: "KIND[:KEY=VALUE,KEY=VALUE...]", e.g. "svd:rank=4,space=log",
 // "tabular:res=45x45x90,dtype=f16", "analytic:lambert+ggx".
 //
-// A kind's options struct reads its keys with the typed getters below and then calls
-// finish(), which rejects any key nobody asked for, so a misspelt option is an error, not a default.
+// A kind's builder reads its keys with the typed getters below and then calls finish(), which rejects
+// any key nobody asked for, so a misspelt option is an error, not a default. compress() first declares
+// the keys the kind registered (compress.h): a builder reading a key it did not declare is a bug
+// (std::logic_error), so the registry, `brdfz representations` and docs/repr-specs.md cannot drift
+// from what the builders read.
 #pragma once
 
 #include <array>
@@ -12,6 +15,14 @@
 #include <vector>
 
 namespace brdfz {
+
+// One key a representation kind takes: its name, its default as text (what the builder uses when the
+// key is absent; may say how it depends on other keys) and a one-line help.
+struct SpecKey {
+    std::string name;
+    std::string default_value;
+    std::string help;
+};
 
 class ReprSpec {
 public:
@@ -36,6 +47,11 @@ public:
     std::vector<int> get_dims(const std::string& key, const std::vector<int>& fallback) const;
     bool has(const std::string& key) const;
 
+    // The keys the kind takes and whether it takes a positional argument: a positional part given to a
+    // kind that takes none, or a declared key given without a value, is a ValueError naming it (as a
+    // misspelt key is); a getter asking for an undeclared key is std::logic_error.
+    void declare(const std::vector<SpecKey>& keys, bool takes_positional);
+
     // ValueError naming every option no getter asked for (a misspelt key).
     void finish() const;
 
@@ -46,6 +62,7 @@ private:
     std::string positional_;
     std::vector<std::pair<std::string, std::string>> options_;
     mutable std::vector<bool> used_;
+    const std::vector<SpecKey>* declared_ = nullptr;
 };
 
 }  // namespace brdfz

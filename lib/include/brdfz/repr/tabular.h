@@ -35,6 +35,8 @@ public:
     std::size_t nbytes() const override { return table_.bins() * 3 * sizeof(float); }
     std::string describe() const override;
     bool reciprocal() const override { return table_.grid().reciprocal(); }
+    const GridSpec* grid() const override { return &table_.grid(); }
+    const Table* stored_table() const override { return &table_; }
 
 protected:
     Rgb eval_above(const Vec3& wi, const Vec3& wo) const override;

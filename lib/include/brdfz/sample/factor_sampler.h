@@ -1,6 +1,6 @@
 // Importance sampling of a factored BRDF from its factors (after Lawrence et al. 2004), with an exact
 // pdf. No evaluation grid of the BRDF: it is built from the factors on a (θh rows × 16 φh) grid per view
-// slice, ~15x faster than the half-vector sampler's build.
+// slice, so it builds much faster than the half-vector sampler.
 //
 // The half vector h is drawn relative to wo in two steps:
 //  1. θh from a density per view slice θo_k, piecewise linear in s = sin²(θh/2) (uniform in s is uniform
@@ -19,9 +19,8 @@
 // wherever f·cosθi may be.
 //
 // Any factors, in any space, give a valid density (negative reconstructions count as 0, as eval clamps
-// them). Measured against the half-vector sampler (bench/README.md, "Factor sampler"): the Marginal
-// density in the log and cbrt spaces does as well as in the linear ones, so FactoredBrdf uses this
-// sampler in every space rather than falling back.
+// them). Against the half-vector sampler the Marginal density does as well in the log and cbrt spaces
+// as in the linear ones (bench/factor_sample), so there is no per-space fallback.
 #pragma once
 
 #include <vector>
@@ -33,7 +32,8 @@ namespace brdfz {
 struct Factors;  // repr/factored.h, which holds this sampler
 
 // The θh density of a slice (see above). Marginal follows the columns' factors, the Jacobian and the
-// cosine; Mixture only the rows' factors (bench/README.md: up to 1000x the variance of Marginal).
+// cosine; Mixture only the rows' factors, and its variance is far higher where the factors' shape is
+// not f's (the log and cbrt spaces).
 enum class FactorDensity { Mixture, Marginal };
 
 struct FactorSamplerOptions {

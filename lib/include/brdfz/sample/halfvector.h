@@ -24,8 +24,8 @@ struct HalfVectorSamplerOptions {
     int n_theta_h = 64;       // cells along y = √(θh / (π/2))
     int n_phi = 64;           // cells along |φh − φo| ∈ [0, π]
     // Probability of a cosine-weighted sample (defensive mixture). On sharp data it sets the albedo
-    // estimate's variance floor, ≈ share/(1 − share)·ρ² (bench/README.md: 0.05 against 0.1 halves it on
-    // chrome and phenolic, which then beat a fitted lambert+ggx proxy's sampler; 0.02 loses on lit pixels).
+    // estimate's variance floor, ≈ share/(1 − share)·ρ², so it is small; smaller still, the draws that
+    // cover an environment's light away from the lobe grow too rare.
     double cosine_share = 0.05;
     int threads = 0;          // 0: one per hardware thread, for building
 };
@@ -58,8 +58,8 @@ public:
     // Up to kBlock draws at once, as arrays (the table kernel's passes read them so), each draw()'s bit
     // for bit: the same operations per draw, run across draws in vector registers (SSE2, or AVX2
     // without FMA contraction where the CPU has it: detail/simd.h). Inputs outside sample()'s domain
-    // (Brdf::can_draw) give a failed draw, pdf 0. 128 draws ran 2–5 % faster than 64 with the table
-    // kernel (bench/README.md); the kernel's arrays then take ~50 KB of stack.
+    // (Brdf::can_draw) give a failed draw, pdf 0. Large enough that the table kernel's memory reads of
+    // many draws overlap; its arrays then take ~50 KB of stack.
     static constexpr std::size_t kBlock = 128;
     struct Draws {
         double wi_x[kBlock], wi_y[kBlock], wi_z[kBlock], pdf[kBlock];  // pdf 0: failed
@@ -71,6 +71,13 @@ public:
     double pdf(const Vec3& wo, const Vec3& wi) const;
 
     std::size_t nbytes() const;
+
+    // Read-only views of the tables, for ports of the sampler (the Python package's Mitsuba bridge):
+    // the options, the slices' view elevations, and slice 0's view of the stacked distributions
+    // (slice k is slices().stacked(k)).
+    const HalfVectorSamplerOptions& options() const { return options_; }
+    const std::vector<double>& theta_o() const { return theta_o_; }
+    Piecewise2D::View slices() const { return first_; }
 
 private:
     Piecewise2D::View slice(int k) const { return first_.stacked(k); }

@@ -56,6 +56,9 @@ public:
     double pdf(const Vec3& wo, const Vec3& wi) const;
     // Probability of choosing each lobe at wo; all 0 when the model is black there (cosine sampling).
     std::vector<double> weights(const Vec3& wo) const;
+    // The albedo table lobe_weights() interpolates: kAlbedoNodes × terms, node-major (node k at
+    // cosθo = (k + ½) / kAlbedoNodes), for ports of the sampler.
+    const std::vector<double>& albedo_table() const { return albedo_; }
 
 private:
     struct Term {

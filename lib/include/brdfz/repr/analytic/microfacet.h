@@ -58,26 +58,27 @@ T beckmann_d(const S& cos_m, const T& alpha) {
     return exp(-((S(1) - c2) / c2) / a2) / (T(std::numbers::pi) * a2 * (c2 * c2));
 }
 
+// √(cos²θ (1−α²) + α²) = cosθ·√(1 + α² tan²θ), the root in GGX's Smith Λ and G1, from a2 = α².
+template <typename T, typename S>
+T ggx_smith_root(const S& cos_t, const T& a2) {
+    using std::sqrt;
+    return sqrt(cos_t * cos_t * (T(1) - a2) + a2);
+}
+
 // GGX "visibility" V = G2 / (4 cosθi cosθo) with the height-correlated Smith G2 written so it stays
 // finite at grazing angles: 4 cosθi cosθo (1 + Λi + Λo) = 2 (cosθo·√(cos²θi (1−α²) + α²) + (i<->o)).
 template <typename T, typename S>
 T ggx_visibility_correlated(const S& cos_i, const S& cos_o, const T& alpha) {
-    using std::sqrt;
     const T a2 = alpha * alpha;
-    const T li = sqrt(cos_i * cos_i * (T(1) - a2) + a2);
-    const T lo = sqrt(cos_o * cos_o * (T(1) - a2) + a2);
-    return T(0.5) / (cos_o * li + cos_i * lo + T(kTiny));
+    return T(0.5) / (cos_o * ggx_smith_root(cos_i, a2) + cos_i * ggx_smith_root(cos_o, a2) + T(kTiny));
 }
 
 // The same with the separable (uncorrelated) Smith G2 = G1(wi) G1(wo), G1 = 2cosθ / (cosθ + √(cos²θ (1−α²) + α²)),
 // as Mitsuba 3 and Walter et al. 2007 use.
 template <typename T, typename S>
 T ggx_visibility_separable(const S& cos_i, const S& cos_o, const T& alpha) {
-    using std::sqrt;
     const T a2 = alpha * alpha;
-    const T li = sqrt(cos_i * cos_i * (T(1) - a2) + a2);
-    const T lo = sqrt(cos_o * cos_o * (T(1) - a2) + a2);
-    return T(1) / ((cos_i + li) * (cos_o + lo));
+    return T(1) / ((cos_i + ggx_smith_root(cos_i, a2)) * (cos_o + ggx_smith_root(cos_o, a2)));
 }
 
 // Smith G1 for Beckmann by Walter et al.'s rational approximation (EGSR 2007, eq. 27; < 0.35% error),

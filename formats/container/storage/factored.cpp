@@ -7,7 +7,7 @@
 
 #include "brdfz/errors.h"
 #include "brdfz/repr/factored.h"
-#include "storage.h"
+#include "container/storage.h"
 
 namespace brdfz::container::detail {
 namespace {
@@ -137,11 +137,22 @@ std::unique_ptr<Brdf> read(const h5::ReadNode& rep, const ReadContext&) {
     }
 }
 
+void source_info(const Brdf& brdf, SourceInfo& info) {
+    const Factors& f = dynamic_cast<const FactoredBrdf&>(brdf).factors();
+    info.dims = {static_cast<std::size_t>(f.grid.n_theta_h), static_cast<std::size_t>(f.grid.n_theta_d),
+                 static_cast<std::size_t>(f.grid.n_phi_d)};
+    info.dims_of = "grid of the rank-" + std::to_string(f.rank) + " " + factor_method_name(f.method) + " factors";
+    info.counts = {};
+    info.counts.valid = f.grid.bins();  // the factors give every bin a value
+    info.has_range = false;
+    info.min_value = info.max_value = 0.0;
+}
+
 }  // namespace
 
-const StorageModule& factored_storage() {
-    static const StorageModule m{"factored", {kFactored, kWarpedThetaD, kFloat16, kFullPhiD}, &needs, &write, &read};
-    return m;
+void register_factored(std::vector<const StorageModule*>& out) {
+    static const StorageModule m{"factored", {kFactored, kWarpedThetaD, kFloat16, kFullPhiD}, &needs, &write, &read, &source_info};
+    out.push_back(&m);
 }
 
 }  // namespace brdfz::container::detail

@@ -3,10 +3,11 @@
 // "bilateral"), slices (n, 2..GridSpec::kMaxAxis); groups slice_0 .. slice_{n-1}, each with its own
 // "type" attribute and that module's contents. formats/SPEC.md §3 describes it.
 #include <algorithm>
+#include <limits>
 
 #include "brdfz/errors.h"
 #include "brdfz/repr/phi_h.h"
-#include "storage.h"
+#include "container/storage.h"
 
 namespace brdfz::container::detail {
 namespace {
@@ -69,11 +70,39 @@ std::unique_ptr<Brdf> read(const h5::ReadNode& rep, const ReadContext& ctx) {
     }
 }
 
+// The slices' own descriptions, combined: dims lead with the slice count, counts summed, one range.
+void source_info(const Brdf& brdf, SourceInfo& info) {
+    const auto& stack = dynamic_cast<const PhiHBrdf&>(brdf);
+    SourceInfo all = info;
+    all.counts = {};
+    all.min_value = std::numeric_limits<double>::infinity();
+    all.max_value = -all.min_value;
+    for (const auto& slice : stack.slices()) {
+        SourceInfo one;
+        one.format = info.format;
+        slice_module(*slice)->source_info(*slice, one);
+        all.dims = one.dims;
+        all.dims.insert(all.dims.begin(), stack.slices().size());
+        all.dims_of = "φh slices x " + (one.dims_of.empty() ? std::string("the slice's grid") : one.dims_of);
+        all.has_range = one.has_range;
+        all.counts.valid += one.counts.valid;
+        all.counts.negative += one.counts.negative;
+        all.counts.nan += one.counts.nan;
+        all.counts.inf += one.counts.inf;
+        all.counts.clamped += one.counts.clamped;
+        all.counts.below_horizon += one.counts.below_horizon;
+        all.min_value = std::min(all.min_value, one.min_value);
+        all.max_value = std::max(all.max_value, one.max_value);
+    }
+    if (!all.has_range) all.min_value = all.max_value = 0.0;
+    info = all;
+}
+
 }  // namespace
 
-const StorageModule& phi_h_storage() {
-    static const StorageModule m{"phi_h", {kPhiH}, &needs, &write, &read};
-    return m;
+void register_phi_h(std::vector<const StorageModule*>& out) {
+    static const StorageModule m{"phi_h", {kPhiH}, &needs, &write, &read, &source_info};
+    out.push_back(&m);
 }
 
 }  // namespace brdfz::container::detail

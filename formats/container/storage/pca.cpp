@@ -9,14 +9,14 @@
 #include <map>
 #include <mutex>
 #include <optional>
-
 #include <sys/stat.h>
 
 #include "brdfz/errors.h"
 #include "brdfz/formats/pca_basis.h"
-#include "checksum.h"
+#include "container/checksum.h"
+#include "container/storage.h"
 #include "detail/bytes.h"
-#include "storage.h"
+#include "detail/table_io.h"
 
 namespace brdfz::container {
 namespace detail {
@@ -201,11 +201,20 @@ std::unique_ptr<Brdf> read(const h5::ReadNode& rep, const ReadContext& ctx) {
     }
 }
 
+// The range and validity of the reconstruction, which the object holds.
+void source_info(const Brdf& brdf, SourceInfo& info) {
+    const PcaBrdf& p = dynamic_cast<const PcaBrdf&>(brdf);
+    ValidityCounts counts = info.counts;
+    counts.valid = p.counts().valid;
+    info = brdfz::detail::table_info(info.format, p.table().table(), counts);
+    info.dims_of = "grid of the basis (" + std::to_string(p.k()) + " coefficients)";
+}
+
 }  // namespace
 
-const StorageModule& pca_storage() {
-    static const StorageModule m{"pca", {kPca, kPcaExternal, kFullPhiD}, &needs, &write, &read};
-    return m;
+void register_pca(std::vector<const StorageModule*>& out) {
+    static const StorageModule m{"pca", {kPca, kPcaExternal, kFullPhiD}, &needs, &write, &read, &source_info};
+    out.push_back(&m);
 }
 
 }  // namespace detail

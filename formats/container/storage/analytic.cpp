@@ -2,9 +2,11 @@
 // parameters as a float64 dataset "params" [k], with the parameter names as attribute "param_names"
 // so the file describes itself. Reading parses the model, checks that its parameter names are the
 // stored ones (a changed parameterisation is refused, not misread) and validates the values.
+#include <algorithm>
+
 #include "brdfz/errors.h"
 #include "brdfz/repr/analytic/model.h"
-#include "storage.h"
+#include "container/storage.h"
 
 namespace brdfz::container::detail {
 namespace {
@@ -54,11 +56,22 @@ std::unique_ptr<Brdf> read(const h5::ReadNode& rep, const ReadContext&) {
     }
 }
 
+void source_info(const Brdf& brdf, SourceInfo& info) {
+    const std::span<const double> p = dynamic_cast<const AnalyticBrdf&>(brdf).params();
+    info.dims = {p.size()};
+    info.dims_of = "parameters";
+    info.counts = {};
+    info.counts.valid = p.size();
+    const auto [lo, hi] = std::minmax_element(p.begin(), p.end());
+    info.min_value = p.empty() ? 0.0 : *lo;
+    info.max_value = p.empty() ? 0.0 : *hi;
+}
+
 }  // namespace
 
-const StorageModule& analytic_storage() {
-    static const StorageModule m{"analytic", {kAnalytic}, &needs, &write, &read};
-    return m;
+void register_analytic(std::vector<const StorageModule*>& out) {
+    static const StorageModule m{"analytic", {kAnalytic}, &needs, &write, &read, &source_info};
+    out.push_back(&m);
 }
 
 }  // namespace brdfz::container::detail

@@ -3,9 +3,14 @@
 // memory layout of Table and CompactTable, so reading is a single read into the table. Element types:
 // float32 (TabularBrdf; invalid entries NaN as the table holds them), float16 and uint8 log-quantised
 // codes (CompactTableBrdf) with their per-channel decoding parameters as attributes (formats/SPEC.md).
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
 #include "brdfz/errors.h"
 #include "brdfz/repr/compact_table.h"
-#include "storage.h"
+#include "container/storage.h"
+#include "detail/table_io.h"
 
 namespace brdfz::container::detail {
 namespace {
@@ -137,6 +142,28 @@ std::unique_ptr<Brdf> read(const h5::ReadNode& rep, const ReadContext& ctx) {
     }
 }
 
+// A compact table's range is that of its decoded values.
+void source_info(const Brdf& brdf, SourceInfo& info) {
+    if (const Table* t = brdf.stored_table()) {
+        info = brdfz::detail::table_info(info.format, *t, info.counts);
+        return;
+    }
+    const CompactTable& c = dynamic_cast<const CompactTableBrdf&>(brdf).table();
+    const GridSpec& g = c.grid();
+    info.dims = {static_cast<std::size_t>(g.n_theta_h), static_cast<std::size_t>(g.n_theta_d),
+                 static_cast<std::size_t>(g.n_phi_d)};
+    double lo = std::numeric_limits<double>::infinity(), hi = -lo;
+    for (std::size_t k = 0; k < g.bins(); ++k)
+        for (int ch = 0; ch < 3; ++ch) {
+            const float v = c.at(k, ch);
+            if (std::isnan(v)) continue;
+            lo = std::min<double>(lo, v);
+            hi = std::max<double>(hi, v);
+        }
+    info.min_value = lo <= hi ? lo : 0.0;
+    info.max_value = lo <= hi ? hi : 0.0;
+}
+
 }  // namespace
 
 void write_theta_d_axis(h5::WriteNode& rep, const GridSpec& g) {
@@ -166,10 +193,10 @@ Symmetry read_phi_d_symmetry(const h5::ReadNode& rep) {
     return Symmetry::None;
 }
 
-const StorageModule& tabular_storage() {
+void register_tabular(std::vector<const StorageModule*>& out) {
     static const StorageModule m{"tabular", {kTabular, kFloat32, kFloat16, kUint8Log, kWarpedThetaD, kFullPhiD},
-                                 &needs, &write, &read};
-    return m;
+                                 &needs, &write, &read, &source_info};
+    out.push_back(&m);
 }
 
 }  // namespace brdfz::container::detail

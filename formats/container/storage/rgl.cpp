@@ -4,9 +4,12 @@
 // luminance [n, rows, cols] when the material has one (for sampling); attribute jacobian (0 or 1).
 // An anisotropic material (feature rgl.anisotropic) adds phi_i [nφ], nφ >= 2, and every n above is
 // nφ, n. formats/include/brdfz/formats/rgl.h explains the tensors.
+#include <algorithm>
+#include <limits>
+
 #include "brdfz/errors.h"
 #include "brdfz/formats/rgl.h"
-#include "storage.h"
+#include "container/storage.h"
 
 namespace brdfz::container::detail {
 namespace {
@@ -100,11 +103,27 @@ std::unique_ptr<Brdf> read(const h5::ReadNode& rep, const ReadContext&) {
     }
 }
 
+// As the RGL reader counts the file's `rgb` values (the object keeps non-finite ones as 0).
+void source_info(const Brdf& brdf, SourceInfo& info) {
+    const rgl::Tensors& t = dynamic_cast<const rgl::RglBrdf&>(brdf).tensors();
+    info.dims = {std::max<std::size_t>(t.phi_i.size(), 1), t.theta_i.size(), 3, t.rgb.rows, t.rgb.cols};
+    info.dims_of = "rgb tensor of the RGL file";
+    info.counts = {};
+    double lo = std::numeric_limits<double>::infinity(), hi = -lo;
+    for (float v : t.rgb.values) {
+        ++(v < 0.0f ? info.counts.negative : info.counts.valid);
+        lo = std::min<double>(lo, v);
+        hi = std::max<double>(hi, v);
+    }
+    info.min_value = lo <= hi ? lo : 0.0;
+    info.max_value = lo <= hi ? hi : 0.0;
+}
+
 }  // namespace
 
-const StorageModule& rgl_storage() {
-    static const StorageModule m{"rgl", {kRgl, kAnisotropic}, &needs, &write, &read};
-    return m;
+void register_rgl(std::vector<const StorageModule*>& out) {
+    static const StorageModule m{"rgl", {kRgl, kAnisotropic}, &needs, &write, &read, &source_info};
+    out.push_back(&m);
 }
 
 }  // namespace brdfz::container::detail

@@ -1,0 +1,436 @@
+"""What a person reads of a catalogue (brdfz.batch) or a benchmark sweep (brdfz.bench): Pareto fronts,
+size / speed against error charts, sphere renders, the choice at error budgets and summary.md.
+
+Rows are catalogue rows (brdfz.batch.COLUMNS): dicts with at least material, spec, status ("ok" or
+"failed"), bytes, the error metrics, eval_rate and build_seconds; values may be numbers or the text of
+a CSV. Charts need matplotlib (imported when drawing).
+"""
+from __future__ import annotations
+
+import csv
+import datetime
+import math
+import os
+import pathlib
+import platform
+import sys
+import tempfile
+from typing import Any, Dict, Iterable, List, Optional, Sequence
+
+import numpy as np
+
+import brdfz
+
+Row = Dict[str, Any]
+
+METRICS = ["cos_rmse_rel", "cos_rmse", "log_rmse", "cbrt_rmse"]
+# Columns of the error measured over direction pairs (brdfz.metrics(over="directions")), when measured,
+# in the order of the grid's columns.
+DIRECTIONS_METRICS = ["directions_" + m for m in ("cos_rmse", "cos_rmse_rel", "log_rmse", "cbrt_rmse")]
+DEFAULT_BUDGETS = [0.02, 0.05]
+# Log axes cannot show 0: smaller errors (a lossless table) are drawn at this floor.
+ERROR_FLOOR = 1e-6
+AUTO_COLUMNS = ["material", "budget", "chosen", "bytes", "cos_rmse_rel", "eval_pairs_per_s", "build_s", "tried"]
+# Catalogue column -> the column of the same quantity in auto rows.
+_AUTO_NAME = {"bytes": "bytes", "eval_rate": "eval_pairs_per_s"}
+_AXIS_LABEL = {"bytes": "bytes", "eval_rate": "eval pairs/s (one thread)"}
+
+
+# ----------------------------------------------------------------------------------------------- rows
+
+def value(row: Row, key: str) -> float:
+    """A numeric cell as a float; NaN when empty or absent."""
+    v = row.get(key)
+    return math.nan if v is None or v == "" else float(v)
+
+
+def ok(row: Row) -> bool:
+    return row["status"] == "ok"
+
+
+def by_material(rows: Iterable[Row]) -> Dict[str, List[Row]]:
+    out: Dict[str, List[Row]] = {}
+    for r in rows:
+        out.setdefault(r["material"], []).append(r)
+    return out
+
+
+def has_directions(rows: Sequence[Row]) -> bool:
+    return any(ok(r) and r.get("directions_cos_rmse_rel") not in (None, "") for r in rows)
+
+
+def method(spec: str) -> str:
+    """The method a setting belongs to, for colours and per-method fronts: its kind, and the stored
+    type of tables ("tabular u8log")."""
+    kind, _, options = spec.partition(":")
+    dtype = [o.split("=", 1)[1] for o in options.split(",") if o.startswith("dtype=")]
+    return kind + (" " + dtype[0] if dtype else "")
+
+
+def pareto_front(xs: Sequence[float], ys: Sequence[float], *, maximize_x: bool = False) -> List[int]:
+    """Indices of the points no other point beats in both coordinates (smaller y, and smaller x, or
+    larger with maximize_x), ordered along x from best to worst. Of equal points, the first is kept."""
+    sign = -1.0 if maximize_x else 1.0
+    order = sorted(range(len(xs)), key=lambda i: (sign * xs[i], ys[i], i))
+    front, best_y = [], math.inf
+    for i in order:
+        if ys[i] < best_y:
+            front.append(i)
+            best_y = ys[i]
+    return front
+
+
+def size_front(rows: Sequence[Row]) -> List[Row]:
+    """The ok rows on the bytes vs cos_rmse_rel Pareto front, smallest first."""
+    good = [r for r in rows if ok(r)]
+    return [good[i] for i in pareto_front([value(r, "bytes") for r in good], [value(r, "cos_rmse_rel") for r in good])]
+
+
+def representatives(rows: Sequence[Row], count: int = 4) -> List[Row]:
+    """Up to `count` settings spread along the material's size vs cos_rmse_rel Pareto front."""
+    front = size_front(rows)
+    if len(front) <= count:
+        return front
+    return [front[round(k * (len(front) - 1) / (count - 1))] for k in range(count)]
+
+
+def smallest_within(rows: Sequence[Row], limit: float) -> Optional[Row]:
+    fits = [r for r in rows if ok(r) and value(r, "cos_rmse_rel") <= limit]
+    return min(fits, key=lambda r: value(r, "bytes")) if fits else None
+
+
+def budget_choice(rows: Sequence[Row], budgets: Sequence[float]) -> List[Row]:
+    """Per material and budget, the smallest setting of the catalogue whose cos_rmse_rel is within the
+    budget: the choice `brdfz compress --auto --metric cos` makes with these settings as candidates.
+    Rows with AUTO_COLUMNS; "chosen" empty when none is."""
+    out = []
+    for name, mine in by_material(rows).items():
+        for budget in budgets:
+            r = smallest_within(mine, budget)
+            a = dict.fromkeys(AUTO_COLUMNS, "") | {"material": name, "budget": f"{budget:g}",
+                                                   "tried": str(sum(ok(x) for x in mine))}
+            if r:
+                a |= {"chosen": r["spec"], "bytes": str(int(value(r, "bytes"))), "cos_rmse_rel": fmt(r["cos_rmse_rel"]),
+                      "eval_pairs_per_s": fmt(r["eval_rate"]), "build_s": fmt(r["build_seconds"])}
+            out.append(a)
+    return out
+
+
+# ---------------------------------------------------------------------------------------------- files
+
+def fmt(v: Any) -> str:
+    """A cell as CSV text: numbers as C's %.6g (bench/compress_sweep's), None as empty."""
+    if v is None:
+        return ""
+    if isinstance(v, float):
+        return format(v, ".6g")
+    return str(v)
+
+
+def atomic_write(path: pathlib.Path, write) -> None:
+    """write(file object) into a temporary file beside `path`, then rename it over `path`: readers see
+    the old file or the new one, never part of one."""
+    path = pathlib.Path(path)
+    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
+    try:
+        with os.fdopen(fd, "w", newline="") as f:
+            write(f)
+        os.replace(tmp, path)
+    except BaseException:
+        os.unlink(tmp)
+        raise
+
+
+def write_csv(rows: Sequence[Row], path: pathlib.Path, columns: Sequence[str]) -> None:
+    def write(f):
+        w = csv.DictWriter(f, fieldnames=columns, lineterminator="\n", extrasaction="ignore")
+        w.writeheader()
+        w.writerows({c: fmt(r.get(c)) for c in columns} for r in rows)
+
+    atomic_write(path, write)
+
+
+class Bar:
+    """A progress bar on stderr, "label  37% [#######.............] 12/32 what", rewritten in place on a
+    terminal; elsewhere (logs) one line per finished step."""
+
+    def __init__(self, label: str, total: int, stream=None):
+        self.label, self.total, self.done = label, max(total, 1), 0
+        self.stream = stream or sys.stderr
+        self.tty = self.stream.isatty()
+
+    def _line(self, what: str) -> str:
+        filled = 20 * self.done // self.total
+        return (f"{self.label} {100 * self.done // self.total:3d}% [{'#' * filled}{'.' * (20 - filled)}]"
+                f" {self.done}/{self.total} {what}")
+
+    def step(self, what: str = "") -> None:
+        self.done += 1
+        if self.tty:
+            self.stream.write("\r\033[K" + self._line(what) + ("\n" if self.done >= self.total else ""))
+        else:
+            self.stream.write(self._line(what) + "\n")
+        self.stream.flush()
+
+
+# --------------------------------------------------------------------------------------------- charts
+
+def _plt():
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    return plt
+
+
+def _colours(methods: Sequence[str]) -> Dict[str, object]:
+    names = sorted(set(methods))
+    cmap = _plt().get_cmap("tab10" if len(names) <= 10 else "tab20")
+    return {m: cmap(k % cmap.N) for k, m in enumerate(names)}
+
+
+def _panels(n: int, title: str):
+    plt = _plt()
+    cols = min(4, n)
+    rows = math.ceil(n / cols)
+    fig, axes = plt.subplots(rows, cols, figsize=(max(4.2 * cols, 7.0), 3.6 * rows + 1.0), squeeze=False)
+    for ax in axes.flat[n:]:
+        ax.set_visible(False)
+    fig.suptitle(title, fontsize="medium")
+    return fig, list(axes.flat[:n])
+
+
+def _finish(fig, handles_from, path: pathlib.Path) -> None:
+    handles = {}
+    for ax in handles_from:
+        for h, label in zip(*ax.get_legend_handles_labels()):
+            handles.setdefault(label, h)
+    fig.legend(list(handles.values()), list(handles.keys()), loc="lower center", ncol=min(6, len(handles)),
+               fontsize="small", frameon=False)
+    fig.tight_layout(rect=(0, 0.04 + 0.02 * math.ceil(len(handles) / 6), 1, 1))
+    fig.savefig(path, dpi=90)
+    _plt().close(fig)
+
+
+def chart_tradeoff(rows: Sequence[Row], x: str, y: str, path: pathlib.Path, *, maximize_x: bool = False) -> None:
+    """One log-log panel per material: every ok setting coloured by method, the Pareto front joined
+    and its points labelled."""
+    mats = by_material([r for r in rows if ok(r) and not math.isnan(value(r, y))])
+    colours = _colours([method(r["spec"]) for r in rows])
+    xlabel = _AXIS_LABEL[x]
+    fig, axes = _panels(len(mats), f"{xlabel} vs {y}; Pareto front: black (errors < {ERROR_FLOOR:g} drawn at it)")
+    for ax, (name, mine) in zip(axes, mats.items()):
+        xs = [value(r, x) for r in mine]
+        ys = [max(value(r, y), ERROR_FLOOR) for r in mine]
+        for r, px, py in zip(mine, xs, ys):
+            ax.scatter(px, py, color=colours[method(r["spec"])], label=method(r["spec"]), s=28, zorder=2)
+        front = pareto_front(xs, ys, maximize_x=maximize_x)
+        ax.plot([xs[i] for i in front], [ys[i] for i in front], "k-", lw=1, zorder=1, drawstyle="steps-post")
+        ax.scatter([xs[i] for i in front], [ys[i] for i in front], facecolors="none", edgecolors="k", s=70, zorder=3)
+        for i in front:
+            ax.annotate(mine[i]["spec"].replace("tabular:", "").replace("analytic:", ""), (xs[i], ys[i]),
+                        fontsize=6, xytext=(3, 3), textcoords="offset points")
+        ax.set(xscale="log", yscale="log", title=name, xlabel=xlabel, ylabel=y)
+        ax.grid(True, which="major", alpha=0.3)
+    _finish(fig, axes, path)
+
+
+def chart_auto(rows: Sequence[Row], auto: Sequence[Row], x: str, path: pathlib.Path) -> None:
+    """Per material: each method's Pareto front (size or speed vs cos_rmse_rel) as a line, the setting
+    chosen at each budget as a star."""
+    mats = by_material([r for r in rows if ok(r)])
+    colours = _colours([method(r["spec"]) for r in rows])
+    maximize_x = x == "eval_rate"
+    fig, axes = _panels(len(mats), "chosen at each cos_rmse_rel budget (dotted) over each method's Pareto front")
+    markers = "*PXD^v"
+    budgets = sorted({a["budget"] for a in auto}, key=float)
+    for ax, (name, mine) in zip(axes, mats.items()):
+        for m in sorted({method(r["spec"]) for r in mine}):
+            pts = [r for r in mine if method(r["spec"]) == m]
+            xs = [value(r, x) for r in pts]
+            ys = [max(value(r, "cos_rmse_rel"), ERROR_FLOOR) for r in pts]
+            front = pareto_front(xs, ys, maximize_x=maximize_x)
+            ax.plot([xs[i] for i in front], [ys[i] for i in front], "-o", color=colours[m], ms=3, lw=1, alpha=0.6,
+                    label=m)
+        for a in auto:
+            if a["material"] == name and a["chosen"]:
+                k = budgets.index(a["budget"]) % len(markers)
+                ax_x, ax_y = float(a[_AUTO_NAME[x]]), max(float(a["cos_rmse_rel"]), ERROR_FLOOR)
+                ax.scatter(ax_x, ax_y, marker=markers[k], s=160, color="k", zorder=3,
+                           label=f"chosen at budget {a['budget']}")
+                ax.annotate(a["chosen"], (ax_x, ax_y), fontsize=6, xytext=(4, -9), textcoords="offset points")
+        for b in budgets:
+            ax.axhline(float(b), color="grey", ls=":", lw=1)
+        ax.set(xscale="log", yscale="log", title=name, xlabel=_AXIS_LABEL[x], ylabel="cos_rmse_rel")
+        ax.grid(True, which="major", alpha=0.3)
+    _finish(fig, axes, path)
+
+
+def write_charts(out: pathlib.Path, rows: Sequence[Row], auto: Sequence[Row]) -> List[str]:
+    """Every chart of a catalogue into `out`: bytes vs each error metric (over directions too when
+    measured), eval speed vs error, and with `auto` rows the choices over the Pareto fronts. Returns
+    the file names (none when no row is ok)."""
+    if not any(ok(r) for r in rows):
+        return []
+    charts = []
+    metrics = METRICS + (["directions_" + m for m in METRICS] if has_directions(rows) else [])
+    for metric in metrics:
+        chart_tradeoff(rows, "bytes", metric, out / f"size_vs_{metric}.png")
+        charts.append(f"size_vs_{metric}.png")
+    chart_tradeoff(rows, "eval_rate", "cos_rmse_rel", out / "speed_vs_error.png", maximize_x=True)
+    charts.append("speed_vs_error.png")
+    if auto:
+        for x, name in (("bytes", "auto_size_vs_error.png"), ("eval_rate", "auto_speed_vs_error.png")):
+            chart_auto(rows, auto, x, out / name)
+            charts.append(name)
+    return charts
+
+
+# -------------------------------------------------------------------------------------------- renders
+
+# The fixed lighting of every render: a directional light towards upper left front, and a sky that
+# brightens upwards, sampled at fixed directions (a Fibonacci sphere, the same for every image).
+LIGHT = np.array([-0.45, 0.55, 0.7]) / np.linalg.norm([-0.45, 0.55, 0.7])
+LIGHT_IRRADIANCE = 2.0
+
+
+def sky(d: np.ndarray) -> np.ndarray:
+    up = d[:, 1:2]
+    return np.where(up > 0, 0.25 + 0.35 * up, 0.12 + 0.05 * up) * np.array([0.85, 0.95, 1.1])
+
+
+def fibonacci_sphere(n: int) -> np.ndarray:
+    k = np.arange(n) + 0.5
+    z = 1 - 2 * k / n
+    phi = k * math.pi * (3 - math.sqrt(5))
+    r = np.sqrt(1 - z * z)
+    return np.stack([r * np.cos(phi), r * np.sin(phi), z], axis=1)
+
+
+def _local(d: np.ndarray, t: np.ndarray, b: np.ndarray, n: np.ndarray) -> np.ndarray:
+    return np.stack([(d * t).sum(1), (d * b).sum(1), (d * n).sum(1)], axis=1)
+
+
+def render_sphere(brdf: brdfz.Brdf, size: int = 128, env_samples: int = 64) -> np.ndarray:
+    """Radiance (size, size, 3) of an orthographic unit sphere seen along -z: at each pixel the normal
+    gives the local frame (brdf.h: normal +z), wo is the view direction; the light contributes
+    f·cosθi·E and each sky direction f·cosθi·L·4π/n. Black outside the sphere."""
+    u = (np.arange(size) + 0.5) / size * 2 - 1
+    x, y = np.meshgrid(u, -u)
+    inside = x * x + y * y < 1
+    n = np.stack([x[inside], y[inside], np.sqrt(1 - x[inside] ** 2 - y[inside] ** 2)], axis=1)
+    # An orthonormal tangent frame without a singularity (Duff et al. 2017).
+    s = np.where(n[:, 2] >= 0, 1.0, -1.0)
+    a = -1 / (s + n[:, 2])
+    bb = n[:, 0] * n[:, 1] * a
+    t = np.stack([1 + s * n[:, 0] ** 2 * a, s * bb, -s * n[:, 0]], axis=1)
+    b = np.stack([bb, s + n[:, 1] ** 2 * a, -n[:, 1]], axis=1)
+    wo = _local(np.broadcast_to([0.0, 0.0, 1.0], n.shape), t, b, n)
+    wi = _local(np.broadcast_to(LIGHT, n.shape), t, b, n)
+    radiance = brdf.eval_cos(wi, wo) * LIGHT_IRRADIANCE
+    dirs = fibonacci_sphere(env_samples)
+    for d, L in zip(dirs, sky(dirs)):
+        radiance += brdf.eval_cos(_local(np.broadcast_to(d, n.shape), t, b, n), wo) * L * (4 * math.pi / env_samples)
+    image = np.zeros((size, size, 3))
+    image[inside] = radiance
+    return image
+
+
+def tone_map(image: np.ndarray, exposure: float) -> np.ndarray:
+    return np.clip(image * exposure, 0, 1) ** (1 / 2.2)
+
+
+def render_material(name: str, ref: brdfz.Brdf, reps: Sequence[Row], brdfs: Sequence[brdfz.Brdf],
+                    path: pathlib.Path, size: int, env_samples: int) -> None:
+    """Reference and each representative setting (`reps`, built as `brdfs`) side by side, the ×10
+    absolute error under each, all tone-mapped with the reference's exposure."""
+    plt = _plt()
+    reference = render_sphere(ref, size, env_samples)
+    lum = reference.mean(axis=2)
+    exposure = 0.8 / max(np.percentile(lum[lum > 0], 99) if (lum > 0).any() else 1.0, 1e-12)
+    fig, axes = plt.subplots(2, len(reps) + 1, figsize=(2.4 * (len(reps) + 1), 5.3), squeeze=False)
+    axes[0][0].imshow(tone_map(reference, exposure))
+    axes[0][0].set_title(f"{name}\nreference", fontsize=8)
+    axes[1][0].text(0.5, 0.5, "×10 |error|\n(same exposure)", ha="center", va="center", fontsize=8)
+    for k, (r, brdf) in enumerate(zip(reps, brdfs), start=1):
+        image = render_sphere(brdf, size, env_samples)
+        axes[0][k].imshow(tone_map(image, exposure))
+        axes[0][k].set_title(f"{r['spec']}\n{int(value(r, 'bytes')):,} B, cos_rmse_rel {value(r, 'cos_rmse_rel'):.3g}",
+                             fontsize=7)
+        axes[1][k].imshow(tone_map(10 * np.abs(image - reference), exposure))
+    for ax in axes.flat:
+        ax.axis("off")
+    fig.tight_layout()
+    fig.savefig(path, dpi=90)
+    plt.close(fig)
+
+
+# -------------------------------------------------------------------------------------------- summary
+
+def _table(header: Sequence[str], rows: Sequence[Sequence[object]]) -> str:
+    lines = ["| " + " | ".join(header) + " |", "|" + "---|" * len(header)]
+    lines += ["| " + " | ".join(str(c) for c in r) + " |" for r in rows]
+    return "\n".join(lines) + "\n"
+
+
+def _g(v: Any) -> str:
+    return "" if v in (None, "") else f"{float(v):.3g}"
+
+
+def _smallest_cells(rows: Sequence[Row], limit: float) -> List[str]:
+    r = smallest_within(rows, limit)
+    return [f"`{r['spec']}`", f"{int(value(r, 'bytes')):,}"] if r else ["none", ""]
+
+
+def write_summary(out: pathlib.Path, title: str, rows: Sequence[Row], charts: Sequence[str], *,
+                  source: str, table: str, renders: Sequence[str] = (), auto: Sequence[Row] = (),
+                  auto_heading: str = "") -> pathlib.Path:
+    """out/summary.md: the smallest setting within 2 % and 5 %, every chart, each material's Pareto
+    front, eval speed per method, the choices at the budgets (`auto`, under `auto_heading`), the
+    renders and the failed tasks. `table` names the file with every row."""
+    mats = by_material(rows)
+    directions = has_directions(rows)
+    md = [f"# {title}\n",
+          f"{len(mats)} materials × {len({r['spec'] for r in rows})} settings from {source}; "
+          f"{datetime.date.today()}, {platform.node()} ({os.cpu_count()} CPUs, {platform.processor() or platform.machine()}). "
+          "Errors are against each material's own data (cos_rmse_rel: cosine-weighted RMSE relative to the "
+          "reference's RMS, channel mean; over the grid"
+          + (", and over direction pairs uniform in solid angle: directions_*" if directions else "")
+          + f"); eval speed is batch eval on one thread. All rows: [{table}]({table}).\n",
+          "## Smallest setting within an error\n",
+          _table(["material", "≤ 2 % cos_rmse_rel", "bytes", "≤ 5 % cos_rmse_rel", "bytes"],
+                 [[m, *_smallest_cells(mine, 0.02), *_smallest_cells(mine, 0.05)] for m, mine in mats.items()]),
+          "## Size and speed against error\n"]
+    md += [f"![{c}]({c})\n" for c in charts if not c.startswith("auto_")]
+    md.append("## Pareto-optimal settings (bytes vs cos_rmse_rel)\n")
+    header = ["setting", "bytes", "ratio", "cos_rmse_rel", "log_rmse", "eval pairs/s", "build s"]
+    for m, mine in mats.items():
+        cells = [[f"`{r['spec']}`", f"{int(value(r, 'bytes')):,}", _g(r.get("ratio")), _g(r["cos_rmse_rel"]),
+                  _g(r["log_rmse"]), _g(r["eval_rate"]), _g(r["build_seconds"])]
+                 + ([_g(r.get("directions_cos_rmse_rel"))] if directions else []) for r in size_front(mine)]
+        md += [f"### {m}\n", _table(header + (["cos_rmse_rel over directions"] if directions else []), cells)]
+    speeds: Dict[str, List[float]] = {}
+    for r in rows:
+        if ok(r):
+            speeds.setdefault(method(r["spec"]), []).append(value(r, "eval_rate"))
+    md += ["## Eval speed per method (pairs/s, one thread, over materials and settings)\n",
+           _table(["method", "median", "min", "max"],
+                  [[m, f"{np.median(v):.3g}", f"{min(v):.3g}", f"{max(v):.3g}"] for m, v in sorted(speeds.items())])]
+    if auto:
+        md += [f"## {auto_heading}\n",
+               _table(["material", "budget", "chosen", "bytes", "cos_rmse_rel", "eval pairs/s", "candidates tried"],
+                      [[a["material"], a["budget"], f"`{a['chosen']}`" if a["chosen"] else "none within the budget",
+                        f"{int(a['bytes']):,}" if a["bytes"] else "", _g(a["cos_rmse_rel"]),
+                        _g(a["eval_pairs_per_s"]), a["tried"]] for a in auto])]
+        md += [f"![{c}]({c})\n" for c in charts if c.startswith("auto_")]
+    if renders:
+        md.append("## Renders (reference, Pareto-optimal settings, ×10 error)\n")
+        md += [f"![{r}]({r})\n" for r in renders]
+    failed = [r for r in rows if not ok(r)]
+    if failed:
+        md += ["## Failed\n",
+               _table(["material", "setting", "error"], [[r["material"], f"`{r['spec']}`", r["error"]] for r in failed])]
+    path = out / "summary.md"
+    atomic_write(path, lambda f: f.write("\n".join(md)))
+    return path

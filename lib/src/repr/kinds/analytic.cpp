@@ -1,0 +1,52 @@
+// Kind `analytic`: analytic lobes fitted with Ceres (fit/fit.h), from a BRDF or from scattered
+// measurements.
+#include "brdfz/errors.h"
+#include "brdfz/fit/fit.h"
+#include "common.h"
+
+namespace brdfz::kinds {
+namespace {
+
+FitOptions analytic_options(const ReprSpec& spec, const CompressOptions& options) {
+    if (spec.positional().empty())
+        throw ValueError("analytic: name the model, e.g. analytic:lambert+ggx");
+    FitOptions fit_options;
+    fit_options.loss = parse_fit_loss(spec.get_choice("loss", "log", {"log", "cos", "cbrt"}));
+    fit_options.starts = spec.get_int("starts", fit_options.starts, 1, 1000);
+    fit_options.seed = static_cast<std::uint64_t>(spec.get_int("seed", 1, 0, 1 << 30));
+    spec.finish();
+    fit_options.threads = options.threads;
+    fit_options.progress = options.progress;
+    return fit_options;
+}
+
+Compressed from_fit(FitResult fitted) {
+    Compressed out;
+    out.notes.push_back(std::string("fit ") + fit_status_name(fitted.report.status) + ": " + fitted.report.message);
+    for (const std::string& w : fitted.report.warnings) out.notes.push_back(w);
+    out.brdf = std::make_unique<AnalyticBrdf>(std::move(fitted.model));
+    return out;
+}
+
+Compressed build(const Brdf& source, const ReprSpec& spec, const CompressOptions& options) {
+    return from_fit(fit(source, spec.positional(), analytic_options(spec, options)));
+}
+
+Compressed build_measurements(const MeasurementSet& source, const ReprSpec& spec, const CompressOptions& options) {
+    return from_fit(fit(source, spec.positional(), analytic_options(spec, options)));
+}
+
+}  // namespace
+
+void register_analytic(std::vector<ReprKind>& out) {
+    out.push_back({"analytic",
+                   "analytic lobes fitted with Ceres, lobes joined by + (docs/fitting.md, docs/model-json.md)",
+                   "MODEL",
+                   {{"loss", "log", "log|cos|cbrt: the residual's transform"},
+                    {"starts", "8", "multi-start count, 1-1000"},
+                    {"seed", "1", "seed of the starts"}},
+                   build,
+                   build_measurements});
+}
+
+}  // namespace brdfz::kinds

@@ -1,0 +1,56 @@
+// What several kinds' builders share: reading the keys they have in common, and the notes a
+// tabulation leaves for Compressed::notes.
+#pragma once
+
+#include <functional>
+#include <string>
+
+#include "brdfz/compress.h"
+#include "brdfz/repr/compact_table.h"
+#include "brdfz/repr/phi_h.h"
+#include "brdfz/table.h"
+#include "brdfz/tabulate.h"
+
+namespace brdfz::kinds {
+
+inline const SpecKey kLookupKey{"lookup", "linear", "linear|nearest: interpolation of the stored grid"};
+inline const SpecKey kWarpKey{"dwarp", "0", "in [0, 0.95]: θd bins narrowing towards grazing (0: linear axis)"};
+inline const SpecKey kSymmetryKey{"symmetry", "reciprocal",
+                                  "reciprocal|none: φd over [0, π), a pair and its exchange sharing a bin (their mean), "
+                                  "or over [0, 2π), non-reciprocal data kept"};
+inline const SpecKey kWeightKey{"weight", "bins",
+                                "bins|solid: the lsq fit's points weighed as the grid's bins, or by solid angle (the "
+                                "metrics over directions)"};
+
+// The φh axis (repr/phi_h.h) of the kinds that take one: phih=N and a symmetry= that may be bilateral.
+inline const SpecKey kPhiHKey{"phih", "1",
+                              "φh slices, 1-4096: 1 isotropic (no φh axis); N >= 2 one table per half-vector azimuth, "
+                              "interpolated linearly (anisotropic data)"};
+inline const SpecKey kPhiHSymmetryKey{
+    "symmetry", "reciprocal",
+    "reciprocal|none|bilateral: φd over [0, π) (a pair and its exchange sharing a bin) or [0, 2π); bilateral (phih >= 2): "
+    "mirror y -> -y, φh over [0, π], φd over [0, 2π)"};
+
+// symmetry= of a kind with a φh axis, `fallback` when absent; ValueError for bilateral with phih = 1.
+std::string phi_h_symmetry_option(const ReprSpec& spec, int phih, Symmetry fallback = Symmetry::Reciprocal);
+
+// phih=N slices of `source` (tabulate_phi_h), each built by build_slice from the rotated source with
+// the slices' φd symmetry; their notes once each.
+Compressed build_phi_h(const Brdf& source, int n, PhiHSymmetry symmetry,
+                       const std::function<Compressed(const Brdf&, Symmetry)>& build_slice);
+
+// What tabulating `source` left out or changed.
+void note_tabulation(const Brdf& source, const Tabulated& t, Compressed& out);
+
+Lookup lookup_option(const ReprSpec& spec);
+// dwarp=W (GridSpec::theta_d_warp).
+double theta_d_warp_option(const ReprSpec& spec);
+// symmetry=reciprocal|none (GridSpec::symmetry), `fallback` when absent.
+Symmetry symmetry_option(const ReprSpec& spec, Symmetry fallback = Symmetry::Reciprocal);
+// weight=bins|solid (TabulateOptions::FitWeight), a key of the least-squares fits only (`lsq`).
+TabulateOptions::FitWeight weight_option(const ReprSpec& spec, bool lsq);
+
+// tabulate(source, tab) (its grid validated first), with the notes it leaves in `out`.
+Tabulated tabulate_noted(const Brdf& source, const TabulateOptions& tab, Compressed& out);
+
+}  // namespace brdfz::kinds
