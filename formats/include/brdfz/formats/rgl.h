@@ -68,7 +68,8 @@ struct Tensors {
     std::vector<float> phi_i;    // incident azimuths (radians) the tables are tabulated at; empty or one
                                  // entry (its value unused): isotropic
     std::vector<float> theta_i;  // incident elevations (radians) the θi-dependent grids are tabulated at
-    Grids ndf;                   // 1 slice: microfacet distribution D(m), x = u_θm, y = u_φm (relative to φi)
+    Grids ndf;                   // 1 slice: microfacet distribution D(m), x = u_θm, y = u_φm (relative to φi;
+                                 // absolute with more than two phi_i entries)
     Grids sigma;                 // 1 slice: projected microfacet area σ(wi), x = u_θi, y = u_φi
     Grids vndf;                  // one slice per θi: visible normal density, x = u_θm, y = u_φm
     Grids luminance;             // one slice per θi over the VNDF warp's unit square (as rgb), or
