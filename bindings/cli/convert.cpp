@@ -12,6 +12,7 @@ void add_convert(CLI::App& app) {
     struct Args {
         std::string in, out, res, from, to;
         LoadOptions load;
+        int phi_i = 1;
     };
     auto args = std::make_shared<Args>();
     CLI::App* cmd = app.add_subcommand("convert", "convert between formats (brdfz formats lists them)");
@@ -20,12 +21,15 @@ void add_convert(CLI::App& app) {
     cmd->add_option("--res", args->res, "table resolution NHxNDxNP (default: the input's, or 90x90x180)");
     cmd->add_option("--from", args->from, "input format (default: from the extension of IN)");
     cmd->add_option("--to", args->to, "output format (default: from the extension of OUT)");
+    cmd->add_option("--phi-i", args->phi_i,
+                    ".bsdf output: φi slices (1: isotropic, the default; 3..4096: an anisotropic file)");
     add_load_options(cmd, args->load);
     cmd->callback([args] {
         ConvertOptions options;
         options.from = args->from;
         options.load = args->load;
         options.save.format = args->to;
+        options.save.rgl_phi_i = args->phi_i;
         if (!args->res.empty()) options.save.grid = parse_resolution(args->res);
         options.save.progress = progress_bar("tabulating");
         const ValidityCounts c = convert(args->in, args->out, options);

@@ -10,6 +10,7 @@
 #include "brdfz/errors.h"
 #include "brdfz/formats/rgl.h"
 #include "brdfz/simd.h"
+#include "aniso.h"
 #include "kernels.h"
 #include "marginal2d.h"
 
@@ -46,18 +47,32 @@ RglBrdf::RglBrdf(Tensors tensors) : tensors_(std::move(tensors)) {
     check_finite("theta_i", t.theta_i);
     for (std::size_t k = 1; k < n_theta; ++k)
         if (!(t.theta_i[k - 1] < t.theta_i[k])) throw ValueError("rgl: theta_i is not strictly increasing");
+    const std::size_t n_slices = std::max<std::size_t>(t.phi_i.size(), 1) * n_theta;
     check_grids("ndf", t.ndf, 1);
     check_grids("sigma", t.sigma, 1);
-    check_grids("vndf", t.vndf, n_theta);
-    check_grids("rgb", t.rgb, 3 * n_theta);
+    check_grids("vndf", t.vndf, n_slices);
+    check_grids("rgb", t.rgb, 3 * n_slices);
     check_finite("ndf", t.ndf.values);
     check_finite("sigma", t.sigma.values);
     check_finite("vndf", t.vndf.values);
     if (!t.luminance.values.empty()) {
-        check_grids("luminance", t.luminance, n_theta);
+        check_grids("luminance", t.luminance, n_slices);
         if (t.luminance.rows != t.rgb.rows || t.luminance.cols != t.rgb.cols)
             throw ValueError("rgl: luminance grid is not shaped like the rgb grid");
         check_finite("luminance", t.luminance.values);
+    }
+    // Mitsuba would return NaN wherever such a value contributes; 0 keeps eval finite.
+    for (float& v : t.rgb.values)
+        if (!std::isfinite(v)) v = 0.0f;
+    // Nothing is measured at θi = 90° (no irradiance): a slice there pads the range for interpolation
+    // (in the RGL-EPFL files a copy of the last measured slice's rgb table, at 90° less a float ulp).
+    const bool padded = n_theta > 1 && t.theta_i.back() >= std::numbers::pi / 2 - 1e-6;
+    measured_theta_max_ = t.theta_i[n_theta - (padded ? 2 : 1)];
+    if (t.phi_i.size() > 1) {  // tabulated over φi too: detail::Anisotropic does all the work, one pair at a time
+        aniso_ = std::make_unique<const detail::Anisotropic>(t);
+        return;
+    }
+    if (!t.luminance.values.empty()) {
         // Real files hold slightly negative luminance (noise; Mitsuba renders them): it is only the
         // sampler's first warp, so it is sampled as max(v, 0), and not at all when a slice has no mass.
         std::vector<float> density(t.luminance.values.size());
@@ -72,13 +87,6 @@ RglBrdf::RglBrdf(Tensors tensors) : tensors_(std::move(tensors)) {
             luminance_ = std::make_unique<const detail::Marginal2D>("rgl: luminance", density, t.luminance.slices,
                                                                     t.luminance.rows, t.luminance.cols);
     }
-    // Mitsuba would return NaN wherever such a value contributes; 0 keeps eval finite.
-    for (float& v : t.rgb.values)
-        if (!std::isfinite(v)) v = 0.0f;
-    // Nothing is measured at θi = 90° (no irradiance): a slice there pads the range for interpolation
-    // (in the RGL-EPFL files a copy of the last measured slice's rgb table, at 90° less a float ulp).
-    const bool padded = n_theta > 1 && t.theta_i.back() >= std::numbers::pi / 2 - 1e-6;
-    measured_theta_max_ = t.theta_i[n_theta - (padded ? 2 : 1)];
     vndf_ = std::make_unique<const detail::Marginal2D>("rgl: vndf", t.vndf.values, t.vndf.slices, t.vndf.rows,
                                                        t.vndf.cols);
     // Each point's channels, slices innermost (kernels.h): the planes (3s + c) of the tensor as 3N
@@ -106,7 +114,8 @@ std::size_t RglBrdf::nbytes() const {
 std::string RglBrdf::describe() const {
     const Tensors& t = tensors_;
     const auto grid = [](const Grids& g) { return std::to_string(g.rows) + "x" + std::to_string(g.cols); };
-    return "rgl isotropic rgb " + std::to_string(t.theta_i.size()) + " theta_i x " + grid(t.rgb) + " (vndf " +
+    const std::string phi = aniso_ ? "anisotropic rgb " + std::to_string(t.phi_i.size()) + " phi_i x " : "isotropic rgb ";
+    return "rgl " + phi + std::to_string(t.theta_i.size()) + " theta_i x " + grid(t.rgb) + " (vndf " +
            grid(t.vndf) + ", ndf " + grid(t.ndf) + ", sigma " + grid(t.sigma) + (t.jacobian ? "" : ", no jacobian") +
            (luminance_ ? "" : ", no luminance") + "; Mitsuba 'measured' evaluation and sampling)";
 }
@@ -128,11 +137,18 @@ Rgb RglBrdf::eval_above(const Vec3& wi, const Vec3& wo) const {
 }
 
 void RglBrdf::eval_batch(const Vec3* wi, const Vec3* wo, Rgb* out, std::size_t n) const {
+    if (aniso_) {
+        for (std::size_t k = 0; k < n; ++k)
+            out[k] = wi[k].z > 0.0 && wo[k].z > 0.0 ? aniso_->eval(wi[k], wo[k]) : Rgb{0.0, 0.0, 0.0};
+        return;
+    }
     detail::eval_pairs(simd_level(), kernel_tables(), wi, wo, out, n);
 }
 
-// The kernel sets the weight with the draw, so Brdf::sample does not evaluate it again.
+// The kernel sets the weight with the draw, so Brdf::sample does not evaluate it again (the anisotropic
+// path leaves it to Brdf::sample).
 BrdfSample RglBrdf::sample_above(const Vec3& wo, double u1, double u2) const {
+    if (aniso_) return aniso_->sample(wo, u1, u2);
     const std::array<double, 2> u{u1, u2};
     BrdfSample s;
     sample_batch(&wo, &u, &s, 1);
@@ -140,6 +156,10 @@ BrdfSample RglBrdf::sample_above(const Vec3& wo, double u1, double u2) const {
 }
 
 void RglBrdf::sample_batch(const Vec3* wo, const std::array<double, 2>* u, BrdfSample* out, std::size_t n) const {
+    if (aniso_) {  // the base's draw (sample_above), then the weights from eval
+        Brdf::sample_batch(wo, u, out, n);
+        return;
+    }
     detail::sample_pairs(simd_level(), kernel_tables(), wo, u, out, n);
 }
 
@@ -150,6 +170,10 @@ double RglBrdf::pdf_above(const Vec3& wo, const Vec3& wi) const {
 }
 
 void RglBrdf::pdf_batch(const Vec3* wo, const Vec3* wi, double* out, std::size_t n) const {
+    if (aniso_) {
+        for (std::size_t k = 0; k < n; ++k) out[k] = wo[k].z > 0.0 && wi[k].z > 0.0 ? aniso_->pdf(wo[k], wi[k]) : 0.0;
+        return;
+    }
     detail::pdf_pairs(simd_level(), kernel_tables(), wo, wi, out, n);
 }
 

@@ -20,9 +20,11 @@ Loaded read(const std::string& path, const LoadOptions&) {
     return out;
 }
 
-ValidityCounts write(const Brdf& brdf, const std::string& path, const SaveOptions&) {
+ValidityCounts write(const Brdf& brdf, const std::string& path, const SaveOptions& options) {
     ValidityCounts written;
-    written.valid = rgl::write(path, brdf);
+    rgl::WriteOptions w;
+    w.n_phi_i = options.rgl_phi_i;
+    written.valid = rgl::write(path, brdf, w);
     return written;
 }
 
@@ -41,7 +43,7 @@ void examples(const std::string& dir) {
 }  // namespace
 
 void register_rgl(std::vector<Format>& out) {
-    out.push_back({"rgl", "RGL-EPFL tensor file (isotropic RGB; Dupuy & Jakob 2018), as Mitsuba 3 `measured` reads it",
+    out.push_back({"rgl", "RGL-EPFL tensor file (RGB, isotropic or anisotropic; Dupuy & Jakob 2018), as Mitsuba 3 `measured` reads it",
                    {".bsdf"}, sniff, read, nullptr, write, examples});
 }
 

@@ -15,7 +15,10 @@ using detail::TensorFile;
 
 std::string shape_str(const std::vector<std::uint64_t>& shape) {
     std::string s;
-    for (std::size_t k = 0; k < shape.size(); ++k) s += (k ? "x" : "") + std::to_string(shape[k]);
+    for (std::size_t k = 0; k < shape.size(); ++k) {
+        if (k) s += 'x';
+        s += std::to_string(shape[k]);
+    }
     return shape.empty() ? "scalar" : s;
 }
 
@@ -37,7 +40,7 @@ void expect_shape(const TensorFile& tf, const Field& f, const std::vector<std::u
 }
 
 // A field whose last two dimensions are the rows and columns of its tables; the leading ones (at
-// most {1, θi count, 3}, checked by the caller) count the slices.
+// most {φi count, θi count, 3}, checked by the caller) count the slices.
 Grids read_grids(const TensorFile& tf, const Field& f) {
     Grids g;
     const std::size_t rank = f.shape.size();
@@ -97,22 +100,12 @@ ReadResult read(const std::string& path) {
     const TensorFile tf(path);
 
     // Valid files this library does not handle; recognised before their shapes are checked,
-    // since they differ from the isotropic RGB layout.
+    // since they differ from the RGB layout. Like Mitsuba, the `isotropic` field is not read: the
+    // number of phi_i entries decides (aniso.h).
     if (tf.find("wavelengths") || tf.find("spectra"))
         throw UnsupportedError(path, "spectral RGL file ('wavelengths'/'spectra' fields): only RGB files are "
                                      "supported");
-    if (const Field* iso = tf.find("isotropic")) {
-        const std::vector<std::uint8_t> flag = tf.read_u8(*iso);
-        if (flag.size() != 1)
-            throw FormatError(path, "field 'isotropic' has shape " + shape_str(iso->shape) + ", expected 1");
-        if (flag[0] == 0)
-            throw UnsupportedError(path, "anisotropic RGL file (isotropic flag is 0): only isotropic files are "
-                                         "supported");
-    }
     const Field& phi_i = require(tf, "phi_i", DType::F32, 1);
-    if (phi_i.shape[0] != 1)
-        throw UnsupportedError(path, "anisotropic RGL file (phi_i has " + std::to_string(phi_i.shape[0]) +
-                                         " entries): only isotropic files are supported");
 
     const Field& description = require(tf, "description", DType::U8, 1);
     const Field& jacobian = require(tf, "jacobian", DType::U8, 1);
@@ -123,13 +116,14 @@ ReadResult read(const std::string& path) {
     const Field& luminance = require(tf, "luminance", DType::F32, 4);
     const Field& rgb = require(tf, "rgb", DType::F32, 5);
 
-    const std::uint64_t n_theta = theta_i.shape[0];
+    const std::uint64_t n_theta = theta_i.shape[0], n_phi = phi_i.shape[0];
     if (n_theta == 0) throw FormatError(path, "field 'theta_i' is empty");
+    if (n_phi == 0) throw FormatError(path, "field 'phi_i' is empty");
     expect_shape(tf, jacobian, {1});
-    expect_shape(tf, vndf, {1, n_theta, vndf.shape[2], vndf.shape[3]});
-    expect_shape(tf, rgb, {1, n_theta, 3, rgb.shape[3], rgb.shape[3]});
+    expect_shape(tf, vndf, {n_phi, n_theta, vndf.shape[2], vndf.shape[3]});
+    expect_shape(tf, rgb, {n_phi, n_theta, 3, rgb.shape[3], rgb.shape[3]});
     // The density of the sampler's first warp, over the same square as rgb.
-    expect_shape(tf, luminance, {1, n_theta, rgb.shape[3], rgb.shape[4]});
+    expect_shape(tf, luminance, {n_phi, n_theta, rgb.shape[3], rgb.shape[4]});
 
     ReadResult result;
     for (std::uint64_t d : rgb.shape) result.dims.push_back(static_cast<std::size_t>(d));
@@ -138,6 +132,7 @@ ReadResult read(const std::string& path) {
     while (!result.description.empty() && result.description.back() == '\0') result.description.pop_back();
 
     Tensors t;
+    if (n_phi > 1) t.phi_i = tf.read_f32(phi_i);
     t.theta_i = tf.read_f32(theta_i);
     t.ndf = read_grids(tf, ndf);
     t.sigma = read_grids(tf, sigma);

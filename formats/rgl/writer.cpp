@@ -11,6 +11,7 @@
 #include "brdfz/formats/rgl_writer.h"
 #include "detail/atomic_file.h"
 #include "detail/bytes.h"
+#include "aniso.h"
 #include "marginal2d.h"
 #include "tensor_file.h"
 
@@ -191,6 +192,161 @@ void write_tensor_file(const std::string& path, const std::vector<OutField>& fie
     file.commit();
 }
 
+// ---- anisotropic tables (nφ >= 3 φi slices over [-π, π], absolute azimuths; aniso.h) ----
+
+Vec3 direction(double theta, double phi) {
+    return {std::sin(theta) * std::cos(phi), std::sin(theta) * std::sin(phi), std::cos(theta)};
+}
+
+// Midpoint quadrature nodes over the square (u_θ across, u_φ down) with their solid angle, for the
+// ndf's normalisation and sigma.
+struct Node {
+    double ux, uy, d_omega;
+    Vec3 m;
+};
+std::vector<Node> nodes(int n) {
+    std::vector<Node> out;
+    for (int j = 0; j < n; ++j)
+        for (int i = 0; i < n; ++i) {
+            const double ux = (i + 0.5) / n, uy = (j + 0.5) / n, theta = theta_of_u(ux);
+            // dω = sinθ dθ dφ, dθ = π u_θ du_θ, dφ = 2π du_φ
+            out.push_back({ux, uy, std::sin(theta) * kPi * ux * 2.0 * kPi / (static_cast<double>(n) * n),
+                           normal_at(ux, uy)});
+        }
+    return out;
+}
+
+// D(m) ∝ Y(f(m, m))·cos²θm over the ndf grid (u_θm across, absolute u_φm down), normalised to
+// ∫ D cosθ dω = 1 and mixed with the uniform D = 1/π; sigma(wi) = ∫ D(m) max(0, m·wi) dωm over the
+// same grid; both read bilinearly as the readers do.
+void derive_ndf_sigma(const Brdf& brdf, int n, Tensors& t) {
+    t.ndf.rows = t.ndf.cols = t.sigma.rows = t.sigma.cols = static_cast<std::size_t>(n);
+    std::vector<Vec3> w(static_cast<std::size_t>(n) * n);
+    for (std::size_t c = 0; c < w.size(); ++c) {
+        const Vec3 m = normal_at(static_cast<double>(c % n) / (n - 1), static_cast<double>(c / n) / (n - 1));
+        w[c] = direction(std::min(elevation(m), kThetaMax), std::atan2(m.y, m.x));
+    }
+    std::vector<Rgb> f(w.size());
+    brdf.eval(w, w, f);
+    std::vector<double> d(w.size());
+    for (std::size_t c = 0; c < w.size(); ++c) {
+        const double cz = std::cos(theta_of_u(static_cast<double>(c % n) / (n - 1)));
+        const double y = luminance(f[c][0], f[c][1], f[c][2]) * cz * cz;
+        d[c] = std::isfinite(y) && y > 0.0 ? y : 0.0;
+    }
+    const auto at = [&](double ux, double uy) {
+        const double x = ux * (n - 1), y = uy * (n - 1);
+        const int i = std::min(static_cast<int>(x), n - 2), j = std::min(static_cast<int>(y), n - 2);
+        const double fx = x - i, fy = y - j;
+        const auto v = [&](int a, int b) { return d[static_cast<std::size_t>(b) * n + a]; };
+        return (v(i, j) * (1 - fx) + v(i + 1, j) * fx) * (1 - fy) + (v(i, j + 1) * (1 - fx) + v(i + 1, j + 1) * fx) * fy;
+    };
+    const std::vector<Node> q = nodes(std::max(n, 64));
+    double total = 0.0;
+    for (const Node& node : q) total += at(node.ux, node.uy) * node.m.z * node.d_omega;
+    for (double& v : d) v = total > 0.0 ? (1.0 - kUniformShare) * v / total + kUniformShare / kPi : 1.0 / kPi;
+    std::vector<double> dq(q.size());
+    for (std::size_t k = 0; k < q.size(); ++k) dq[k] = at(q[k].ux, q[k].uy) * q[k].d_omega;
+    t.ndf.values.assign(d.begin(), d.end());
+    t.sigma.values.resize(d.size());
+    for (std::size_t c = 0; c < d.size(); ++c) {
+        const Vec3 wi = direction(theta_of_u(static_cast<double>(c % n) / (n - 1)),
+                                  (2.0 * static_cast<double>(c / n) / (n - 1) - 1.0) * kPi);
+        double sigma = 0.0;
+        for (std::size_t k = 0; k < q.size(); ++k) sigma += dq[k] * std::max(dot(q[k].m, wi), 0.0);
+        t.sigma.values[c] = static_cast<float>(sigma);
+    }
+}
+
+Tensors derive_anisotropic(const Brdf& brdf, const WriteOptions& options) {
+    const int n = options.n_theta_i, np = options.n_phi_i, nv = options.vndf_resolution, nr = options.rgb_resolution;
+    const std::size_t slices = static_cast<std::size_t>(np) * n;
+    Tensors t;
+    t.jacobian = true;
+    derive_ndf_sigma(brdf, options.ndf_resolution, t);
+    for (int p = 0; p < np; ++p) t.phi_i.push_back(static_cast<float>(kPi * (2.0 * p / (np - 1) - 1.0)));
+    for (int k = 0; k < n; ++k) t.theta_i.push_back(static_cast<float>(kThetaMax * k / (n - 1)));
+    // wi of slice s; at θi = 0 every φi slice sees the same direction (and so holds the same tables).
+    const auto incident = [&](std::size_t s) {
+        return direction(t.theta_i[s % n], s % n == 0 ? 0.0 : static_cast<double>(t.phi_i[s / n]));
+    };
+
+    // The warp per slice, as derive()'s: 70% the reflected energy, 30% cosθo·dωo/du_m.
+    t.vndf = square(slices, nv);
+    const std::size_t cells = static_cast<std::size_t>(nv) * nv;
+    std::vector<Vec3> wis(cells), wos(cells);
+    std::vector<Rgb> f(cells);
+    std::vector<double> cosine(cells);
+    for (std::size_t s = 0; s < slices; ++s) {
+        const Vec3 wi = incident(s);
+        for (std::size_t c = 0; c < cells; ++c) {
+            const double ux = static_cast<double>(c % nv) / (nv - 1), uy = static_cast<double>(c / nv) / (nv - 1);
+            const Vec3 m = normal_at(ux, uy);
+            wis[c] = wi;
+            wos[c] = 2.0 * dot(m, wi) * m - wi;
+            cosine[c] = jacobian(ux, m, wi) * std::max(wos[c].z, 0.0);
+        }
+        brdf.eval(wis, wos, f);
+        double lobe_total = 0.0, cosine_total = 0.0;
+        for (std::size_t c = 0; c < cells; ++c) {
+            const double y = luminance(f[c][0], f[c][1], f[c][2]) * cosine[c];
+            f[c][0] = std::isfinite(y) && y > 0.0 ? y : 0.0;
+            lobe_total += f[c][0];
+            cosine_total += cosine[c];
+        }
+        float* out = t.vndf.values.data() + s * cells;
+        const double share = lobe_total > 0.0 ? kCosineShare : 1.0;
+        for (std::size_t c = 0; c < cells; ++c)
+            out[c] = static_cast<float>((lobe_total > 0.0 ? (1.0 - share) * f[c][0] / lobe_total : 0.0) +
+                                        share * cosine[c] / cosine_total);
+    }
+
+    // rgb and luminance at each grid point of each slice, as derive()'s.
+    Tensors ones = t;
+    ones.rgb = square(3 * slices, nr);
+    std::fill(ones.rgb.values.begin(), ones.rgb.values.end(), 1.0f);
+    const RglBrdf scale_of(std::move(ones));
+    const detail::SliceWarp warp("rgl: vndf", t.vndf.values, slices, t.vndf.rows, t.vndf.cols);
+    t.rgb = square(3 * slices, nr);
+    t.luminance = square(slices, nr);
+    const std::size_t plane = static_cast<std::size_t>(nr) * nr;
+    wis.resize(plane);
+    wos.resize(plane);
+    f.resize(plane);
+    std::vector<Rgb> scale(plane);
+    std::vector<double> per_unit(plane);
+    for (std::size_t s = 0; s < slices; ++s) {
+        const Vec3 wi = incident(s);
+        detail::Corners slice;
+        slice.slice[0] = s;
+        for (std::size_t p = 0; p < plane; ++p) {
+            const detail::WarpPoint u = warp.sample(static_cast<double>(p % nr) / (nr - 1),
+                                                    static_cast<double>(p / nr) / (nr - 1), slice);
+            const Vec3 m = normal_at(u.x, u.y);
+            wis[p] = wi;
+            wos[p] = 2.0 * dot(m, wi) * m - wi;
+            per_unit[p] = u.pdf > 0.0 ? jacobian(u.x, m, wi) / u.pdf : 0.0;
+        }
+        brdf.eval(wis, wos, f);
+        scale_of.eval(wis, wos, scale);
+        float* rgb = t.rgb.values.data() + 3 * s * plane;
+        float* lum = t.luminance.values.data() + s * plane;
+        double mean = 0.0;
+        for (std::size_t p = 0; p < plane; ++p) {
+            for (int c = 0; c < 3; ++c) {
+                const double v = scale[p][c] > 0.0 ? f[p][c] / scale[p][c] : 0.0;
+                rgb[c * plane + p] = std::isfinite(v) ? static_cast<float>(v) : 0.0f;
+            }
+            const double y = luminance(f[p][0], f[p][1], f[p][2]) * std::max(wos[p].z, 0.0) * per_unit[p];
+            lum[p] = std::isfinite(y) && y > 0.0 ? static_cast<float>(y) : 0.0f;
+            mean += lum[p] / static_cast<double>(plane);
+        }
+        const double floor = mean > 0.0 ? kLuminanceFloor * mean : 1.0;
+        for (std::size_t p = 0; p < plane; ++p) lum[p] += static_cast<float>(floor);
+    }
+    return t;
+}
+
 OutField f32_field(const char* name, std::vector<std::uint64_t> shape, const std::vector<float>& v) {
     return {name, detail::DType::F32, std::move(shape), v.data(), v.size() * sizeof(float)};
 }
@@ -200,6 +356,9 @@ OutField f32_field(const char* name, std::vector<std::uint64_t> shape, const std
 Tensors derive(const Brdf& brdf, const WriteOptions& options) {
     for (int n : {options.vndf_resolution, options.rgb_resolution, options.ndf_resolution, options.n_theta_i})
         if (n < 2 || n > 4096) throw ValueError("rgl::derive: resolutions must be in 2..4096");
+    if (options.n_phi_i != 1 && (options.n_phi_i < 3 || options.n_phi_i > 4096))
+        throw ValueError("rgl::derive: n_phi_i must be 1 (isotropic) or in 3..4096");
+    if (options.n_phi_i > 1) return derive_anisotropic(brdf, options);
     const int n = options.n_theta_i, nv = options.vndf_resolution, nr = options.rgb_resolution;
 
     Tensors t;
@@ -303,23 +462,23 @@ std::size_t write(const std::string& path, const Brdf& brdf, const WriteOptions&
     if (t.luminance.values.empty()) t.luminance = luminance_of(t.rgb);
 
     const std::string description = options.description.empty() ? brdf.describe() : options.description;
-    const std::vector<float> phi_i{0.0f};
+    const std::vector<float> phi_i = t.phi_i.size() > 1 ? t.phi_i : std::vector<float>{0.0f};
     const std::uint8_t jacobian = t.jacobian ? 1 : 0;
-    const std::uint64_t n = t.theta_i.size(), rows = t.rgb.rows, cols = t.rgb.cols;
+    const std::uint64_t np = phi_i.size(), n = t.theta_i.size(), rows = t.rgb.rows, cols = t.rgb.cols;
     const std::vector<std::uint8_t> valid(rows * cols, 1);
     write_tensor_file(path, {
         {"description", detail::DType::U8, {description.size()}, description.data(), description.size()},
-        f32_field("phi_i", {1}, phi_i),
+        f32_field("phi_i", {np}, phi_i),
         f32_field("theta_i", {n}, t.theta_i),
         f32_field("sigma", {t.sigma.rows, t.sigma.cols}, t.sigma.values),
         f32_field("ndf", {t.ndf.rows, t.ndf.cols}, t.ndf.values),
-        f32_field("vndf", {1, n, t.vndf.rows, t.vndf.cols}, t.vndf.values),
-        f32_field("luminance", {1, n, rows, cols}, t.luminance.values),
-        f32_field("rgb", {1, n, 3, rows, cols}, t.rgb.values),
+        f32_field("vndf", {np, n, t.vndf.rows, t.vndf.cols}, t.vndf.values),
+        f32_field("luminance", {np, n, rows, cols}, t.luminance.values),
+        f32_field("rgb", {np, n, 3, rows, cols}, t.rgb.values),
         {"jacobian", detail::DType::U8, {1}, &jacobian, 1},
         {"valid", detail::DType::U8, {rows * cols}, valid.data(), valid.size()},
     });
-    return n * rows * cols;
+    return np * n * rows * cols;
 }
 
 }  // namespace brdfz::rgl

@@ -30,6 +30,9 @@ const ReprKind& kind_of(ReprSpec& spec) {
         for (const std::string& name : compress_kinds()) known += (known.empty() ? "" : ", ") + name;
         throw SpecError("unknown representation '" + spec.kind() + "' (known: " + known + ")");
     }
+    // A key the kind does not declare is refused by ReprSpec::finish; phih gets its own message.
+    if (spec.has("phih") && std::none_of(kind->keys.begin(), kind->keys.end(), [](const SpecKey& k) { return k.name == "phih"; }))
+        throw ValueError("phih is not supported by " + spec.kind() + ": it has no φh axis (tabular, svd and nmf do)");
     spec.declare(kind->keys, !kind->positional.empty());
     return *kind;
 }

@@ -36,6 +36,10 @@ const KindCase kKinds[] = {
     {"nmf:rank=2,res=16x16x32,iterations=20", true},
     {"pca:basis=BASIS,k=2", true},
     {"analytic:lambert+ggx,starts=1", true},
+    {"tabular:res=16x16x32,phih=4,symmetry=none", false},
+    {"tabular:res=16x16x32,phih=4,symmetry=reciprocal,dtype=f16", true},
+    {"tabular:res=16x16x32,phih=3,symmetry=bilateral,dtype=u8log", false},
+    {"svd:rank=2,res=16x16x32,phih=3,symmetry=none", false},
 };
 
 // A basis from a few variations of the source, written where the pca line can name it.

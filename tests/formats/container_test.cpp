@@ -21,6 +21,8 @@
 #include "brdfz/repr/analytic/model.h"
 #include "brdfz/repr/compact_table.h"
 #include "brdfz/repr/factored.h"
+#include "brdfz/repr/phi_h.h"
+#include "brdfz/compress.h"
 #include "container/checksum.h"
 #include "container/h5.h"
 #include "test_util.h"
@@ -359,6 +361,17 @@ TEST_CASE("RGL tensors round-trip through .brdfz bit for bit", "[container][rgl]
     test::TempDir dir;
     std::vector<std::unique_ptr<rgl::RglBrdf>> sources;
     sources.push_back(std::make_unique<rgl::RglBrdf>(small_tensors()));
+    {  // anisotropic: the same grids over 2 φi slices
+        rgl::Tensors t = small_tensors();
+        t.phi_i = {-3.0f, 0.5f, 3.0f};
+        for (rgl::Grids* g : {&t.vndf, &t.rgb, &t.luminance}) {
+            const std::vector<float> one = g->values;
+            for (int k = 0; k < 2; ++k)
+                for (float v : one) g->values.push_back(v * (1.5f + k));
+            g->slices *= 3;
+        }
+        sources.push_back(std::make_unique<rgl::RglBrdf>(std::move(t)));
+    }
     const fs::path shared = fs::path(BRDFZ_SHARED_DIR) / "data" / "rgl";
     std::error_code ec;
     if (fs::is_directory(shared, ec)) {
@@ -377,6 +390,8 @@ TEST_CASE("RGL tensors round-trip through .brdfz bit for bit", "[container][rgl]
         const auto* back = dynamic_cast<const rgl::RglBrdf*>(r.brdf.get());
         REQUIRE(back);
         const rgl::Tensors &a = src->tensors(), &b = back->tensors();
+        CHECK(a.phi_i == b.phi_i);
+        CHECK((r.meta.min_reader_version == 4) == (a.phi_i.size() > 1));
         CHECK(a.theta_i == b.theta_i);
         CHECK(a.ndf.values == b.ndf.values);
         CHECK(a.sigma.values == b.sigma.values);
@@ -622,4 +637,44 @@ TEST_CASE("float16 factors cannot be misread as float32 ones", "[container][fact
     }
     reseal(p);
     CHECK_THAT(read_error(p), Catch::Contains("dataset 'u' is not a float32 array"));
+}
+
+TEST_CASE("Tables with a φh axis round-trip through .brdfz bit for bit", "[container][phih]") {
+    test::TempDir dir;
+    const AnalyticBrdf source("lambert+ggx_aniso", {0.3, 0.2, 0.1, 1, 1, 1, 0.15, 0.4, 0.5});
+    for (const char* spec : {"tabular:res=8x4x8,phih=4,symmetry=none", "tabular:res=8x4x8,phih=3,symmetry=bilateral",
+                             "tabular:res=8x4x8,phih=4,symmetry=reciprocal,dtype=f16",
+                             "tabular:res=8x4x8,phih=2,symmetry=none,dtype=u8log",
+                             "svd:rank=2,res=8x4x8,phih=3,symmetry=none", "nmf:rank=2,res=8x4x8,phih=2,symmetry=bilateral"}) {
+        INFO(spec);
+        const Compressed c = compress(source, spec);
+        const fs::path p = dir.path / "stack.brdfz";
+        const container::Achieved a = container::write(p.string(), *c.brdf);
+        CHECK(a.lossless);
+        const container::ReadResult r = container::read(p.string());
+        CHECK(r.meta.representation == "phi_h");
+        CHECK(r.meta.min_reader_version == 4);
+        const auto* back = dynamic_cast<const PhiHBrdf*>(r.brdf.get());
+        REQUIRE(back);
+        const auto& orig = dynamic_cast<const PhiHBrdf&>(*c.brdf);
+        CHECK(back->symmetry() == orig.symmetry());
+        CHECK(back->slices().size() == orig.slices().size());
+        CHECK(back->nbytes() == orig.nbytes());
+        std::mt19937_64 rng(13);
+        std::uniform_real_distribution<double> u(-1.0, 1.0);
+        for (int k = 0; k < 300; ++k) {
+            const Vec3 wi = normalize(Vec3{u(rng), u(rng), std::abs(u(rng)) + 0.01});
+            const Vec3 wo = normalize(Vec3{u(rng), u(rng), std::abs(u(rng)) + 0.01});
+            const Rgb fa = c.brdf->eval(wi, wo), fb = back->eval(wi, wo);
+            CHECK(std::memcmp(&fa, &fb, sizeof fa) == 0);
+        }
+    }
+    // A table without φh is written and read as before (no phi-h feature, its own reader version).
+    const Compressed flat = compress(source, "tabular:res=8x4x8");
+    const fs::path q = dir.path / "flat.brdfz";
+    container::write(q.string(), *flat.brdf);
+    const container::ReadResult r = container::read(q.string());
+    CHECK(r.meta.representation == "tabular");
+    CHECK(r.meta.min_reader_version == 1);
+    CHECK(dynamic_cast<const TabularBrdf*>(r.brdf.get()));
 }

@@ -277,20 +277,121 @@ TEST_CASE("rgl: invalid files are rejected with FormatError or IoError", "[rgl]"
         rejects("prefix " + std::to_string(n), prefix(good.bytes, n));
 }
 
-TEST_CASE("rgl: anisotropic and spectral files are UnsupportedError", "[rgl]") {
+TEST_CASE("rgl: spectral files are UnsupportedError", "[rgl]") {
     TempDir dir;
     auto fields = synthetic_fields();
-    field(fields, "phi_i") = {"phi_i", kF32, {2}, f32({0.0f, 3.14159f})};
-    CHECK_THROWS_AS(rgl::read(dir.write("aniso.bsdf", serialize(fields).bytes)), UnsupportedError);
-
-    fields = synthetic_fields();
-    fields.push_back({"isotropic", kU8, {1}, {0}});
-    CHECK_THROWS_AS(rgl::read(dir.write("aniso_flag.bsdf", serialize(fields).bytes)), UnsupportedError);
-
-    fields = synthetic_fields();
     field(fields, "rgb") = {"spectra", kF32, {1, 2, 4, 4, 4}, f32(filled(128, 0.5f))};
     fields.push_back({"wavelengths", kF32, {4}, f32({400, 500, 600, 700})});
     CHECK_THROWS_AS(rgl::read(dir.write("spectral.bsdf", serialize(fields).bytes)), UnsupportedError);
+
+    // Like Mitsuba, the `isotropic` field is not read: one phi_i entry is an isotropic file.
+    fields = synthetic_fields();
+    fields.push_back({"isotropic", kU8, {1}, {0}});
+    const auto r = rgl::read(dir.write("flag.bsdf", serialize(fields).bytes));
+    CHECK(r.brdf->tensors().phi_i.empty());
+}
+
+namespace {
+
+// synthetic_fields() tabulated over the given φi: constant densities, and in φi slice p the colours
+// (0.1, 0.2, 0.3)·(p + 1), so f·cosθo = 0.025·(c + 1) times φi's interpolated slice factor.
+std::vector<FieldSpec> anisotropic_fields(const std::vector<float>& phi) {
+    const std::uint64_t np = phi.size();
+    std::vector<float> rgb;
+    for (std::uint64_t p = 0; p < np; ++p)
+        for (int t = 0; t < 2; ++t)
+            for (int c = 0; c < 3; ++c)
+                for (int k = 0; k < 16; ++k) rgb.push_back(0.1f * static_cast<float>(c + 1) * static_cast<float>(p + 1));
+    auto fields = synthetic_fields();
+    field(fields, "phi_i") = {"phi_i", kF32, {np}, f32(phi)};
+    field(fields, "vndf") = {"vndf", kF32, {np, 2, 4, 4}, f32(filled(np * 32, 1.0f))};
+    field(fields, "luminance") = {"luminance", kF32, {np, 2, 4, 4}, f32(filled(np * 32, 1.0f))};
+    field(fields, "rgb") = {"rgb", kF32, {np, 2, 3, 4, 4}, f32(rgb)};
+    return fields;
+}
+
+Vec3 at_azimuth(double theta, double phi) { return spherical_direction(theta, phi); }
+
+}  // namespace
+
+TEST_CASE("rgl: anisotropic files read, interpolated over phi_i as Mitsuba does", "[rgl][aniso]") {
+    TempDir dir;
+    const double pi = std::numbers::pi;
+    const float fpi = static_cast<float>(pi);
+    const auto check_factor = [&](const rgl::RglBrdf& b, double phi, double factor) {
+        const Vec3 wi = at_azimuth(0.7, phi), wo = at_azimuth(0.4, phi + 2.0);
+        const Rgb f = b.eval(wi, wo);
+        INFO("phi_i " << phi);
+        for (int c = 0; c < 3; ++c) CHECK(f[c] * wo.z == Approx(0.025 * (c + 1) * factor).epsilon(1e-5));
+    };
+
+    // Three φi entries over the full circle: absolute azimuths, linear in φi between slices.
+    const auto r = rgl::read(dir.write("aniso.bsdf", serialize(anisotropic_fields({-fpi, 0.0f, fpi})).bytes));
+    CHECK(r.dims == std::vector<std::size_t>{3, 2, 3, 4, 4});
+    CHECK(r.brdf->tensors().phi_i.size() == 3);
+    CHECK(r.brdf->describe().find("anisotropic") != std::string::npos);
+    CHECK(r.brdf->nbytes() == 4 * (3 + 2 + 8 + 8 + 96 + 96 + 288));
+    for (double phi : {-3.0, -1.5, -0.2, 0.0, 0.3, 1.6, 3.1}) {
+        const double w = phi < 0 ? (phi + pi) / pi : phi / pi;
+        check_factor(*r.brdf, phi, phi < 0 ? 1 + w : 2 + w);
+    }
+    // Constant warps: u_m = (u2, u1) with an absolute azimuth, density 1/(2π²·u_θm·sinθm·4(wo·m)).
+    std::mt19937_64 rng(29);
+    std::uniform_real_distribution<double> u(0.0, 1.0);
+    std::size_t drawn = 0;
+    for (int k = 0; k < 1000; ++k) {
+        const Vec3 wo = random_upper(rng);
+        const double u1 = u(rng), u2 = u(rng);
+        const BrdfSample s = r.brdf->sample(wo, u1, u2);
+        const Vec3 m = spherical_direction(pi / 2 * u2 * u2, (2 * u1 - 1) * pi);
+        const Vec3 wi = (2 * dot(wo, m)) * m - wo;
+        if (wi.z <= 0) continue;
+        ++drawn;
+        const Vec3 h = normalize(wo + s.wi);
+        const double expected = 1 / (2 * pi * pi * std::sqrt(elevation(h) / (pi / 2)) * std::sin(elevation(h)) * 4 * dot(wo, h));
+        CHECK(s.wi.x == Approx(wi.x).margin(1e-6));
+        CHECK(s.wi.y == Approx(wi.y).margin(1e-6));
+        CHECK(s.pdf == Approx(expected).epsilon(1e-6));
+        CHECK(r.brdf->pdf(wo, s.wi) == Approx(s.pdf).epsilon(1e-9));
+    }
+    CHECK(drawn > 300);
+
+    // φi over a half circle: the file holds one of two copies related by a half turn; wi with y > 0
+    // is turned into the stored half (x, y negated, wo alike).
+    const auto half = rgl::read(dir.write("half.bsdf", serialize(anisotropic_fields({-fpi, -fpi / 2, 0.0f})).bytes));
+    check_factor(*half.brdf, -pi / 2, 2.0);
+    check_factor(*half.brdf, pi / 2, 2.0);
+    check_factor(*half.brdf, 0.75 * pi, 2.5);  // turned to -π/4
+    check_factor(*half.brdf, -0.75 * pi, 1.5);
+    for (int k = 0; k < 200; ++k) {
+        const Vec3 wi = random_upper(rng), wo = random_upper(rng);
+        const Vec3 ti{-wi.x, -wi.y, wi.z}, to{-wo.x, -wo.y, wo.z};
+        const Rgb a = half.brdf->eval(wi, wo), b = half.brdf->eval(ti, to);
+        for (int c = 0; c < 3; ++c) CHECK(a[c] == Approx(b[c]).epsilon(1e-9));
+    }
+    // A quarter circle: x and y each mirrored onto their negative half-axes.
+    const auto quarter =
+        rgl::read(dir.write("quarter.bsdf", serialize(anisotropic_fields({-fpi, -0.75f * fpi, -fpi / 2})).bytes));
+    for (double phi : {0.25 * pi, 0.75 * pi, -0.25 * pi, -0.75 * pi}) check_factor(*quarter.brdf, phi, 2.0);
+    check_factor(*quarter.brdf, 0.1, 1.0 + 0.1 / (pi / 4));  // mirrored to -π + 0.1
+
+    // Two φi entries: Mitsuba's isotropic case (azimuths relative to φi), still interpolated over φi.
+    const auto two = rgl::read(dir.write("two.bsdf", serialize(anisotropic_fields({-fpi, fpi})).bytes));
+    check_factor(*two.brdf, 0.0, 1.5);
+    check_factor(*two.brdf, pi / 2, 1.75);
+
+    // Shapes and values that do not fit are FormatError.
+    auto bad = anisotropic_fields({-fpi, 0.0f, fpi});
+    field(bad, "vndf").shape = {1, 2, 4, 4};
+    field(bad, "vndf").data = f32(filled(32, 1.0f));
+    CHECK_THROWS_AS(rgl::read(dir.write("bad1.bsdf", serialize(bad).bytes)), FormatError);
+    bad = anisotropic_fields({0.0f, -1.0f, 1.0f});
+    CHECK_THROWS_AS(rgl::read(dir.write("bad2.bsdf", serialize(bad).bytes)), FormatError);
+    bad = anisotropic_fields({-fpi, std::numeric_limits<float>::quiet_NaN(), fpi});
+    CHECK_THROWS_AS(rgl::read(dir.write("bad3.bsdf", serialize(bad).bytes)), FormatError);
+    bad = synthetic_fields();
+    field(bad, "phi_i") = {"phi_i", kF32, {0}, {}};
+    CHECK_THROWS_AS(rgl::read(dir.write("bad4.bsdf", serialize(bad).bytes)), FormatError);
 }
 
 TEST_CASE("rgl: non-finite and negative rgb values are counted, eval stays finite", "[rgl]") {

@@ -1,8 +1,9 @@
-// RGL storage: the tensors of an isotropic RGB RGL-EPFL material (Dupuy & Jakob 2018) as RglBrdf keeps
-// them, so a .bsdf file converted to .brdfz evaluates bit-identically to the file. Datasets (float32,
-// C order): theta_i [n], ndf [rows, cols], sigma [rows, cols], vndf [n, rows, cols],
-// rgb [n, 3, rows, cols], and luminance [n, rows, cols] when the material has one (for sampling);
-// attribute jacobian (0 or 1). formats/include/brdfz/formats/rgl.h explains the tensors.
+// RGL storage: the tensors of an RGB RGL-EPFL material (Dupuy & Jakob 2018) as RglBrdf keeps them, so a
+// .bsdf file converted to .brdfz evaluates bit-identically to the file. Datasets (float32, C order):
+// theta_i [n], ndf [rows, cols], sigma [rows, cols], vndf [n, rows, cols], rgb [n, 3, rows, cols], and
+// luminance [n, rows, cols] when the material has one (for sampling); attribute jacobian (0 or 1).
+// An anisotropic material (feature rgl.anisotropic) adds phi_i [nφ], nφ >= 2, and every n above is
+// nφ, n. formats/include/brdfz/formats/rgl.h explains the tensors.
 #include <algorithm>
 #include <limits>
 
@@ -14,9 +15,12 @@ namespace brdfz::container::detail {
 namespace {
 
 const Feature kRgl{"rgl", 1};
+const Feature kAnisotropic{"rgl.anisotropic", 4};
 
 std::vector<Feature> needs(const Brdf& brdf) {
-    if (!dynamic_cast<const rgl::RglBrdf*>(&brdf)) return {};
+    const auto* rgl = dynamic_cast<const rgl::RglBrdf*>(&brdf);
+    if (!rgl) return {};
+    if (rgl->tensors().phi_i.size() > 1) return {kRgl, kAnisotropic};
     return {kRgl};
 }
 
@@ -28,14 +32,22 @@ void write_grids(h5::WriteNode& rep, const char* name, const rgl::Grids& g, std:
 
 void write(h5::WriteNode& rep, const Brdf& brdf) {
     const rgl::Tensors& t = dynamic_cast<const rgl::RglBrdf&>(brdf).tensors();
-    const std::uint64_t n = t.theta_i.size();
+    const std::uint64_t n = t.theta_i.size(), np = t.phi_i.size();
+    // The slices' leading dimensions: n, or nφ, n.
+    std::vector<std::uint64_t> lead{n};
+    if (np > 1) {
+        lead.insert(lead.begin(), np);
+        rep.dataset("phi_i", h5::DType::F32, {np}, t.phi_i.data());
+    }
     rep.attr("jacobian", std::uint64_t{t.jacobian});
     rep.dataset("theta_i", h5::DType::F32, {n}, t.theta_i.data());
     write_grids(rep, "ndf", t.ndf, {});
     write_grids(rep, "sigma", t.sigma, {});
-    write_grids(rep, "vndf", t.vndf, {n});
-    write_grids(rep, "rgb", t.rgb, {n, 3});
-    if (!t.luminance.values.empty()) write_grids(rep, "luminance", t.luminance, {n});
+    write_grids(rep, "vndf", t.vndf, lead);
+    std::vector<std::uint64_t> rgb_lead = lead;
+    rgb_lead.push_back(3);
+    write_grids(rep, "rgb", t.rgb, rgb_lead);
+    if (!t.luminance.values.empty()) write_grids(rep, "luminance", t.luminance, lead);
 }
 
 // A float32 dataset of the given rank whose leading dimensions (all but the last two) multiply to
@@ -67,11 +79,23 @@ std::unique_ptr<Brdf> read(const h5::ReadNode& rep, const ReadContext&) {
     t.theta_i.resize(theta.count());
     theta.read(t.theta_i.data());
     const std::uint64_t n = t.theta_i.size();
+    std::vector<std::uint64_t> lead{n};
+    if (rep.has("phi_i")) {
+        const h5::Dataset phi = rep.dataset("phi_i");
+        if (phi.type() != h5::DType::F32 || phi.shape().size() != 1 || phi.count() < 2)
+            throw FormatError(rep.file(), phi.path() + ": expected a float32 vector of at least 2 values");
+        t.phi_i.resize(phi.count());
+        phi.read(t.phi_i.data());
+        lead.insert(lead.begin(), t.phi_i.size());
+    }
+    const std::size_t rank = lead.size() + 2;
     t.ndf = read_grids(rep, "ndf", 2, {});
     t.sigma = read_grids(rep, "sigma", 2, {});
-    t.vndf = read_grids(rep, "vndf", 3, {n});
-    t.rgb = read_grids(rep, "rgb", 4, {n, 3});
-    if (rep.has("luminance")) t.luminance = read_grids(rep, "luminance", 3, {n});
+    t.vndf = read_grids(rep, "vndf", rank, lead);
+    std::vector<std::uint64_t> rgb_lead = lead;
+    rgb_lead.push_back(3);
+    t.rgb = read_grids(rep, "rgb", rank + 1, rgb_lead);
+    if (rep.has("luminance")) t.luminance = read_grids(rep, "luminance", rank, lead);
     rgl::check_renderable(rep.file(), t);
     try {
         return std::make_unique<rgl::RglBrdf>(std::move(t));
@@ -83,7 +107,7 @@ std::unique_ptr<Brdf> read(const h5::ReadNode& rep, const ReadContext&) {
 // As the RGL reader counts the file's `rgb` values (the object keeps non-finite ones as 0).
 void source_info(const Brdf& brdf, SourceInfo& info) {
     const rgl::Tensors& t = dynamic_cast<const rgl::RglBrdf&>(brdf).tensors();
-    info.dims = {1, t.theta_i.size(), 3, t.rgb.rows, t.rgb.cols};
+    info.dims = {std::max<std::size_t>(t.phi_i.size(), 1), t.theta_i.size(), 3, t.rgb.rows, t.rgb.cols};
     info.dims_of = "rgb tensor of the RGL file";
     info.counts = {};
     double lo = std::numeric_limits<double>::infinity(), hi = -lo;
@@ -99,7 +123,7 @@ void source_info(const Brdf& brdf, SourceInfo& info) {
 }  // namespace
 
 void register_rgl(std::vector<const StorageModule*>& out) {
-    static const StorageModule m{"rgl", {kRgl}, &needs, &write, &read, &source_info};
+    static const StorageModule m{"rgl", {kRgl, kAnisotropic}, &needs, &write, &read, &source_info};
     out.push_back(&m);
 }
 

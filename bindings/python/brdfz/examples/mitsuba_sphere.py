@@ -99,7 +99,7 @@ def compare(path, res: int = 64, spp: int = 16, spec: str = "", incidents=("came
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    parser.add_argument("file", help="an RGL-EPFL .bsdf file (isotropic RGB)")
+    parser.add_argument("file", help="an RGL-EPFL .bsdf file (RGB)")
     parser.add_argument("--res", type=int, default=64, help="image width and height")
     parser.add_argument("--spp", type=int, default=16, help="samples per pixel (every render)")
     parser.add_argument("--compress", default="", help="render this representation of the file, e.g. tabular:res=45x45x90")

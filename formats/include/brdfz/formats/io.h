@@ -69,6 +69,8 @@ struct SaveOptions {
     // .brdfz: the compress() spec that built the BRDF, and its metrics against the original (container.h).
     std::string build_spec;
     std::optional<Metrics> source_metrics;
+    // .bsdf: φi slices, 1 for an isotropic file, 3..4096 for an anisotropic one (rgl_writer.h).
+    int rgl_phi_i = 1;
 };
 
 // The format a path's extension names: for Access::Read a format that reads it, for Access::Write

@@ -1,6 +1,7 @@
 // RGL-EPFL measured materials (Dupuy & Jakob, "An Adaptive Parameterization for Efficient Material
 // Acquisition and Rendering", SIGGRAPH Asia 2018; rgl.epfl.ch/materials): `.bsdf` tensor files.
-// Isotropic RGB files only; anisotropic and spectral ones are reported as UnsupportedError.
+// RGB files, isotropic and anisotropic (phi_i with more than one entry; formats/rgl/aniso.h has the
+// layout); spectral ones are reported as UnsupportedError.
 //
 // Evaluation reproduces Mitsuba 3's `measured` plugin (variant scalar_rgb), computed in double:
 // the microfacet normal m = normalize(wi + wo) is mapped through the inverse of the VNDF warp
@@ -58,6 +59,7 @@ namespace brdfz::rgl {
 namespace detail {
 class Marginal2D;     // the VNDF and luminance warps, private to the reader (formats/rgl/marginal2d.h)
 struct KernelTables;  // what the batch kernels read (formats/rgl/kernels.h)
+class Anisotropic;    // evaluation of files tabulated over φi too (formats/rgl/aniso.h)
 }
 
 // `slices` tables of rows × cols float32 samples, row-major (column index fastest), as stored.
@@ -66,12 +68,16 @@ struct Grids {
     std::vector<float> values;
 };
 
-// The tensors of an isotropic RGB file that evaluation uses, in the file's layout (storage form;
-// RglBrdf builds its warps from them). Every grid spans [0,1]² in the parameterisation's unit
-// coordinates: x = u_θ = sqrt(θ / (π/2)), y = u_φ = (φ + π) / 2π.
+// The tensors of an RGB file that evaluation uses, in the file's layout (storage form; RglBrdf builds
+// its warps from them). Every grid spans [0,1]² in the parameterisation's unit coordinates:
+// x = u_θ = sqrt(θ / (π/2)), y = u_φ = (φ + π) / 2π. Below, for isotropic files (phi_i empty or one
+// entry); with nφ >= 2 phi_i entries every "per θi" is "per (φi, θi)", φi outermost (formats/rgl/aniso.h).
 struct Tensors {
+    std::vector<float> phi_i;    // incident azimuths (radians) the tables are tabulated at; empty or one
+                                 // entry (its value unused): isotropic
     std::vector<float> theta_i;  // incident elevations (radians) the θi-dependent grids are tabulated at
-    Grids ndf;                   // 1 slice: microfacet distribution D(m), x = u_θm, y = u_φm (relative to φi)
+    Grids ndf;                   // 1 slice: microfacet distribution D(m), x = u_θm, y = u_φm (relative to φi;
+                                 // absolute with more than two phi_i entries)
     Grids sigma;                 // 1 slice: projected microfacet area σ(wi), x = u_θi, y = u_φi
     Grids vndf;                  // one slice per θi: visible normal density, x = u_θm, y = u_φm
     Grids luminance;             // one slice per θi over the VNDF warp's unit square (as rgb), or
@@ -83,9 +89,9 @@ struct Tensors {
 class RglBrdf final : public Brdf {
 public:
     // ValueError unless the shapes agree (grids at least 2×2, vndf with one slice and rgb with three
-    // per θi, luminance empty or one slice per θi shaped like rgb's, theta_i strictly increasing)
-    // and theta_i, ndf, sigma, vndf and luminance are finite, vndf non-negative with every slice
-    // integrating to a positive number. Non-finite rgb values are stored as 0. Negative luminance
+    // per θi, luminance empty or one slice per θi shaped like rgb's, theta_i and phi_i strictly
+    // increasing) and theta_i, ndf, sigma, vndf and luminance are finite, vndf non-negative with every
+    // slice integrating to a positive number. Non-finite rgb values are stored as 0. Negative luminance
     // values (noise in real files, which Mitsuba renders) are sampled as 0; when a θi slice of it has
     // no positive value, sampling uses the VNDF warp alone. check_renderable() holds the reader's
     // further rules.
@@ -120,6 +126,7 @@ private:
     std::unique_ptr<const detail::Marginal2D> vndf_;
     std::unique_ptr<const detail::Marginal2D> luminance_;  // null without a luminance tensor
     std::vector<float> rgb_;  // the rgb tensor in the kernels' layout (formats/rgl/kernels.h)
+    std::unique_ptr<const detail::Anisotropic> aniso_;     // set for nφ >= 2, which then does all the work
     double measured_theta_max_;
 };
 

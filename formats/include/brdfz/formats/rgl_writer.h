@@ -1,4 +1,4 @@
-// Writing RGL-EPFL `.bsdf` files (isotropic RGB), so any brdfz representation can be rendered by
+// Writing RGL-EPFL `.bsdf` files (RGB, isotropic or anisotropic), so any brdfz representation can be rendered by
 // Mitsuba 3's `measured` plugin. The reader and the parameterisation are described in rgl.h.
 //
 // An RglBrdf is written with its own tensors. Any other Brdf is tabulated into the
@@ -17,7 +17,10 @@
 //          bilinear interpolation between grid points is accurate inside the highlight;
 //   luminance  Y(f)·cosθo per unit of the square, Y·(dωo/du_m)/pdf(u_m) (plus 1e-3 of its slice
 //          mean): sampling by it and the warp draws wo in proportion to Y(f)·cosθo.
-// θi slices are spaced evenly from 0 to 89°; Mitsuba uses the last one beyond it. Readers reproduce
+// θi slices are spaced evenly from 0 to 89°; Mitsuba uses the last one beyond it.
+// With n_phi_i >= 3 the file is anisotropic (formats/rgl/aniso.h): φi slices spaced evenly over
+// [-π, π] (both ends, so no folding), every table built as above with wi at (θi, φi) and absolute
+// microfacet azimuths; ndf and sigma are ndf_resolution² tables over (u_θ, u_φ), sigma by quadrature. Readers reproduce
 // f exactly at the grid points and interpolate between them and between slices, which is the
 // approximation: its size is measured by tests/python/test_rgl_write_mitsuba.py.
 #pragma once
@@ -31,6 +34,7 @@ namespace brdfz::rgl {
 
 struct WriteOptions {
     int n_theta_i = 24;        // θi slices
+    int n_phi_i = 1;           // φi slices: 1, an isotropic file; 3..4096, an anisotropic one (below)
     int vndf_resolution = 128;  // vndf grid, square
     int rgb_resolution = 64;   // rgb and luminance grids, square
     int ndf_resolution = 128;  // ndf and sigma: columns along u_θ (2 rows in φ: isotropic)

@@ -1,5 +1,6 @@
 #include "common.h"
 
+#include <algorithm>
 #include <cstdio>
 #include <numbers>
 
@@ -31,6 +32,25 @@ double theta_d_warp_option(const ReprSpec& spec) {
 
 Symmetry symmetry_option(const ReprSpec& spec, Symmetry fallback) {
     return parse_symmetry(spec.get_choice("symmetry", symmetry_name(fallback), {"reciprocal", "none"}));
+}
+
+std::string phi_h_symmetry_option(const ReprSpec& spec, int phih, Symmetry fallback) {
+    const std::string s = spec.get_choice("symmetry", symmetry_name(fallback), {"reciprocal", "none", "bilateral"});
+    if (phih == 1 && s == "bilateral")
+        throw ValueError(spec.kind() + ": symmetry=bilateral folds the φh axis: it needs phih >= 2");
+    return s;
+}
+
+Compressed build_phi_h(const Brdf& source, int n, PhiHSymmetry symmetry,
+                       const std::function<Compressed(const Brdf&, Symmetry)>& build_slice) {
+    Compressed out;
+    out.brdf = tabulate_phi_h(source, n, symmetry, [&](const Brdf& slice) {
+        Compressed c = build_slice(slice, slice_symmetry(symmetry));
+        for (std::string& note : c.notes)
+            if (std::find(out.notes.begin(), out.notes.end(), note) == out.notes.end()) out.notes.push_back(std::move(note));
+        return std::move(c.brdf);
+    });
+    return out;
 }
 
 TabulateOptions::FitWeight weight_option(const ReprSpec& spec, bool lsq) {

@@ -2,10 +2,12 @@
 // tabulation leaves for Compressed::notes.
 #pragma once
 
+#include <functional>
 #include <string>
 
 #include "brdfz/compress.h"
 #include "brdfz/repr/compact_table.h"
+#include "brdfz/repr/phi_h.h"
 #include "brdfz/table.h"
 #include "brdfz/tabulate.h"
 
@@ -19,6 +21,23 @@ inline const SpecKey kSymmetryKey{"symmetry", "reciprocal",
 inline const SpecKey kWeightKey{"weight", "bins",
                                 "bins|solid: the lsq fit's points weighed as the grid's bins, or by solid angle (the "
                                 "metrics over directions)"};
+
+// The φh axis (repr/phi_h.h) of the kinds that take one: phih=N and a symmetry= that may be bilateral.
+inline const SpecKey kPhiHKey{"phih", "1",
+                              "φh slices, 1-4096: 1 isotropic (no φh axis); N >= 2 one table per half-vector azimuth, "
+                              "interpolated linearly (anisotropic data)"};
+inline const SpecKey kPhiHSymmetryKey{
+    "symmetry", "reciprocal",
+    "reciprocal|none|bilateral: φd over [0, π) (a pair and its exchange sharing a bin) or [0, 2π); bilateral (phih >= 2): "
+    "mirror y -> -y, φh over [0, π], φd over [0, 2π)"};
+
+// symmetry= of a kind with a φh axis, `fallback` when absent; ValueError for bilateral with phih = 1.
+std::string phi_h_symmetry_option(const ReprSpec& spec, int phih, Symmetry fallback = Symmetry::Reciprocal);
+
+// phih=N slices of `source` (tabulate_phi_h), each built by build_slice from the rotated source with
+// the slices' φd symmetry; their notes once each.
+Compressed build_phi_h(const Brdf& source, int n, PhiHSymmetry symmetry,
+                       const std::function<Compressed(const Brdf&, Symmetry)>& build_slice);
 
 // What tabulating `source` left out or changed.
 void note_tabulation(const Brdf& source, const Tabulated& t, Compressed& out);

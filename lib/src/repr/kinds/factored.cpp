@@ -1,5 +1,6 @@
 // Kinds `svd` and `nmf` (repr/factored.h): a table factored in a transform space, on the source's own
-// grid when it is a table and neither res= nor another symmetry= is given, else tabulated on res.
+// grid when it is a table and neither res= nor another symmetry= is given, else tabulated on res; with
+// phih=N, one factorisation per φh slice of the source (repr/phi_h.h), each tabulated on res.
 #include "brdfz/errors.h"
 #include "brdfz/repr/factored.h"
 #include "brdfz/repr/tabular.h"
@@ -7,6 +8,19 @@
 
 namespace brdfz::kinds {
 namespace {
+
+// What a factorisation did, for the user.
+void note_factoring(FactorMethod method, const FactorReport& r, bool lsq, Compressed& out) {
+    out.notes.push_back(std::string(factor_method_name(method)) + ": " + std::to_string(r.iterations) + " iterations, " +
+                        (r.converged ? "converged" : "iteration cap reached") + ", weighted residual " +
+                        std::to_string(r.residual) + " over " + std::to_string(r.valid_bins) + " valid bins");
+    if (lsq)
+        out.notes.push_back("fit=lsq: " + std::to_string(r.fit_iterations) + " iterations through the lookup over " +
+                            std::to_string(r.fit_points) + " points, weighted residual " +
+                            std::to_string(r.fit_residual_start) + " -> " + std::to_string(r.fit_residual));
+    if (r.clamped > 0)
+        out.notes.push_back(std::to_string(r.clamped) + " reconstructed values below 0 at the grid's samples (clamped to 0 at eval)");
+}
 
 Compressed build_factored(FactorMethod method, const Brdf& source, const ReprSpec& spec, const CompressOptions& options) {
     FactorOptions fo;
@@ -25,8 +39,12 @@ Compressed build_factored(FactorMethod method, const Brdf& source, const ReprSpe
     fo.fit_weight = weight_option(spec, lsq);
     fo.dtype = parse_factor_dtype(spec.get_choice("dtype", "f32", {"f32", "f16"}));
     const Table* table = source.stored_table();
-    const Symmetry symmetry = symmetry_option(spec, table ? table->grid().symmetry : Symmetry::Reciprocal);
-    const bool resample = !table || spec.has("res") || symmetry != table->grid().symmetry;
+    const int phih = spec.get_int("phih", 1, 1, GridSpec::kMaxAxis);
+    const std::string symmetry_text =
+        phi_h_symmetry_option(spec, phih, table ? table->grid().symmetry : Symmetry::Reciprocal);
+    const Symmetry symmetry = phih > 1 ? Symmetry::None : parse_symmetry(symmetry_text);
+    // A φh axis tabulates each slice from the rotated source.
+    const bool resample = phih > 1 || !table || spec.has("res") || symmetry != table->grid().symmetry;
     const std::vector<int> res = spec.get_dims("res", {90, 90, 180});
     const double warp = theta_d_warp_option(spec);
     if (warp != 0.0 && !resample) throw ValueError(spec.kind() + ": dwarp= applies to the res= grid; give res= as well");
@@ -35,27 +53,22 @@ Compressed build_factored(FactorMethod method, const Brdf& source, const ReprSpe
     spec.finish();
     fo.threads = options.threads;
     fo.progress = options.progress;
-    Compressed out;
-    Factored factored;
-    if (resample) {
+    const auto factor_on_grid = [&](const Brdf& from, Symmetry s) {
+        Compressed out;
         TabulateOptions tab;
-        tab.grid = GridSpec{res[0], res[1], res[2], BinPosition::Centre, warp, symmetry};
+        tab.grid = GridSpec{res[0], res[1], res[2], BinPosition::Centre, warp, s};
         tab.threads = options.threads;
-        const Tabulated t = tabulate_noted(source, tab, out);
-        factored = factor(source, t.table, fo);
-    } else {
-        factored = factor(*table, fo);
-    }
-    const FactorReport& r = factored.report;
-    out.notes.push_back(std::string(factor_method_name(method)) + ": " + std::to_string(r.iterations) + " iterations, " +
-                        (r.converged ? "converged" : "iteration cap reached") + ", weighted residual " +
-                        std::to_string(r.residual) + " over " + std::to_string(r.valid_bins) + " valid bins");
-    if (lsq)
-        out.notes.push_back("fit=lsq: " + std::to_string(r.fit_iterations) + " iterations through the lookup over " +
-                            std::to_string(r.fit_points) + " points, weighted residual " +
-                            std::to_string(r.fit_residual_start) + " -> " + std::to_string(r.fit_residual));
-    if (r.clamped > 0)
-        out.notes.push_back(std::to_string(r.clamped) + " reconstructed values below 0 at the grid's samples (clamped to 0 at eval)");
+        const Tabulated t = tabulate_noted(from, tab, out);
+        Factored factored = factor(from, t.table, fo);
+        note_factoring(method, factored.report, lsq, out);
+        out.brdf = std::move(factored.brdf);
+        return out;
+    };
+    if (phih > 1) return build_phi_h(source, phih, parse_phi_h_symmetry(symmetry_text), factor_on_grid);
+    if (resample) return factor_on_grid(source, symmetry);
+    Compressed out;
+    Factored factored = factor(*table, fo);
+    note_factoring(method, factored.report, lsq, out);
     out.brdf = std::move(factored.brdf);
     return out;
 }
@@ -80,7 +93,8 @@ std::vector<SpecKey> keys(const char* iterations) {
             {"ss", "2", "fit=lsq: points per bin and axis, 1-16"},
             {"fit_iterations", "20", "fit=lsq: the refit's iteration cap"},
             {"dtype", "f32", "f32|f16: stored factors (f16: half the bytes)"},
-            {"symmetry", "(a table source's own, else reciprocal)", kSymmetryKey.help},
+            {"symmetry", "(a table source's own, else reciprocal)", kPhiHSymmetryKey.help},
+            kPhiHKey,
             kWeightKey};
 }
 

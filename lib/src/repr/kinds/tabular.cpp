@@ -57,10 +57,15 @@ Compressed build_tabular(const Brdf& source, const ReprSpec& spec, const Compres
     const int ss = supersample_option(spec, filter);
     const TabulateOptions::FitWeight weight = weight_option(spec, filter == TabulateOptions::Filter::LeastSquares);
     const double warp = theta_d_warp_option(spec);
-    const Symmetry symmetry = symmetry_option(spec);
+    const int phih = spec.get_int("phih", 1, 1, GridSpec::kMaxAxis);
+    const std::string symmetry = phi_h_symmetry_option(spec, phih);
     spec.finish();
-    return build_table(source, GridSpec{res[0], res[1], res[2], BinPosition::Centre, warp, symmetry}, {ss, ss, ss},
-                       filter, weight, dtype, lookup, options);
+    const auto table = [&](const Brdf& from, Symmetry s) {
+        return build_table(from, GridSpec{res[0], res[1], res[2], BinPosition::Centre, warp, s}, {ss, ss, ss}, filter,
+                           weight, dtype, lookup, options);
+    };
+    if (phih > 1) return build_phi_h(source, phih, parse_phi_h_symmetry(symmetry), table);
+    return table(source, parse_symmetry(symmetry));
 }
 
 Compressed build_bivariate(const Brdf& source, const ReprSpec& spec, const CompressOptions& options) {
@@ -87,7 +92,7 @@ void register_tabular(std::vector<ReprKind>& out) {
                    "a Rusinkiewicz (θh, θd, φd) table resampled on res, square-root θh axis",
                    "",
                    {{"res", "90x90x180", "bins θh x θd x φd"}, kDtype, kLookupKey, kFilter, kSupersample, kWarpKey,
-                    kSymmetryKey, kWeightKey},
+                    kPhiHSymmetryKey, kPhiHKey, kWeightKey},
                    build_tabular});
     out.push_back({"bivariate",
                    "a (θh, θd) table without the φd axis, the source averaged over phi values of φd",
