@@ -6,8 +6,10 @@
 #include <cmath>
 #include <numbers>
 #include <string>
+#include <utility>
 
 #include "brdfz/errors.h"
+#include "marginal2d.h"
 
 namespace brdfz::rgl::detail {
 namespace {
@@ -95,38 +97,11 @@ double solid_angle_per_unit_square(double u_theta, double theta_m, double w_dot_
 
 SliceWarp::SliceWarp(const char* what, const std::vector<float>& data, std::size_t slices, std::size_t rows,
                      std::size_t cols)
-    : rows_(rows), cols_(cols), data_(data) {
-    for (float v : data_)
-        if (v < 0.0f) throw ValueError(std::string(what) + " holds a negative value");
-    cond_.resize(slices * rows * (cols - 1));
-    marg_.resize(slices * (rows - 1));
-    std::vector<double> row_total(rows);
-    const double half_width = 0.5 / static_cast<double>(cols - 1), half_height = 0.5 / static_cast<double>(rows - 1);
-    for (std::size_t s = 0; s < slices; ++s) {
-        float* d = data_.data() + s * rows * cols;
-        float* cond = cond_.data() + s * rows * (cols - 1);
-        float* marg = marg_.data() + s * (rows - 1);
-        for (std::size_t y = 0; y < rows; ++y) {
-            double sum = 0.0;
-            for (std::size_t x = 0; x + 1 < cols; ++x) {
-                sum += half_width * (static_cast<double>(d[y * cols + x]) + d[y * cols + x + 1]);
-                cond[y * (cols - 1) + x] = static_cast<float>(sum);
-            }
-            row_total[y] = sum;
-        }
-        double total = 0.0;
-        for (std::size_t y = 0; y + 1 < rows; ++y) {
-            total += half_height * (row_total[y] + row_total[y + 1]);
-            marg[y] = static_cast<float>(total);
-        }
-        if (!(total > 0.0 && std::isfinite(total)))
-            throw ValueError(std::string(what) + " slice " + std::to_string(s) + " integrates to " +
-                             std::to_string(total) + ", not a positive number");
-        const auto norm = static_cast<float>(1.0 / total);
-        for (std::size_t k = 0; k < rows * (cols - 1); ++k) cond[k] *= norm;
-        for (std::size_t k = 0; k + 1 < rows; ++k) marg[k] *= norm;
-        for (std::size_t k = 0; k < rows * cols; ++k) d[k] *= norm;
-    }
+    : rows_(rows), cols_(cols) {
+    SliceTables t = slice_tables(what, data, slices, rows, cols);
+    data_ = std::move(t.density);
+    cond_ = std::move(t.conditional);
+    marg_ = std::move(t.marginal);
 }
 
 WarpPoint SliceWarp::sample(double ux, double uy, const Corners& c) const {

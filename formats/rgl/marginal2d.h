@@ -23,6 +23,52 @@
 
 namespace brdfz::rgl::detail {
 
+// Each slice's tables, slice after slice: the density normalised to integrate to 1, the CDF along
+// each row (`conditional`, rows × (cols − 1)) and across rows (`marginal`, rows − 1), built as Mitsuba
+// builds them. ValueError (naming `what`) for a negative value or a slice that does not integrate to a
+// positive finite number.
+struct SliceTables {
+    std::vector<float> density, conditional, marginal;
+};
+
+inline SliceTables slice_tables(const char* what, std::span<const float> values, std::size_t slices, std::size_t rows,
+                                std::size_t cols) {
+    for (float v : values)
+        if (v < 0.0f) throw ValueError(std::string(what) + " holds a negative value");
+    SliceTables t{std::vector<float>(values.begin(), values.end()), std::vector<float>(slices * rows * (cols - 1)),
+                  std::vector<float>(slices * (rows - 1))};
+    std::vector<double> row_total(rows);
+    const double half_width = 0.5 / static_cast<double>(cols - 1);
+    const double half_height = 0.5 / static_cast<double>(rows - 1);
+    for (std::size_t s = 0; s < slices; ++s) {
+        float* d = t.density.data() + s * rows * cols;
+        float* cond = t.conditional.data() + s * rows * (cols - 1);
+        float* marg = t.marginal.data() + s * (rows - 1);
+        // Trapezoid rule along each row (exact for the linear interpolant), then across rows.
+        for (std::size_t y = 0; y < rows; ++y) {
+            double sum = 0.0;
+            for (std::size_t x = 0; x + 1 < cols; ++x) {
+                sum += half_width * (static_cast<double>(d[y * cols + x]) + d[y * cols + x + 1]);
+                cond[y * (cols - 1) + x] = static_cast<float>(sum);
+            }
+            row_total[y] = sum;
+        }
+        double total = 0.0;
+        for (std::size_t y = 0; y + 1 < rows; ++y) {
+            total += half_height * (row_total[y] + row_total[y + 1]);
+            marg[y] = static_cast<float>(total);
+        }
+        if (!(total > 0.0 && std::isfinite(total)))
+            throw ValueError(std::string(what) + " slice " + std::to_string(s) + " integrates to " +
+                             std::to_string(total) + ", not a positive number");
+        const auto norm = static_cast<float>(1.0 / total);
+        for (std::size_t k = 0; k < rows * (cols - 1); ++k) cond[k] *= norm;
+        for (std::size_t k = 0; k + 1 < rows; ++k) marg[k] *= norm;
+        for (std::size_t k = 0; k < rows * cols; ++k) d[k] *= norm;
+    }
+    return t;
+}
+
 class Marginal2D {
 public:
     // ValueError (naming `what`) when a value is negative (no density), a slice does not integrate to a
@@ -33,43 +79,10 @@ public:
         if (static_cast<double>(stride_) * static_cast<double>(values.size()) / static_cast<double>(slices) >=
             static_cast<double>(std::numeric_limits<int>::max()))
             throw ValueError(std::string(what) + " is too large");
-        for (float v : values)
-            if (v < 0.0f) throw ValueError(std::string(what) + " holds a negative value");
-        // Slice by slice first, as Mitsuba builds them.
-        std::vector<float> density(values.begin(), values.end()), conditional(slices * rows * (cols - 1)),
-            marginal(slices * (rows - 1));
-        std::vector<double> row_total(rows);
-        const double half_width = 0.5 / static_cast<double>(cols - 1);
-        const double half_height = 0.5 / static_cast<double>(rows - 1);
-        for (std::size_t s = 0; s < slices; ++s) {
-            float* d = density.data() + s * rows * cols;
-            float* cond = conditional.data() + s * rows * (cols - 1);
-            float* marg = marginal.data() + s * (rows - 1);
-            // Trapezoid rule along each row (exact for the linear interpolant), then across rows.
-            for (std::size_t y = 0; y < rows; ++y) {
-                double sum = 0.0;
-                for (std::size_t x = 0; x + 1 < cols; ++x) {
-                    sum += half_width * (static_cast<double>(d[y * cols + x]) + d[y * cols + x + 1]);
-                    cond[y * (cols - 1) + x] = static_cast<float>(sum);
-                }
-                row_total[y] = sum;
-            }
-            double total = 0.0;
-            for (std::size_t y = 0; y + 1 < rows; ++y) {
-                total += half_height * (row_total[y] + row_total[y + 1]);
-                marg[y] = static_cast<float>(total);
-            }
-            if (!(total > 0.0 && std::isfinite(total)))
-                throw ValueError(std::string(what) + " slice " + std::to_string(s) + " integrates to " +
-                                 std::to_string(total) + ", not a positive number");
-            const auto norm = static_cast<float>(1.0 / total);
-            for (std::size_t k = 0; k < rows * (cols - 1); ++k) cond[k] *= norm;
-            for (std::size_t k = 0; k + 1 < rows; ++k) marg[k] *= norm;
-            for (std::size_t k = 0; k < rows * cols; ++k) d[k] *= norm;
-        }
-        data_ = slices_innermost(density.data(), slices, rows * cols);
-        cond_ = slices_innermost(conditional.data(), slices, rows * (cols - 1));
-        marg_ = slices_innermost(marginal.data(), slices, rows - 1);
+        SliceTables t = slice_tables(what, values, slices, rows, cols);
+        data_ = slices_innermost(t.density.data(), slices, rows * cols);
+        cond_ = slices_innermost(t.conditional.data(), slices, rows * (cols - 1));
+        marg_ = slices_innermost(t.marginal.data(), slices, rows - 1);
     }
 
     // The tables as the kernels read them.

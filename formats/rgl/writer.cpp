@@ -258,6 +258,64 @@ void derive_ndf_sigma(const Brdf& brdf, int n, Tensors& t) {
     }
 }
 
+// The warp of one slice, incident direction wi, as nv × nv samples over (u_θm across, u_φm down): a
+// mixture of the BRDF's own lobe there, Y(f)·cosθo·dωo/du_m, which puts the rgb samples where the
+// reflected energy is, and of cosθo·dωo/du_m (kCosineShare), which keeps every reflected direction sampled.
+void vndf_slice(const Brdf& brdf, const Vec3& wi, int nv, float* out) {
+    const std::size_t cells = static_cast<std::size_t>(nv) * nv;
+    std::vector<Vec3> wis(cells, wi), wos(cells);
+    std::vector<Rgb> f(cells);
+    std::vector<double> cosine(cells);
+    for (std::size_t c = 0; c < cells; ++c) {
+        const double ux = static_cast<double>(c % nv) / (nv - 1), uy = static_cast<double>(c / nv) / (nv - 1);
+        const Vec3 m = normal_at(ux, uy);
+        wos[c] = 2.0 * dot(m, wi) * m - wi;
+        cosine[c] = jacobian(ux, m, wi) * std::max(wos[c].z, 0.0);
+    }
+    brdf.eval(wis, wos, f);
+    double lobe_total = 0.0, cosine_total = 0.0;
+    for (std::size_t c = 0; c < cells; ++c) {
+        const double y = luminance(f[c][0], f[c][1], f[c][2]) * cosine[c];
+        f[c][0] = std::isfinite(y) && y > 0.0 ? y : 0.0;  // reused as the lobe's weight
+        lobe_total += f[c][0];
+        cosine_total += cosine[c];
+    }
+    const double share = lobe_total > 0.0 ? kCosineShare : 1.0;
+    for (std::size_t c = 0; c < cells; ++c)
+        out[c] = static_cast<float>((lobe_total > 0.0 ? (1.0 - share) * f[c][0] / lobe_total : 0.0) +
+                                    share * cosine[c] / cosine_total);
+}
+
+// rgb and luminance of one slice (incident direction wi) at the warped points (ux, uy) of the grid,
+// whose warp densities are u_pdf: rgb is f over the scale a reader of these tables applies (scale_of,
+// a reader whose rgb values are all 1), luminance Y(f)·cosθo per unit of the square plus a floor.
+void rgb_slice(const Brdf& brdf, const Brdf& scale_of, const Vec3& wi, const std::vector<double>& ux,
+               const std::vector<double>& uy, const std::vector<double>& u_pdf, float* rgb, float* lum) {
+    const std::size_t plane = ux.size();
+    std::vector<Vec3> wis(plane, wi), wos(plane);
+    std::vector<Rgb> f(plane), scale(plane);
+    std::vector<double> per_unit(plane);
+    for (std::size_t p = 0; p < plane; ++p) {
+        const Vec3 m = normal_at(ux[p], uy[p]);
+        wos[p] = 2.0 * dot(m, wi) * m - wi;
+        per_unit[p] = u_pdf[p] > 0.0 ? jacobian(ux[p], m, wi) / u_pdf[p] : 0.0;
+    }
+    brdf.eval(wis, wos, f);
+    scale_of.eval(wis, wos, scale);
+    double mean = 0.0;
+    for (std::size_t p = 0; p < plane; ++p) {
+        for (int c = 0; c < 3; ++c) {
+            const double v = scale[p][c] > 0.0 ? f[p][c] / scale[p][c] : 0.0;
+            rgb[c * plane + p] = std::isfinite(v) ? static_cast<float>(v) : 0.0f;
+        }
+        const double y = luminance(f[p][0], f[p][1], f[p][2]) * std::max(wos[p].z, 0.0) * per_unit[p];
+        lum[p] = std::isfinite(y) && y > 0.0 ? static_cast<float>(y) : 0.0f;
+        mean += lum[p] / static_cast<double>(plane);
+    }
+    const double floor = mean > 0.0 ? kLuminanceFloor * mean : 1.0;  // nothing reflected: uniform
+    for (std::size_t p = 0; p < plane; ++p) lum[p] += static_cast<float>(floor);
+}
+
 Tensors derive_anisotropic(const Brdf& brdf, const WriteOptions& options) {
     const int n = options.n_theta_i, np = options.n_phi_i, nv = options.vndf_resolution, nr = options.rgb_resolution;
     const std::size_t slices = static_cast<std::size_t>(np) * n;
@@ -271,35 +329,10 @@ Tensors derive_anisotropic(const Brdf& brdf, const WriteOptions& options) {
         return direction(t.theta_i[s % n], s % n == 0 ? 0.0 : static_cast<double>(t.phi_i[s / n]));
     };
 
-    // The warp per slice, as derive()'s: 70% the reflected energy, 30% cosθo·dωo/du_m.
+    // The warp per slice (vndf_slice).
     t.vndf = square(slices, nv);
-    const std::size_t cells = static_cast<std::size_t>(nv) * nv;
-    std::vector<Vec3> wis(cells), wos(cells);
-    std::vector<Rgb> f(cells);
-    std::vector<double> cosine(cells);
-    for (std::size_t s = 0; s < slices; ++s) {
-        const Vec3 wi = incident(s);
-        for (std::size_t c = 0; c < cells; ++c) {
-            const double ux = static_cast<double>(c % nv) / (nv - 1), uy = static_cast<double>(c / nv) / (nv - 1);
-            const Vec3 m = normal_at(ux, uy);
-            wis[c] = wi;
-            wos[c] = 2.0 * dot(m, wi) * m - wi;
-            cosine[c] = jacobian(ux, m, wi) * std::max(wos[c].z, 0.0);
-        }
-        brdf.eval(wis, wos, f);
-        double lobe_total = 0.0, cosine_total = 0.0;
-        for (std::size_t c = 0; c < cells; ++c) {
-            const double y = luminance(f[c][0], f[c][1], f[c][2]) * cosine[c];
-            f[c][0] = std::isfinite(y) && y > 0.0 ? y : 0.0;
-            lobe_total += f[c][0];
-            cosine_total += cosine[c];
-        }
-        float* out = t.vndf.values.data() + s * cells;
-        const double share = lobe_total > 0.0 ? kCosineShare : 1.0;
-        for (std::size_t c = 0; c < cells; ++c)
-            out[c] = static_cast<float>((lobe_total > 0.0 ? (1.0 - share) * f[c][0] / lobe_total : 0.0) +
-                                        share * cosine[c] / cosine_total);
-    }
+    for (std::size_t s = 0; s < slices; ++s)
+        vndf_slice(brdf, incident(s), nv, t.vndf.values.data() + s * static_cast<std::size_t>(nv) * nv);
 
     // rgb and luminance at each grid point of each slice, as derive()'s.
     Tensors ones = t;
@@ -310,39 +343,17 @@ Tensors derive_anisotropic(const Brdf& brdf, const WriteOptions& options) {
     t.rgb = square(3 * slices, nr);
     t.luminance = square(slices, nr);
     const std::size_t plane = static_cast<std::size_t>(nr) * nr;
-    wis.resize(plane);
-    wos.resize(plane);
-    f.resize(plane);
-    std::vector<Rgb> scale(plane);
-    std::vector<double> per_unit(plane);
+    std::vector<double> ux(plane), uy(plane), u_pdf(plane);
     for (std::size_t s = 0; s < slices; ++s) {
-        const Vec3 wi = incident(s);
         detail::Corners slice;
         slice.slice[0] = s;
         for (std::size_t p = 0; p < plane; ++p) {
             const detail::WarpPoint u = warp.sample(static_cast<double>(p % nr) / (nr - 1),
                                                     static_cast<double>(p / nr) / (nr - 1), slice);
-            const Vec3 m = normal_at(u.x, u.y);
-            wis[p] = wi;
-            wos[p] = 2.0 * dot(m, wi) * m - wi;
-            per_unit[p] = u.pdf > 0.0 ? jacobian(u.x, m, wi) / u.pdf : 0.0;
+            ux[p] = u.x, uy[p] = u.y, u_pdf[p] = u.pdf;
         }
-        brdf.eval(wis, wos, f);
-        scale_of.eval(wis, wos, scale);
-        float* rgb = t.rgb.values.data() + 3 * s * plane;
-        float* lum = t.luminance.values.data() + s * plane;
-        double mean = 0.0;
-        for (std::size_t p = 0; p < plane; ++p) {
-            for (int c = 0; c < 3; ++c) {
-                const double v = scale[p][c] > 0.0 ? f[p][c] / scale[p][c] : 0.0;
-                rgb[c * plane + p] = std::isfinite(v) ? static_cast<float>(v) : 0.0f;
-            }
-            const double y = luminance(f[p][0], f[p][1], f[p][2]) * std::max(wos[p].z, 0.0) * per_unit[p];
-            lum[p] = std::isfinite(y) && y > 0.0 ? static_cast<float>(y) : 0.0f;
-            mean += lum[p] / static_cast<double>(plane);
-        }
-        const double floor = mean > 0.0 ? kLuminanceFloor * mean : 1.0;
-        for (std::size_t p = 0; p < plane; ++p) lum[p] += static_cast<float>(floor);
+        rgb_slice(brdf, scale_of, incident(s), ux, uy, u_pdf, t.rgb.values.data() + 3 * s * plane,
+                  t.luminance.values.data() + s * plane);
     }
     return t;
 }
@@ -371,37 +382,10 @@ Tensors derive(const Brdf& brdf, const WriteOptions& options) {
     t.sigma = isotropic(sigma);
     for (int k = 0; k < n; ++k) t.theta_i.push_back(static_cast<float>(kThetaMax * k / (n - 1)));
 
-    // The warp per slice, over (u_θm across, u_φm down): a mixture of the BRDF's own lobe at this
-    // θi, Y(f)·cosθo·dωo/du_m, which puts the rgb samples where the reflected energy is, and of
-    // cosθo·dωo/du_m, which keeps every reflected direction sampled.
+    // The warp per slice (vndf_slice).
     t.vndf = square(static_cast<std::size_t>(n), nv);
-    const std::size_t cells = static_cast<std::size_t>(nv) * nv;
-    std::vector<Vec3> wis(cells), wos(cells);
-    std::vector<Rgb> f(cells);
-    std::vector<double> cosine(cells);
-    for (int k = 0; k < n; ++k) {
-        const Vec3 wi = in_plane(t.theta_i[k]);
-        for (std::size_t c = 0; c < cells; ++c) {
-            const double ux = static_cast<double>(c % nv) / (nv - 1), uy = static_cast<double>(c / nv) / (nv - 1);
-            const Vec3 m = normal_at(ux, uy);
-            wis[c] = wi;
-            wos[c] = 2.0 * dot(m, wi) * m - wi;
-            cosine[c] = jacobian(ux, m, wi) * std::max(wos[c].z, 0.0);
-        }
-        brdf.eval(wis, wos, f);
-        double lobe_total = 0.0, cosine_total = 0.0;
-        for (std::size_t c = 0; c < cells; ++c) {
-            const double y = luminance(f[c][0], f[c][1], f[c][2]) * cosine[c];
-            f[c][0] = std::isfinite(y) && y > 0.0 ? y : 0.0;  // reused as the lobe's weight
-            lobe_total += f[c][0];
-            cosine_total += cosine[c];
-        }
-        float* out = t.vndf.values.data() + static_cast<std::size_t>(k) * cells;
-        const double share = lobe_total > 0.0 ? kCosineShare : 1.0;
-        for (std::size_t c = 0; c < cells; ++c)
-            out[c] = static_cast<float>((lobe_total > 0.0 ? (1.0 - share) * f[c][0] / lobe_total : 0.0) +
-                                        share * cosine[c] / cosine_total);
-    }
+    for (int k = 0; k < n; ++k)
+        vndf_slice(brdf, in_plane(t.theta_i[k]), nv, t.vndf.values.data() + static_cast<std::size_t>(k) * nv * nv);
 
     // rgb at each grid point s of each slice: m = warp(s), wo = wi reflected about m, and the value
     // from which the reader (and Mitsuba) reproduce f(wi, wo) there: f over the scale they apply,
@@ -417,41 +401,17 @@ Tensors derive(const Brdf& brdf, const WriteOptions& options) {
     t.rgb = square(3 * static_cast<std::size_t>(n), nr);
     t.luminance = square(static_cast<std::size_t>(n), nr);
     const std::size_t plane = static_cast<std::size_t>(nr) * nr;
-    wis.resize(plane);
-    wos.resize(plane);
-    f.resize(plane);
-    std::vector<Rgb> scale(plane);
-    std::vector<double> per_unit(plane), ux(plane), uy(plane), u_pdf(plane);
+    std::vector<double> ux(plane), uy(plane), u_pdf(plane);
     const detail::WarpTables warp_tables = warp.tables();
     for (int k = 0; k < n; ++k) {
-        const Vec3 wi = in_plane(t.theta_i[k]);
         for (std::size_t p = 0; p < plane; ++p) {
             ux[p] = static_cast<double>(p % nr) / (nr - 1);
             uy[p] = static_cast<double>(p / nr) / (nr - 1);
         }
         detail::sample_warp(warp_tables, k, ux.data(), uy.data(), u_pdf.data(), plane);
-        for (std::size_t p = 0; p < plane; ++p) {
-            const Vec3 m = normal_at(ux[p], uy[p]);
-            wis[p] = wi;
-            wos[p] = 2.0 * dot(m, wi) * m - wi;
-            per_unit[p] = u_pdf[p] > 0.0 ? jacobian(ux[p], m, wi) / u_pdf[p] : 0.0;
-        }
-        brdf.eval(wis, wos, f);
-        scale_of.eval(wis, wos, scale);
-        float* rgb = t.rgb.values.data() + 3 * static_cast<std::size_t>(k) * plane;
-        float* lum = t.luminance.values.data() + static_cast<std::size_t>(k) * plane;
-        double mean = 0.0;
-        for (std::size_t p = 0; p < plane; ++p) {
-            for (int c = 0; c < 3; ++c) {
-                const double v = scale[p][c] > 0.0 ? f[p][c] / scale[p][c] : 0.0;
-                rgb[c * plane + p] = std::isfinite(v) ? static_cast<float>(v) : 0.0f;
-            }
-            const double y = luminance(f[p][0], f[p][1], f[p][2]) * std::max(wos[p].z, 0.0) * per_unit[p];
-            lum[p] = std::isfinite(y) && y > 0.0 ? static_cast<float>(y) : 0.0f;
-            mean += lum[p] / static_cast<double>(plane);
-        }
-        const double floor = mean > 0.0 ? kLuminanceFloor * mean : 1.0;  // nothing reflected: uniform
-        for (std::size_t p = 0; p < plane; ++p) lum[p] += static_cast<float>(floor);
+        rgb_slice(brdf, scale_of, in_plane(t.theta_i[k]), ux, uy, u_pdf,
+                  t.rgb.values.data() + 3 * static_cast<std::size_t>(k) * plane,
+                  t.luminance.values.data() + static_cast<std::size_t>(k) * plane);
     }
     return t;
 }

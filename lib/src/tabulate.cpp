@@ -118,17 +118,23 @@ Tabulated tabulate_points(const Brdf& brdf, const TabulateOptions& options) {
     return result;
 }
 
+// `options` on the grid `supersample` times finer, sampled at bin centres (ValueError past the grid limits).
+TabulateOptions supersampled(const TabulateOptions& options) {
+    const GridSpec& g = options.grid;
+    const auto [sh, sd, sp] = options.supersample;
+    TabulateOptions fine = options;
+    fine.grid = GridSpec{g.n_theta_h * sh, g.n_theta_d * sd, g.n_phi_d * sp, BinPosition::Centre, g.theta_d_warp, g.symmetry};
+    fine.grid.validate();
+    return fine;
+}
+
 // Box filter: point-sample a grid `supersample` times finer (whose bins nest exactly in the coarse
 // ones, the square-root θh axis and a warped θd axis included), then average each coarse bin's valid
 // fine bins, leaving out grazing points unless the bin has no others.
 Tabulated tabulate_boxes(const Brdf& brdf, const TabulateOptions& options) {
     const GridSpec& g = options.grid;
     const auto [sh, sd, sp] = options.supersample;
-    TabulateOptions fine_options = options;
-    fine_options.grid = GridSpec{g.n_theta_h * sh, g.n_theta_d * sd, g.n_phi_d * sp, BinPosition::Centre, g.theta_d_warp,
-                                 g.symmetry};
-    fine_options.grid.validate();
-    Tabulated fine = tabulate_points(brdf, fine_options);
+    Tabulated fine = tabulate_points(brdf, supersampled(options));
     const Table& f = fine.table;
     const GridSpec& fg = f.grid();
     const double min_cos = std::cos(options.box_max_theta_deg * std::numbers::pi / 180.0);
@@ -236,11 +242,7 @@ namespace detail {
 
 FitPoints fit_points(const Brdf& brdf, const TabulateOptions& options, double outside_scale) {
     const GridSpec& g = options.grid;
-    const auto [sh, sd, sp] = options.supersample;
-    TabulateOptions fine_options = options;
-    fine_options.grid = GridSpec{g.n_theta_h * sh, g.n_theta_d * sd, g.n_phi_d * sp, BinPosition::Centre, g.theta_d_warp,
-                                 g.symmetry};
-    fine_options.grid.validate();
+    const TabulateOptions fine_options = supersampled(options);
     const GridSpec& fg = fine_options.grid;
     if (fg.bins() > kMaxFitPoints)
         throw ValueError("least squares over " + std::to_string(fg.bins()) +

@@ -24,6 +24,15 @@
 
 #include "brdfz/frame.h"
 
+// The protected hooks of a representation with its own kernels (one pair and batches of eval and
+// sample, and pdf), declared in its class by this one line; Brdf below says what each must do.
+#define BRDFZ_BRDF_KERNELS                                                                                        \
+    Rgb eval_above(const Vec3& wi, const Vec3& wo) const override;                                               \
+    void eval_batch(const Vec3* wi, const Vec3* wo, Rgb* out, std::size_t n) const override;                     \
+    BrdfSample sample_above(const Vec3& wo, double u1, double u2) const override;                                \
+    void sample_batch(const Vec3* wo, const std::array<double, 2>* u, BrdfSample* out, std::size_t n) const override; \
+    double pdf_above(const Vec3& wo, const Vec3& wi) const override
+
 namespace brdfz {
 
 struct GridSpec;

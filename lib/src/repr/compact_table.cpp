@@ -234,50 +234,46 @@ Table CompactTable::decode() const {
     return t;
 }
 
-CompactTableBrdf::CompactTableBrdf(CompactTable table, Lookup lookup) : table_(std::move(table)), lookup_(lookup) {}
+CompactTableBrdf::CompactTableBrdf(CompactTable table, Lookup lookup) : LookupTableBrdf(lookup), table_(std::move(table)) {}
 
 std::string CompactTableBrdf::describe() const {
     const GridSpec& g = table_.grid();
     return detail::table_shape(g) + (table_.dtype() == TableDtype::F16 ? " float16" : " uint8 log") + ", bin " +
-           (g.position == BinPosition::Start ? "start" : "centre") + ", " + lookup_name(lookup_) + " lookup";
+           (g.position == BinPosition::Start ? "start" : "centre") + ", " + lookup_name(lookup()) + " lookup";
 }
 
 Rgb CompactTableBrdf::eval_above(const Vec3& wi, const Vec3& wo) const {
     const GridSpec& g = table_.grid();
     if (table_.dtype() == TableDtype::F16)
-        return detail::eval_table(g, HalfValues{table_.codes().data(), table_.half_scales()}, lookup_, wi, wo);
-    return detail::eval_table(g, LogU8Values{table_.codes().data(), &table_.lut()}, lookup_, wi, wo);
+        return detail::eval_table(g, HalfValues{table_.codes().data(), table_.half_scales()}, lookup(), wi, wo);
+    return detail::eval_table(g, LogU8Values{table_.codes().data(), &table_.lut()}, lookup(), wi, wo);
 }
 
 void CompactTableBrdf::eval_batch(const Vec3* wi, const Vec3* wo, Rgb* out, std::size_t n) const {
     const GridSpec& g = table_.grid();
     if (table_.dtype() == TableDtype::F16)
-        detail::eval_table_batch(g, HalfValues{table_.codes().data(), table_.half_scales()}, lookup_, wi, wo, out, n);
+        detail::eval_table_batch(g, HalfValues{table_.codes().data(), table_.half_scales()}, lookup(), wi, wo, out, n);
     else
-        detail::eval_table_batch(g, LogU8Values{table_.codes().data(), &table_.lut()}, lookup_, wi, wo, out, n);
-}
-
-const HalfVectorSampler& CompactTableBrdf::sampler() const {
-    return sampler_.get([this] { return std::make_unique<HalfVectorSampler>(*this); });
+        detail::eval_table_batch(g, LogU8Values{table_.codes().data(), &table_.lut()}, lookup(), wi, wo, out, n);
 }
 
 // The weight comes with the draw (detail/table_sample.h), as for TabularBrdf.
 BrdfSample CompactTableBrdf::sample_above(const Vec3& wo, double u1, double u2) const {
     const GridSpec& g = table_.grid();
     if (table_.dtype() == TableDtype::F16)
-        return detail::sample_table(g, HalfValues{table_.codes().data(), table_.half_scales()}, lookup_, sampler(), wo,
+        return detail::sample_table(g, HalfValues{table_.codes().data(), table_.half_scales()}, lookup(), sampler(), wo,
                                     u1, u2);
-    return detail::sample_table(g, LogU8Values{table_.codes().data(), &table_.lut()}, lookup_, sampler(), wo, u1, u2);
+    return detail::sample_table(g, LogU8Values{table_.codes().data(), &table_.lut()}, lookup(), sampler(), wo, u1, u2);
 }
 
 void CompactTableBrdf::sample_batch(const Vec3* wo, const std::array<double, 2>* u, BrdfSample* out,
                                     std::size_t n) const {
     const GridSpec& g = table_.grid();
     if (table_.dtype() == TableDtype::F16)
-        detail::sample_table_batch(g, HalfValues{table_.codes().data(), table_.half_scales()}, lookup_, sampler(), wo,
+        detail::sample_table_batch(g, HalfValues{table_.codes().data(), table_.half_scales()}, lookup(), sampler(), wo,
                                    u, out, n);
     else
-        detail::sample_table_batch(g, LogU8Values{table_.codes().data(), &table_.lut()}, lookup_, sampler(), wo, u,
+        detail::sample_table_batch(g, LogU8Values{table_.codes().data(), &table_.lut()}, lookup(), sampler(), wo, u,
                                    out, n);
 }
 

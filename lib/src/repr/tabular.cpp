@@ -30,33 +30,33 @@ Lookup parse_lookup(const std::string& name) {
 
 const char* lookup_name(Lookup lookup) { return lookup == Lookup::Nearest ? "nearest" : "linear"; }
 
-TabularBrdf::TabularBrdf(Table table, Lookup lookup) : table_(std::move(table)), lookup_(lookup) {}
+TabularBrdf::TabularBrdf(Table table, Lookup lookup) : LookupTableBrdf(lookup), table_(std::move(table)) {}
 
 std::string TabularBrdf::describe() const {
     const GridSpec& g = table_.grid();
     return detail::table_shape(g) + " float32, bin " + (g.position == BinPosition::Start ? "start" : "centre") + ", " +
-           lookup_name(lookup_) + " lookup";
+           lookup_name(lookup()) + " lookup";
 }
 
 Rgb TabularBrdf::eval_above(const Vec3& wi, const Vec3& wo) const {
-    return detail::eval_table(table_.grid(), Float32Values{table_.data()}, lookup_, wi, wo);
+    return detail::eval_table(table_.grid(), Float32Values{table_.data()}, lookup(), wi, wo);
 }
 
 void TabularBrdf::eval_batch(const Vec3* wi, const Vec3* wo, Rgb* out, std::size_t n) const {
-    detail::eval_table_batch(table_.grid(), Float32Values{table_.data()}, lookup_, wi, wo, out, n);
+    detail::eval_table_batch(table_.grid(), Float32Values{table_.data()}, lookup(), wi, wo, out, n);
 }
 
-const HalfVectorSampler& TabularBrdf::sampler() const {
+const HalfVectorSampler& LookupTableBrdf::sampler() const {
     return sampler_.get([this] { return std::make_unique<HalfVectorSampler>(*this); });
 }
 
 // The weight comes with the draw (detail/table_sample.h), so sample() does not evaluate it again.
 BrdfSample TabularBrdf::sample_above(const Vec3& wo, double u1, double u2) const {
-    return detail::sample_table(table_.grid(), Float32Values{table_.data()}, lookup_, sampler(), wo, u1, u2);
+    return detail::sample_table(table_.grid(), Float32Values{table_.data()}, lookup(), sampler(), wo, u1, u2);
 }
 
 void TabularBrdf::sample_batch(const Vec3* wo, const std::array<double, 2>* u, BrdfSample* out, std::size_t n) const {
-    detail::sample_table_batch(table_.grid(), Float32Values{table_.data()}, lookup_, sampler(), wo, u, out, n);
+    detail::sample_table_batch(table_.grid(), Float32Values{table_.data()}, lookup(), sampler(), wo, u, out, n);
 }
 
 double TabularBrdf::pdf_above(const Vec3& wo, const Vec3& wi) const { return sampler().pdf(wo, wi); }

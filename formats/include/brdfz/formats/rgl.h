@@ -112,11 +112,7 @@ public:
     double measured_theta_max() const override { return measured_theta_max_; }
 
 protected:
-    Rgb eval_above(const Vec3& wi, const Vec3& wo) const override;
-    void eval_batch(const Vec3* wi, const Vec3* wo, Rgb* out, std::size_t n) const override;
-    BrdfSample sample_above(const Vec3& wo, double u1, double u2) const override;
-    void sample_batch(const Vec3* wo, const std::array<double, 2>* u, BrdfSample* out, std::size_t n) const override;
-    double pdf_above(const Vec3& wo, const Vec3& wi) const override;
+    BRDFZ_BRDF_KERNELS;
     void pdf_batch(const Vec3* wo, const Vec3* wi, double* out, std::size_t n) const override;
 
 private:

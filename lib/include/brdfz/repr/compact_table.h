@@ -98,36 +98,20 @@ private:
     std::array<std::array<float, 256>, 3> lut_{};
 };
 
-class CompactTableBrdf final : public Brdf {
+class CompactTableBrdf final : public LookupTableBrdf {
 public:
     explicit CompactTableBrdf(CompactTable table, Lookup lookup = Lookup::Linear);
 
     const CompactTable& table() const { return table_; }
-    Lookup lookup() const { return lookup_; }
-    void set_lookup(Lookup lookup) {
-        lookup_ = lookup;
-        sampler_.reset();  // built from eval, which depends on the lookup
-    }
-    // The importance sampler, built from eval on first use.
-    const HalfVectorSampler& sampler() const;
-
-    int channels() const override { return 3; }
     std::size_t nbytes() const override { return table_.nbytes(); }
     std::string describe() const override;
-    bool reciprocal() const override { return table_.grid().reciprocal(); }
     const GridSpec* grid() const override { return &table_.grid(); }
 
 protected:
-    Rgb eval_above(const Vec3& wi, const Vec3& wo) const override;
-    void eval_batch(const Vec3* wi, const Vec3* wo, Rgb* out, std::size_t n) const override;
-    BrdfSample sample_above(const Vec3& wo, double u1, double u2) const override;
-    void sample_batch(const Vec3* wo, const std::array<double, 2>* u, BrdfSample* out, std::size_t n) const override;
-    double pdf_above(const Vec3& wo, const Vec3& wi) const override;
+    BRDFZ_BRDF_KERNELS;
 
 private:
     CompactTable table_;
-    Lookup lookup_;
-    Lazy<HalfVectorSampler> sampler_;
 };
 
 }  // namespace brdfz

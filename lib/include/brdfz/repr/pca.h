@@ -142,11 +142,7 @@ public:
     static constexpr std::size_t kBasisRefBytes = 32;
 
 protected:
-    Rgb eval_above(const Vec3& wi, const Vec3& wo) const override;
-    void eval_batch(const Vec3* wi, const Vec3* wo, Rgb* out, std::size_t n) const override;
-    BrdfSample sample_above(const Vec3& wo, double u1, double u2) const override;
-    void sample_batch(const Vec3* wo, const std::array<double, 2>* u, BrdfSample* out, std::size_t n) const override;
-    double pdf_above(const Vec3& wo, const Vec3& wi) const override;
+    BRDFZ_BRDF_KERNELS;
 
 private:
     std::shared_ptr<const PcaBasis> basis_;
