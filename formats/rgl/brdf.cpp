@@ -106,7 +106,7 @@ RglBrdf::~RglBrdf() = default;
 
 std::size_t RglBrdf::nbytes() const {
     const Tensors& t = tensors_;
-    const std::size_t floats = t.theta_i.size() + t.ndf.values.size() + t.sigma.values.size() +
+    const std::size_t floats = t.phi_i.size() + t.theta_i.size() + t.ndf.values.size() + t.sigma.values.size() +
                                t.vndf.values.size() + t.luminance.values.size() + t.rgb.values.size();
     return sizeof(float) * floats;
 }
