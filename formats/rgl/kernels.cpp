@@ -45,7 +45,10 @@ constexpr int kBlock = 64;  // pairs per pass, a multiple of every build's lanes
 }
 [[gnu::always_inline]] inline double lerp(double a, double b, double t) { return a * (1.0 - t) + b * t; }
 [[gnu::always_inline]] inline bool finite(double v) { return std::fabs(v) < kInf; }
-[[gnu::always_inline]] inline bool finite(const Vec3& v) { return finite(v.x) & finite(v.y) & finite(v.z); }
+[[gnu::always_inline]] inline bool finite(const Vec3& v) {
+    const bool x = finite(v.x), y = finite(v.y), z = finite(v.z);
+    return x & y & z;  // not &&: no branches in the lane loops
+}
 
 // atan2(y, x) through atan01, with std::atan2's quadrants and signed zeros (x's sign by copysign, which
 // vectorises where std::signbit does not).
@@ -351,7 +354,8 @@ template <int W>
     for (int k = 0; k < m; ++k) {
         const Vec3& u = a[k];
         const Vec3& v = b[k];
-        const bool ok = (u.z > 0.0) & (v.z > 0.0) & finite(u) & finite(v);
+        const bool fu = finite(u), fv = finite(v);
+        const bool ok = (u.z > 0.0) & (v.z > 0.0) & fu & fv;
         p.ok[k] = ok ? 1.0 : 0.0;
         p.ax[k] = ok ? u.x : 0.0, p.ay[k] = ok ? u.y : 0.0, p.az[k] = ok ? u.z : 1.0;
         p.bx[k] = ok ? v.x : 0.0, p.by[k] = ok ? v.y : 0.0, p.bz[k] = ok ? v.z : 1.0;
@@ -430,7 +434,8 @@ template <int W>
         for (int k = 0; k < m; ++k) {
             const double v = lerp(lerp(d[c][0][k], d[c][1][k], fx[k]), lerp(d[c][2][k], d[c][3][k], fx[k]), fy[k]) * scale[k];
             // A zero sigma, an empty VNDF row or a cosθo so small that f overflows would give Inf or NaN.
-            out[c][k] = (p.ok[k] > 0.0) & finite(v) ? v : 0.0;
+            const bool fv = finite(v);
+            out[c][k] = ((p.ok[k] > 0.0) & fv) ? v : 0.0;
         }
 }
 
@@ -477,7 +482,8 @@ template <int W>
         for (int k = 0; k < m; ++k) {
             const double jacobian = solid_angle_per_unit_square(g.um_x[k], g.sin_m[k], g.a_dot_m[k]);
             const double pdf = q.pdf[k] * lum[k] / jacobian;
-            out[start + k] = (p.ok[k] > 0.0) & (q.pdf[k] > 0.0) & (jacobian > 0.0) & finite(pdf) ? pdf : 0.0;
+            const bool fp = finite(pdf);
+            out[start + k] = ((p.ok[k] > 0.0) & (q.pdf[k] > 0.0) & (jacobian > 0.0) & fp) ? pdf : 0.0;
         }
     }
 }

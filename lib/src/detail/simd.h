@@ -31,7 +31,11 @@ inline Simd simd_level() {
 
 }  // namespace brdfz::detail
 
-// The target attribute of AVX-512 builds: 512-bit vectors (GCC otherwise prefers 256-bit ones even
-// where AVX-512 is enabled). Without FMA contraction where a kernel must give its other builds' bits,
-// which the unit's -ffp-contract=off provides.
+// The target attribute of AVX-512 builds: 512-bit vectors (GCC and clang otherwise prefer 256-bit ones
+// even where AVX-512 is enabled; clang asks for them with its own attribute). Without FMA contraction
+// where a kernel must give its other builds' bits, which the unit's -ffp-contract=off provides.
+#if defined(__clang__)
+#define BRDFZ_AVX512 gnu::target("avx512f,avx512dq,avx512vl,avx512bw"), clang::min_vector_width(512)
+#else
 #define BRDFZ_AVX512 gnu::target("avx512f,avx512dq,avx512vl,avx512bw,prefer-vector-width=512")
+#endif
