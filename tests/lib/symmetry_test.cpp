@@ -145,7 +145,7 @@ TEST_CASE("tabulation: a symmetry=none table keeps both sides, a reciprocal one 
     CHECK(compare(ramp, TabularBrdf(Table(folded)), directions()).cos_rmse_rel.mean > 0.1);
 }
 
-TEST_CASE("every gridded kind takes symmetry=none and follows a non-reciprocal source", "[symmetry][compress]") {
+TEST_CASE("every gridded kind takes symmetry=none and follows a non-reciprocal source", "[symmetry][compress][heavy]") {
     const Skewed src(0.8);
     const Metrics lobe_self = compare(src, src.lobe(), directions());
     INFO("the source against its reciprocal mean: " << lobe_self.cos_rmse_rel.mean);
