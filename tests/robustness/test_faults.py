@@ -120,11 +120,11 @@ def test_brdfz_bytes_are_reproducible_with_source_date_epoch(cli, demo_table, tm
 def test_a_killed_demo_leaves_no_partial_csv(cli, tmp_path, sig):
     """demo writes representations.csv whole once every setting is measured: signalled while it
     builds them, it leaves neither the CSV nor a temporary; left alone, the CSV has a row a setting."""
-    specs = ["analytic:lambert+ggx", "tabular:res=90x90x180", "svd:rank=4,space=log"]
+    specs = ["analytic:lambert+ggx", "tabular:res=32x32x64", "svd:rank=2,space=log,res=32x32x32"]
     cmd = [cli, "demo", "--out", str(tmp_path)] + [a for s in specs for a in ("--repr", s)]
     proc = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.DEVNULL, text=True)
     for line in proc.stdout:
-        if line.lstrip().startswith("tabular:res=90x90x180"):  # the first setting is measured
+        if line.lstrip().startswith("tabular:res=32x32x64"):  # the first settings are measured
             proc.send_signal(sig)
             break
     proc.stdout.close()
