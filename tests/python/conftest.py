@@ -9,6 +9,12 @@ REPO = pathlib.Path(__file__).resolve().parents[2]
 SHARED = REPO.parent / "shared"
 
 
+def pytest_configure(config):
+    # As Catch's [heavy] tag: the sanitizer tree runs pytest with -m "not heavy" (tests/CMakeLists.txt);
+    # a heavy test's code is run there by a lighter one.
+    config.addinivalue_line("markers", "heavy: left to the Release run (10-60x slower under the sanitizers)")
+
+
 @pytest.fixture(scope="session")
 def cli():
     path = os.environ.get("BRDFZ_CLI")

@@ -10,3 +10,4 @@ _spec.loader.exec_module(_shared)
 
 cli, demo_table, merl_tables, rgl_files = _shared.cli, _shared.demo_table, _shared.merl_tables, _shared.rgl_files
 run, import_brdfz, SHARED = _shared.run, _shared.import_brdfz, _shared.SHARED
+pytest_configure = _shared.pytest_configure

@@ -129,6 +129,7 @@ def child_rss_mb(args):
     return int(rc), int(rss), proc.stderr
 
 
+@pytest.mark.heavy  # 1.5 M rows; under the sanitizers their allocator's own memory is what is measured
 def test_sample_streams_rows_in_constant_memory(cli, tmp_path):
     run(cli, "demo", "--out", tmp_path, "--repr", "tabular:res=4x4x8")
     table = tmp_path / "coated-diffuse.binary"
