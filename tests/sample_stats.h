@@ -42,15 +42,42 @@ inline Vec3 wi_at(const Vec3& wo, double x, double y, double* jacobian) {
     return wi;
 }
 
+// Points of a quadrature rule in half-vector coordinates whose pdf goes through the batch pdf, which
+// gives one call's bits (check_batch_sampler); the sums run in the points' order, as one call at a
+// time would.
+class PdfRule {
+public:
+    explicit PdfRule(const Vec3& wo) : wo_(wo) {}
+    void add(double x, double y) {
+        double jac;
+        wi_.push_back(wi_at(wo_, x, y, &jac));
+        jacobian_.push_back(jac);
+    }
+    // sum plus pdf(wo, wi)·jacobian at each point added since the last call, where the jacobian is > 0.
+    double accumulate(const Brdf& b, double sum) {
+        views_.resize(wi_.size(), wo_);
+        pdf_.resize(wi_.size());
+        b.pdf(std::span<const Vec3>(views_.data(), wi_.size()), std::span<const Vec3>(wi_), std::span(pdf_));
+        for (std::size_t k = 0; k < wi_.size(); ++k)
+            if (jacobian_[k] > 0) sum += pdf_[k] * jacobian_[k];
+        wi_.clear(), jacobian_.clear();
+        return sum;
+    }
+
+private:
+    Vec3 wo_;
+    std::vector<Vec3> views_, wi_;
+    std::vector<double> jacobian_, pdf_;
+};
+
 // ∫ pdf(wo, wi) dωi over the upper hemisphere, by a midpoint rule with n×n points per unit square.
 inline double pdf_integral(const Brdf& b, const Vec3& wo, int n = 1024) {
     double sum = 0;
-    for (int i = 0; i < n; ++i)
-        for (int j = 0; j < n; ++j) {
-            double jac;
-            const Vec3 wi = wi_at(wo, (i + 0.5) / n, (j + 0.5) / n, &jac);
-            if (jac > 0) sum += b.pdf(wo, wi) * jac;
-        }
+    PdfRule rule(wo);
+    for (int i = 0; i < n; ++i) {
+        for (int j = 0; j < n; ++j) rule.add((i + 0.5) / n, (j + 0.5) / n);
+        sum = rule.accumulate(b, sum);
+    }
     return sum / (double(n) * n);
 }
 
@@ -131,15 +158,11 @@ inline Chi2Result chi2_test(const Brdf& b, const Vec3& wo, std::size_t samples, 
     // Expected counts by a midpoint rule on 16×16 points per cell. Cells the horizon crosses (wi.z = 0,
     // where the pdf may drop to 0) take 64×64, or their quadrature error alone fails the test; the
     // crossing is found on the cell's outline, which the horizon curve must cut to enter the cell.
+    PdfRule rule(wo);
     const auto cell_integral = [&](int i, int j, int sub) {
-        double sum = 0;
         for (int a = 0; a < sub; ++a)
-            for (int c = 0; c < sub; ++c) {
-                double jac;
-                const Vec3 wi = wi_at(wo, (i + (a + 0.5) / sub) / cells, (j + (c + 0.5) / sub) / cells, &jac);
-                if (jac > 0) sum += b.pdf(wo, wi) * jac;
-            }
-        return sum / (sub * sub);
+            for (int c = 0; c < sub; ++c) rule.add((i + (a + 0.5) / sub) / cells, (j + (c + 0.5) / sub) / cells);
+        return rule.accumulate(b, 0.0) / (sub * sub);
     };
     const auto horizon_crosses = [&](int i, int j) {
         constexpr int kProbes = 128;

@@ -457,11 +457,9 @@ TEST_CASE("rgl kernels: the batch sampler's chi-square on shared files, and batc
         WARN("skipped the shared files: ../shared/data/rgl missing");
         return;
     }
-    // Three files (Bonferroni over them and the five views; the heavy test below takes every file).
-    for (std::size_t i = 0; i < files.size(); i += 6) {
-        INFO(files[i].filename().string());
-        test::check_batch_sampler(*rgl::read(files[i].string()).brdf, 200000, test::kViewsLevel / 3);
-    }
+    // One file (the heavy test below takes every file at more draws).
+    INFO(files.front().filename().string());
+    test::check_batch_sampler(*rgl::read(files.front().string()).brdf, 50000);
 }
 
 TEST_CASE("rgl kernels: the batch sampler's chi-square on every shared file", "[rgl][kernels][sample][heavy]") {

@@ -37,13 +37,11 @@ def signal_mid_write(cmd, sig, after_bytes=64 << 10):
     return proc.wait(timeout=300)
 
 
-# Each case converts to a large table six times. The sanitizer tree keeps one, the container killed
-# (HDF5 writes through the unnamed file by its path); files_test.cpp kills the writer itself there.
-KILLED_WRITES = [pytest.param(ext, sig, marks=[] if (ext, sig) == (".brdfz", signal.SIGKILL) else pytest.mark.heavy)
-                 for ext in FORMATS for sig in (signal.SIGKILL, signal.SIGTERM)]
-
-
-@pytest.mark.parametrize("ext, sig", KILLED_WRITES)
+# The killed-process tests are heavy: a killed process cannot report a sanitizer finding, so the
+# sanitizer tree leaves them to the Release run (files_test.cpp kills the writer itself there).
+@pytest.mark.heavy
+@pytest.mark.parametrize("sig", [signal.SIGKILL, signal.SIGTERM])
+@pytest.mark.parametrize("ext", FORMATS)
 def test_killed_writes_leave_no_file_and_no_temporary(cli, demo_table, tmp_path, ext, sig):
     """Signalled while writing (and, earlier, while still tabulating): nothing is left at OUT nor
     beside it, and an OUT that was there before is unchanged."""
@@ -121,7 +119,8 @@ def test_brdfz_bytes_are_reproducible_with_source_date_epoch(cli, demo_table, tm
     assert not (tmp_path / "c.brdfz").exists()
 
 
-@pytest.mark.parametrize("sig", [signal.SIGKILL, pytest.param(signal.SIGTERM, marks=pytest.mark.heavy)])
+@pytest.mark.heavy
+@pytest.mark.parametrize("sig", [signal.SIGKILL, signal.SIGTERM])
 def test_a_killed_demo_leaves_no_partial_csv(cli, tmp_path, sig):
     """demo writes representations.csv whole once every setting is measured: signalled while it
     builds them, it leaves neither the CSV nor a temporary; left alone, the CSV has a row a setting."""

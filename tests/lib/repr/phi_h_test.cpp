@@ -169,7 +169,7 @@ TEST_CASE("phih: the stack samples with its exact pdf (chi-square, normalisation
     }
 }
 
-TEST_CASE("phih: svd and nmf factor each φh slice", "[phih][factored]") {
+TEST_CASE("phih: svd and nmf factor each φh slice", "[phih][factored][heavy]") {
     const AnalyticBrdf source = brushed();
     for (const char* kind : {"svd:rank=3,space=log", "nmf:rank=3,space=linear"}) {
         INFO(kind);
@@ -192,4 +192,22 @@ TEST_CASE("phih: svd and nmf factor each φh slice", "[phih][factored]") {
     }
     const Compressed small = compress(source, "svd:rank=2,res=16x8x16,phih=4,symmetry=none");
     test::check_sampler(*small.brdf, 100000);
+}
+
+// The sanitizers' share of the test above: the same builders and sampler on small grids.
+TEST_CASE("phih: svd and nmf factor each φh slice (small grids)", "[phih][factored][light]") {
+    const AnalyticBrdf source = brushed();
+    for (const char* kind : {"svd:rank=2,space=log", "nmf:rank=2,space=linear"}) {
+        INFO(kind);
+        const Compressed flat = compress(source, std::string(kind) + ",res=8x4x8,symmetry=none");
+        const Compressed stack = compress(source, std::string(kind) + ",res=8x4x8,phih=4,symmetry=none");
+        const Compressed mirror = compress(source, std::string(kind) + ",res=8x4x8,phih=2,symmetry=bilateral");
+        const auto* s = dynamic_cast<const PhiHBrdf*>(stack.brdf.get());
+        REQUIRE(s);
+        CHECK(s->slices().size() == 4);
+        CHECK(dynamic_cast<const FactoredBrdf*>(s->slices().front().get()));
+        CHECK(stack.brdf->nbytes() == 4 * flat.brdf->nbytes());
+        CHECK(over_directions(source, *mirror.brdf) < over_directions(source, *flat.brdf));
+        test::check_sampler(*stack.brdf, 20000);
+    }
 }
