@@ -559,7 +559,11 @@ template <int W>
     }
 }
 
-// The kernels' three builds.
+// The kernels' three builds, and a one-lane build for fewer pairs than a vector holds (one call at a
+// time): the same operations, so the same bits, without computing the unused lanes.
+[[gnu::flatten]] void eval_one(const KernelTables& t, const Vec3* wi, const Vec3* wo, Rgb* out, std::size_t n) {
+    eval_passes<1>(t, wi, wo, out, n);
+}
 [[gnu::flatten]] void eval_sse2(const KernelTables& t, const Vec3* wi, const Vec3* wo, Rgb* out, std::size_t n) {
     eval_passes<2>(t, wi, wo, out, n);
 }
@@ -572,6 +576,9 @@ template <int W>
     eval_passes<8>(t, wi, wo, out, n);
 }
 
+[[gnu::flatten]] void pdf_one(const KernelTables& t, const Vec3* wo, const Vec3* wi, double* out, std::size_t n) {
+    pdf_passes<1>(t, wo, wi, out, n);
+}
 [[gnu::flatten]] void pdf_sse2(const KernelTables& t, const Vec3* wo, const Vec3* wi, double* out, std::size_t n) {
     pdf_passes<2>(t, wo, wi, out, n);
 }
@@ -584,6 +591,10 @@ template <int W>
     pdf_passes<8>(t, wo, wi, out, n);
 }
 
+[[gnu::flatten]] void sample_one(const KernelTables& t, const Vec3* wo, const std::array<double, 2>* u,
+                                 BrdfSample* out, std::size_t n) {
+    sample_passes<1>(t, wo, u, out, n);
+}
 [[gnu::flatten]] void sample_sse2(const KernelTables& t, const Vec3* wo, const std::array<double, 2>* u,
                                   BrdfSample* out, std::size_t n) {
     sample_passes<2>(t, wo, u, out, n);
@@ -597,8 +608,11 @@ template <int W>
     sample_passes<8>(t, wo, u, out, n);
 }
 
+// The build for n pairs at the level asked for: the one-lane build below a vector's worth of pairs.
 template <typename F>
-F* pick(Simd simd, F* sse2, F* avx2, F* avx512) {
+F* pick(Simd simd, std::size_t n, F* one, F* sse2, F* avx2, F* avx512) {
+    const std::size_t lanes = simd == Simd::Avx512 ? 8 : simd == Simd::Avx2Fma ? 4 : 2;
+    if (n < lanes) return one;
     return simd == Simd::Avx512 ? avx512 : simd == Simd::Avx2Fma ? avx2 : sse2;
 }
 
@@ -617,16 +631,16 @@ void sample_warp(const WarpTables& w, int slice, double* x, double* y, double* p
 }
 
 void eval_pairs(Simd simd, const KernelTables& t, const Vec3* wi, const Vec3* wo, Rgb* out, std::size_t n) {
-    pick(simd, eval_sse2, eval_avx2, eval_avx512)(t, wi, wo, out, n);
+    pick(simd, n, eval_one, eval_sse2, eval_avx2, eval_avx512)(t, wi, wo, out, n);
 }
 
 void pdf_pairs(Simd simd, const KernelTables& t, const Vec3* wo, const Vec3* wi, double* out, std::size_t n) {
-    pick(simd, pdf_sse2, pdf_avx2, pdf_avx512)(t, wo, wi, out, n);
+    pick(simd, n, pdf_one, pdf_sse2, pdf_avx2, pdf_avx512)(t, wo, wi, out, n);
 }
 
 void sample_pairs(Simd simd, const KernelTables& t, const Vec3* wo, const std::array<double, 2>* u,
                   BrdfSample* out, std::size_t n) {
-    pick(simd, sample_sse2, sample_avx2, sample_avx512)(t, wo, u, out, n);
+    pick(simd, n, sample_one, sample_sse2, sample_avx2, sample_avx512)(t, wo, u, out, n);
 }
 
 }  // namespace brdfz::rgl::detail
