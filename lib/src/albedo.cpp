@@ -1,9 +1,12 @@
 #include "brdfz/albedo.h"
 
+#include <algorithm>
+#include <array>
 #include <cmath>
 #include <limits>
 #include <numbers>
 #include <random>
+#include <span>
 #include <vector>
 
 #include "brdfz/errors.h"
@@ -83,12 +86,25 @@ SampledAlbedo sampled_albedo(const Brdf& brdf, double theta_o, std::size_t n, st
     std::mt19937_64 rng(seed);
     std::uniform_real_distribution<double> u(0.0, 1.0);
     double sum[3] = {}, sum_sq[3] = {};
-    for (std::size_t k = 0; k < n; ++k) {
-        const BrdfSample s = brdf.sample(wo, u(rng), u(rng));
-        for (int c = 0; c < 3; ++c) {
-            sum[c] += s.weight[c];
-            sum_sq[c] += s.weight[c] * s.weight[c];
+    // Drawn in batches (the same draws as one call at a time), a chunk of bounded memory at a time.
+    constexpr std::size_t kChunk = 4096;
+    const std::size_t chunk = std::min(n, kChunk);
+    const std::vector<Vec3> views(chunk, wo);
+    std::vector<std::array<double, 2>> us(chunk);
+    std::vector<BrdfSample> drawn(chunk);
+    for (std::size_t start = 0; start < n; start += chunk) {
+        const std::size_t m = std::min(chunk, n - start);
+        for (std::size_t k = 0; k < m; ++k) {
+            const double u1 = u(rng);
+            us[k] = {u1, u(rng)};
         }
+        brdf.sample(std::span(views.data(), m), std::span<const std::array<double, 2>>(us.data(), m),
+                    std::span(drawn.data(), m));
+        for (std::size_t k = 0; k < m; ++k)
+            for (int c = 0; c < 3; ++c) {
+                sum[c] += drawn[k].weight[c];
+                sum_sq[c] += drawn[k].weight[c] * drawn[k].weight[c];
+            }
     }
     SampledAlbedo r;
     for (int c = 0; c < 3; ++c) {
