@@ -34,7 +34,7 @@ Two implementations behind one interface:
   through them: mi.traverse() lists the differentiable arrays (`values` of a table, `lut` or
   `half_scales` of a compact one, `u`, `v`, `colour_weights` of factors, `coefficients` of a PCA
   material, `params` of an analytic model). Sampling keeps the tables of the Brdf it was built from.
-- wavefront (every other kind: RGL-EPFL files, scattered measurements; scalar variants; or
+- wavefront (every other kind: RGL-EPFL files, φh stacks, scattered measurements; scalar variants; or
   native=False): each call hands its lanes to brdfz's C++ batch kernels through numpy. It cannot be
   traced into a kernel, so building one switches Dr.Jit's symbolic loops and calls off for the process
   (wavefront mode, one batch per bounce); while one exists, symbolic mode must stay off (a symbolic

@@ -9,8 +9,8 @@ with fast_math.h's polynomial arctangent for the angles: within ~1e-10 of C++'s,
 path is within 5e-8 bins of the exact one, so linear lookups agree to ~1e-9 relative and nearest
 lookups pick the same bin except within ~1e-9 bins of an edge.
 
-The φd axis spans [0, π) with reciprocity folding (Grid.phi_span); a grid over [0, 2π) would change
-only that attribute and the fold in coords().
+The φd axis spans [0, π) folded by reciprocity or, on a symmetry=none grid, [0, 2π) (Grid.full):
+the folded angle plus π where d_y < 0, as table_lookup.h's phi_d_coord.
 """
 from __future__ import annotations
 
@@ -60,9 +60,10 @@ class Grid:
         self.nh, self.nd, self.np = int(g["n_theta_h"]), int(g["n_theta_d"]), int(g["n_phi_d"])
         self.offset = 0.5 if g["position"] == "centre" else 0.0
         self.warp = float(g["theta_d_warp"])
-        if g["symmetry"] != "reciprocal":  # the ports fold φd by reciprocity, as MERL's grid does
+        if g["symmetry"] not in ("reciprocal", "none"):
             raise Unsupported(f"a grid with symmetry={g['symmetry']}")
-        self.phi_span = PI  # φd folded by reciprocity (table.h)
+        self.full = g["symmetry"] == "none"
+        self.per_radian = (0.5 if self.full else 1.0) / PI  # as phi_d_coord rounds it
         self.bins = self.nh * self.nd * self.np
         if 3 * self.bins >= _MAX_INDEX:
             raise Unsupported(f"grid of {self.bins} bins is too large for 32-bit gathers")
@@ -92,8 +93,9 @@ class Grid:
         theta_h = half_turn_angle(r, hz)
         theta_d = half_turn_angle(dr.sqrt(dx * dx + dy * dy), dz)
         phi_d = half_turn_angle(dy, dx)  # folded into [0, π]
-        return (dr.sqrt(theta_h * (2.0 / PI)) * self.nh, self.theta_d_coord(theta_d, dz),
-                phi_d * (1.0 / self.phi_span) * self.np)
+        if self.full:
+            phi_d = phi_d + dr.select(dy < 0.0, PI, 0.0)
+        return (dr.sqrt(theta_h * (2.0 / PI)) * self.nh, self.theta_d_coord(theta_d, dz), phi_d * self.per_radian * self.np)
 
     def spans(self, c):
         uh, ud, up = c
