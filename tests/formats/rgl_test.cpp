@@ -530,17 +530,6 @@ std::vector<fs::path> shared_rgl_files() {
     return files;
 }
 
-// The sampler's statistical checks run on a spread of the shared materials (a paint with negative
-// values, a satin, a matte paper, a yellow car paint, the roughest file and a metallic one).
-std::vector<fs::path> sampled_rgl_files() {
-    std::vector<fs::path> files;
-    for (const fs::path& p : shared_rgl_files())
-        for (const char* name : {"cc_ibiza_sunset", "satin_rosaline", "paper_white", "vch_golden_yellow", "chm_mint",
-                                 "ilm_l3_37_metallic"})
-            if (p.filename() == std::string(name) + "_rgb.bsdf") files.push_back(p);
-    return files;
-}
-
 const double kThetaODeg[] = {0, 30, 60, 80, 87};
 
 Vec3 view_at(double deg) { return spherical_direction(deg * std::numbers::pi / 180, 0.4); }
@@ -593,9 +582,10 @@ TEST_CASE("rgl sampler: constant warps give the Jacobian alone, in Mitsuba's var
     }
 }
 
+// The batch sampler (whose draws are one call's bits: rgl_kernel_test.cpp) on every shared file.
 TEST_CASE("rgl sampler on the shared RGL-EPFL files: chi-square, normalisation, round trip, albedo",
           "[rgl][sample][heavy]") {
-    const auto files = sampled_rgl_files();
+    const auto files = shared_rgl_files();
     if (files.empty()) {
         WARN("skipped: ../shared/data/rgl missing");
         return;
@@ -607,7 +597,7 @@ TEST_CASE("rgl sampler on the shared RGL-EPFL files: chi-square, normalisation, 
         const Brdf& b = *r.brdf;
         for (double deg : kThetaODeg) {
             const Vec3 wo = view_at(deg);
-            const test::Chi2Result chi2 = test::chi2_test(b, wo, samples);
+            const test::Chi2Result chi2 = test::chi2_test(b, wo, samples, 32, 1, test::Draws::Batch);
             // Normals that reflect wo below the horizon fail (pdf 0): the pdf integrates over the upper
             // hemisphere to the probability of everything else.
             const double lost = static_cast<double>(chi2.failed) / samples;

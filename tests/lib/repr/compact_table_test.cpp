@@ -502,7 +502,7 @@ void check_compact_samplers(bool both_views) {
         for (double deg : {20.0, 70.0}) {
             if (!both_views && (deg == 70.0) != grazing_turn) continue;
             const Vec3 wo = spherical_direction(deg * M_PI / 180, 0.4);
-            const test::Chi2Result r = test::chi2_test(*c.brdf, wo, 300000);
+            const test::Chi2Result r = test::chi2_test(*c.brdf, wo, 300000, 32, 1, test::Draws::Batch);
             CHECK(r.p_value > 0.01 / 4);
             CHECK(test::pdf_integral(*c.brdf, wo, 512) == Approx(1.0).margin(0.01));
             std::mt19937_64 rng(7);

@@ -749,7 +749,7 @@ TEST_CASE("factored sampler: chi-square, normalisation, round trip", "[factored]
         for (double deg : kThetaODeg) {
             INFO(factor_method_name(method) << " theta_o = " << deg);
             const Vec3 wo = spherical_direction(deg * M_PI / 180, 0.4);
-            CHECK(test::chi2_test(b, wo, 1000000).p_value > alpha);
+            CHECK(test::chi2_test(b, wo, 1000000, 32, 1, test::Draws::Batch).p_value > alpha);
             CHECK(test::pdf_integral(b, wo) == Approx(1.0).margin(0.01));
             std::mt19937_64 rng(7);
             std::uniform_real_distribution<double> u(0, 1);
