@@ -209,15 +209,23 @@ inline constexpr double kThetaODeg[] = {0, 30, 60, 80, 87};
 // The 1 % level, Bonferroni-corrected over the five views: check_sampler's default.
 inline constexpr double kViewsLevel = 0.01 / std::size(kThetaODeg);
 
+// How check_sampler's χ² draws (one call at a time or through the batch sampler, whose draws
+// check_batch_bits shows are one call's bits) and on how many cells a side: the expected counts'
+// quadrature takes cells·16 points a side, so 16 cells cost a quarter of 32's (for few draws).
+struct Chi2Setting {
+    Draws draws = Draws::OneAtATime;
+    int cells = 32;
+};
+
 // At each of kThetaODeg: χ² of `samples` draws against the pdf (fails below p_min: callers Bonferroni-
 // correct it for the number of tests they run), ∫ pdf dωi = 1 ± 1% (on the χ² test's quadrature: 512
-// points a side, 2048 where the horizon crosses), and the sample → pdf round trip with the weight
-// f·cosθi/pdf.
-inline void check_sampler(const Brdf& b, std::size_t samples, double p_min = kViewsLevel) {
+// points a side at 32 cells, 2048 where the horizon crosses), and the sample → pdf round trip with the
+// weight f·cosθi/pdf.
+inline void check_sampler(const Brdf& b, std::size_t samples, double p_min = kViewsLevel, Chi2Setting chi2 = {}) {
     for (double deg : kThetaODeg) {
         INFO("theta_o = " << deg);
         const Vec3 wo = spherical_direction(deg * M_PI / 180, 0.4);
-        const Chi2Result r = chi2_test(b, wo, samples);
+        const Chi2Result r = chi2_test(b, wo, samples, chi2.cells, 1, chi2.draws);
         CHECK(r.p_value > p_min);
         CHECK(r.integral == Approx(1.0).margin(0.01));
         std::mt19937_64 rng(7);

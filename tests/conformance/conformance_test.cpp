@@ -72,8 +72,8 @@ TEST_CASE("conformance: every representation kind", "[conformance]") {
             test::check_conventions(b);
             if (c.reciprocal) test::check_reciprocity(b);
             test::check_furnace(b, 1.0);
-            test::check_sampler(b, 20000);
-            test::check_batch_sampler(b, 20000);
+            test::check_sampler(b, 20000, test::kViewsLevel, {test::Draws::Batch, 16});
+            test::check_batch_bits(b);
             LoadOptions reading;
             if (spec.find("lookup=nearest") != std::string::npos) reading.lookup = Lookup::Nearest;
             test::check_container_round_trip(b, reading);

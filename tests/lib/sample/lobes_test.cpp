@@ -134,33 +134,26 @@ TEST_CASE("every lobe family samples with its header's sample and pdf", "[sample
     check_header_samplers(AllLobes{});
 }
 
-TEST_CASE("analytic samplers: chi-square, normalisation, round trip at 0/30/60/80/87 deg", "[sample][analytic][chi2][heavy]") {
+// Every case: χ² of batch draws (the mixture's block kernel, LobeMixture::sample_block), normalisation and
+// round trip at 0/30/60/80/87 deg, and batch = one call, bit for bit.
+void check_samplers(std::size_t samples, test::Chi2Setting chi2) {
     // Bonferroni over every case and angle: a 1% chance in all that any check fails by chance.
     const double p_min = 0.01 / (cases().size() * std::size(test::kThetaODeg));
     for (const Case& c : cases()) {
         const AnalyticBrdf b(c.model, c.params);
         INFO(b.describe());
-        test::check_sampler(b, 200000, p_min);
+        test::check_sampler(b, samples, p_min, chi2);
+        test::check_batch_bits(b);
     }
 }
 
-// The mixture's block kernel (LobeMixture::sample_block, AnalyticBrdf's batch sample): chi-square of batch
-// draws, and batch = one call, bit for bit, for every case.
-void check_batch_samplers(std::size_t samples) {
-    const double p_min = 0.01 / (cases().size() * std::size(test::kThetaODeg));
-    for (const Case& c : cases()) {
-        const AnalyticBrdf b(c.model, c.params);
-        INFO(b.describe());
-        test::check_batch_sampler(b, samples, p_min);
-    }
+TEST_CASE("analytic samplers: chi-square, normalisation, round trip at 0/30/60/80/87 deg, batch = one call",
+          "[sample][analytic][chi2][heavy]") {
+    check_samplers(200000, {test::Draws::Batch});
 }
 
-TEST_CASE("analytic samplers: batch draws, chi-square and batch = one call", "[sample][analytic][chi2][heavy]") {
-    check_batch_samplers(200000);
-}
-
-TEST_CASE("analytic samplers: batch draws, chi-square and batch = one call (fewer draws)", "[sample][analytic][chi2][light]") {
-    check_batch_samplers(20000);
+TEST_CASE("analytic samplers: the same checks with fewer draws", "[sample][analytic][chi2][light]") {
+    check_samplers(20000, {test::Draws::Batch, 16});
 }
 
 namespace {
