@@ -160,7 +160,7 @@ template <int W, FactorLayout L, bool Grouped>
             const detail::BinCoords& c = coords[k];
             set_corners<L>(g,
                            {detail::clamped_span(c.uh - off, g.n_theta_h), detail::clamped_span(c.ud - off, g.n_theta_d),
-                            detail::periodic_span(c.up - off, g.n_phi_d)},
+                            detail::phi_d_span(g, c.up - off)},
                            k, corners);
         }
         if (f.prefetch_u)
