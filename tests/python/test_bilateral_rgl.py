@@ -8,7 +8,7 @@ from conftest import import_brdfz
 brdfz = import_brdfz()
 
 DIRECTIONS = 1 << 16
-# A bilateral factorisation of at most 16 KiB.
+# The smallest bilateral candidate of default_candidates() (lib/src/select.cpp).
 SVD = "svd:rank=10,space=cos,colour=shared,res=50x40x14,dwarp=0.9,fit=lsq,weight=solid,symmetry=bilateral,dtype=f16"
 
 
@@ -34,6 +34,7 @@ def test_the_bilateral_table_is_as_accurate_as_none_at_half_the_bins(rgl_files):
 
 
 def test_the_bilateral_svd_candidate_is_within_2_percent_over_directions(rgl_files, tmp_path):
+    assert SVD in brdfz.default_candidates()
     m = rgl(rgl_files, "cardboard")
     c = brdfz.compress(m, SVD)
     assert c.nbytes == 12320
