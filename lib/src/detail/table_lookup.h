@@ -7,6 +7,7 @@
 #pragma once
 
 #include <algorithm>
+#include <bit>
 #include <cmath>
 #include <concepts>
 #include <cstddef>
@@ -83,8 +84,10 @@ constexpr double kIllConditioned = 1e300;
 // reciprocal grid the arithmetic of the folded axis exactly.
 [[gnu::always_inline]] inline double phi_d_coord(const GridSpec& g, double y, double x) {
     const bool full = g.full_circle();
-    const double phi = fast_half_turn_angle(g.bilateral() ? std::fabs(y) : y, x) +
-                       ((full & (y < 0.0)) ? std::numbers::pi : 0.0);
+    // |d_y| by masking its sign bit (all bits kept on the other axes): one AND per pair, not a select.
+    const std::uint64_t keep = g.bilateral() ? ~(std::uint64_t{1} << 63) : ~std::uint64_t{0};
+    const double folded = std::bit_cast<double>(std::bit_cast<std::uint64_t>(y) & keep);
+    const double phi = fast_half_turn_angle(folded, x) + ((full & (y < 0.0)) ? std::numbers::pi : 0.0);
     return phi * (full ? 0.5 / std::numbers::pi : 1.0 / std::numbers::pi) * g.n_phi_d;
 }
 
@@ -345,10 +348,17 @@ template <bool Wide, typename Values, typename Wi, typename Emit>
     const double off = g.sample_offset();
     for (std::size_t k = 0; k < m; ++k) {
         const Span h = clamped_span(c.uh[k] - off, g.n_theta_h), d = clamped_span(c.ud[k] - off, g.n_theta_d),
-                   p = phi_d_span(g, c.up[k] - off);
+                   p = periodic_span(c.up[k] - off, g.n_phi_d);
         h0[k] = h.i0, h1[k] = h.i1, ht[k] = h.t, d0[k] = d.i0, d1[k] = d.i1, dt[k] = d.t;
         p0[k] = p.i0, p1[k] = p.i1, pt[k] = p.t;
     }
+    // The bilateral axis's φd spans in a pass of their own, so that the loop above stays the periodic
+    // axes' (a select per pair between the two kinds of span computed both).
+    if (g.bilateral())
+        for (std::size_t k = 0; k < m; ++k) {
+            const Span p = clamped_span(c.up[k] - off, g.n_phi_d);
+            p0[k] = p.i0, p1[k] = p.i1, pt[k] = p.t;
+        }
     for (std::size_t k = 0; k < m; ++k)
         if (use[k] && !(c.up[k] <= g.n_phi_d)) [[unlikely]] {  // kIllConditioned or NaN
             const Corners x = linear_corners(g, {c.uh[k], c.ud[k], c.up[k]}, wi(k), wo[k]);
