@@ -27,14 +27,13 @@
 
 namespace brdfz::detail {
 
-// The start of a table's describe(): "tabular 90x90x180", or "bivariate 90x90" for one φd bin, and
-// ", theta_d warp 0.6" on a warped θd axis, ", symmetry none" with φd over [0, 2π) (", symmetry
-// bilateral" folded by the mirror).
 // ", symmetry none" or ", symmetry bilateral"; nothing on a reciprocal grid.
 inline std::string symmetry_suffix(const GridSpec& g) {
     return g.reciprocal() ? "" : std::string(", symmetry ") + symmetry_name(g.symmetry);
 }
 
+// The start of a table's describe(): "tabular 90x90x180", or "bivariate 90x90" for one φd bin, and
+// ", theta_d warp 0.6" on a warped θd axis, then symmetry_suffix.
 inline std::string table_shape(const GridSpec& g) {
     std::string warp;
     if (g.theta_d_warp != 0.0) {
@@ -353,7 +352,7 @@ template <bool Wide, typename Values, typename Wi, typename Emit>
         p0[k] = p.i0, p1[k] = p.i1, pt[k] = p.t;
     }
     // The bilateral axis's φd spans in a pass of their own, so that the loop above stays the periodic
-    // axes' (a select per pair between the two kinds of span computed both).
+    // axes' own: a select per pair would compute both kinds of span.
     if (g.bilateral())
         for (std::size_t k = 0; k < m; ++k) {
             const Span p = clamped_span(c.up[k] - off, g.n_phi_d);

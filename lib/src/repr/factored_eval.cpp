@@ -156,7 +156,7 @@ template <int W, FactorLayout L, bool Grouped>
         for (std::size_t k = 0; k < m; ++k)
             if (above[k] & !(coords[k].up <= g.n_phi_d)) [[unlikely]]  // kIllConditioned or NaN
                 coords[k] = detail::bin_coords(g, a[k], b[k]);
-        // One loop per kind of φd axis: a select per pair between the two kinds of span computed both.
+        // One loop per kind of φd axis: a select per pair would compute both kinds of span.
         if (g.bilateral())
             for (std::size_t k = 0; k < m; ++k) {
                 const detail::BinCoords& c = coords[k];
