@@ -43,7 +43,7 @@ const StorageModule* find_storage(std::string_view type);
 void write_theta_d_axis(h5::WriteNode& rep, const GridSpec& g);
 double read_theta_d_warp(const h5::ReadNode& rep);
 // The φd axis likewise (formats/SPEC.md, `phi_d_axis`): nothing for the reciprocal [0, π), "full" for
-// Symmetry::None; reading throws FormatError for another value.
+// Symmetry::None, "bilateral" for Symmetry::Bilateral; reading throws FormatError for another value.
 void write_phi_d_axis(h5::WriteNode& rep, const GridSpec& g);
 Symmetry read_phi_d_symmetry(const h5::ReadNode& rep);
 

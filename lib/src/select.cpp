@@ -49,16 +49,20 @@ std::vector<std::string> benchmark_specs() {
 std::vector<std::string> default_candidates() {
     // In order of bytes for three channels (the comments), so the first within budget is the smallest.
     // The symmetry=none ones keep φd over [0, 2π) for non-reciprocal data (RGL files), which a
-    // reciprocal grid holds as the mean of the two sides.
+    // reciprocal grid holds as the mean of the two sides; the symmetry=bilateral ones keep it in half
+    // the bins, φd folded by the mirror that isotropic data have.
     return {
         "analytic:lambert+ggx",                             // 64
         "analytic:lambert+ggx+ggx",                         // 104
         // At most Neural-BRDF's 2,700 B, for the error over directions.
         "svd:rank=4,space=log,colour=shared,layout=hd_p,res=20x14x32,fit=lsq,symmetry=none,dtype=f16",  // 2,544
         "bivariate:res=32x32,dtype=u8log",                  // 3,144
+        // At most 16 KB for the error over directions (with the 14,560 B one below); the second with the
+        // θh rows and rank of sharp specular spikes (chm_mint).
+        "svd:rank=10,space=cos,colour=shared,res=50x40x14,dwarp=0.9,fit=lsq,weight=solid,symmetry=bilateral,dtype=f16",  // 12,320
+        "svd:rank=14,space=cos,colour=shared,res=128x28x12,dwarp=0.9,fit=lsq,weight=solid,symmetry=bilateral,dtype=f16",  // 13,160
         "svd:rank=4,space=cos,res=32x16x16",                // 13,824
         "svd:rank=6,space=cos,colour=shared,res=90x32x16",  // 14,520
-        // At most 16 KB for the error over directions.
         "svd:rank=10,space=cos,colour=shared,res=50x24x28,dwarp=0.9,fit=lsq,weight=solid,symmetry=none,dtype=f16",  // 14,560
         // Within 2 % cos_rmse_rel on each of the size benchmark's four RGL materials.
         "svd:rank=8,space=cos,colour=shared,res=64x48x18,dwarp=0.9,fit=lsq,dtype=f16",  // 14,944
@@ -70,6 +74,8 @@ std::vector<std::string> default_candidates() {
         "tabular:res=45x45x90,dtype=f16",                   // 1,093,572
         "tabular:res=48x48x180,dtype=u8log,symmetry=none",  // 1,244,232
         "tabular:res=90x90x180,dtype=u8log",                // 4,374,072
+        // chm_mint's specular spike (θh < 2°) wants 360 θh bins.
+        "tabular:res=360x45x90,dtype=f16,symmetry=bilateral",  // 8,748,072
         "tabular:res=90x90x180",                            // 17,496,000
         "tabular:res=90x90x360,dtype=f16,symmetry=none",    // 17,496,072
         "tabular:res=90x90x360,symmetry=none",              // 34,992,000

@@ -20,7 +20,7 @@ void GridSpec::validate() const {
         throw ValueError("grid " + str() + ": " + std::to_string(bins()) + " bins, a float32 table of " +
                          std::to_string(3 * sizeof(float) * bins()) + " bytes, over the limit of " +
                          std::to_string(kMaxBins) + " bins (" + std::to_string(3 * sizeof(float) * kMaxBins) + " bytes)");
-    if (symmetry != Symmetry::Reciprocal && symmetry != Symmetry::None)
+    if (symmetry != Symmetry::Reciprocal && symmetry != Symmetry::None && symmetry != Symmetry::Bilateral)
         throw ValueError("grid " + str() + ": unknown phi_d symmetry");
     if (!(theta_d_warp >= 0.0 && theta_d_warp <= kMaxWarp))
         throw ValueError("grid " + str() + ": theta_d warp " + std::to_string(theta_d_warp) + " outside [0, 0.95]");
@@ -39,12 +39,19 @@ double axis::u_to_theta_d(double u, int n, double w) {
     return 0.5 * (lo + hi);
 }
 
-const char* symmetry_name(Symmetry s) { return s == Symmetry::Reciprocal ? "reciprocal" : "none"; }
+const char* symmetry_name(Symmetry s) {
+    switch (s) {
+        case Symmetry::Reciprocal: return "reciprocal";
+        case Symmetry::Bilateral: return "bilateral";
+        default: return "none";
+    }
+}
 
 Symmetry parse_symmetry(const std::string& name) {
     if (name == "reciprocal") return Symmetry::Reciprocal;
     if (name == "none") return Symmetry::None;
-    throw ValueError("symmetry must be 'reciprocal' or 'none', not '" + name + "'");
+    if (name == "bilateral") return Symmetry::Bilateral;
+    throw ValueError("symmetry must be 'reciprocal', 'none' or 'bilateral', not '" + name + "'");
 }
 
 std::string GridSpec::str() const {

@@ -23,16 +23,20 @@ Tabulated tabulate_points(const Brdf& brdf, const TabulateOptions& options) {
     std::vector<ValidityCounts> counts(workers);
     std::vector<std::size_t> extrapolated(workers, 0);
     std::vector<std::vector<Rgb>> scratch(workers);
-    // Per direction, its elevation clamped as the incident one (i) and as the outgoing one (o).
+    // Per direction, its elevation clamped as the incident one (i) and as the outgoing one (o); the
+    // mirror images of the pairs evaluated (m).
     struct Clamped {
-        std::vector<Vec3> wi_i, wi_o, wo_i, wo_o;
+        std::vector<Vec3> wi_i, wi_o, wo_i, wo_o, wi_m, wo_m;
     };
     std::vector<Clamped> clamped(workers);
     const double theta_max = brdf.measured_theta_max();
     const bool limited = theta_max < std::numbers::pi / 2;
     const double theta_o_max = std::max(theta_max, options.outgoing_theta_max_deg * std::numbers::pi / 180.0);
-    // A reciprocal grid holds f(wi, wo) and f(wo, wi) in one bin: their mean, unless they are equal.
-    const bool both_sides = g.reciprocal() && !brdf.reciprocal();
+    // A reciprocal grid holds f(wi, wo) and f(wo, wi) in one bin, a bilateral one f(wi, wo) and f at the
+    // pair's mirror image (y → −y, φd → −φd): their mean, unless they are equal.
+    const bool exchanged = g.reciprocal() && !brdf.reciprocal();
+    const bool mirrored = g.bilateral() && !brdf.bilateral();
+    const bool both_sides = exchanged || mirrored;
     std::vector<std::vector<Rgb>> swapped(workers);
 
     detail::sweep_slices(
@@ -53,17 +57,28 @@ Tabulated tabulate_points(const Brdf& brdf, const TabulateOptions& options) {
                     bool moved = false;
                     c.wi_i[k] = clamp(wi[k], theta_max, moved);
                     c.wo_o[k] = clamp(wo[k], theta_o_max, moved);
-                    if (both_sides) {
+                    if (exchanged) {
                         c.wo_i[k] = clamp(wo[k], theta_max, moved);
                         c.wi_o[k] = clamp(wi[k], theta_o_max, moved);
                     }
                     extrapolated[worker] += wi[k].z > 0.0 && wo[k].z > 0.0 && moved;
                 }
                 brdf.eval(c.wi_i, c.wo_o, f);
-                if (both_sides) swapped[worker].resize(wi.size()), brdf.eval(c.wo_i, c.wi_o, swapped[worker]);
+                if (exchanged) swapped[worker].resize(wi.size()), brdf.eval(c.wo_i, c.wi_o, swapped[worker]);
             } else {
                 brdf.eval(wi, wo, f);
-                if (both_sides) swapped[worker].resize(wi.size()), brdf.eval(wo, wi, swapped[worker]);
+                if (exchanged) swapped[worker].resize(wi.size()), brdf.eval(wo, wi, swapped[worker]);
+            }
+            if (mirrored) {
+                // The mirror image of the pair evaluated (clamping keeps azimuths, so it commutes with the mirror).
+                Clamped& c = clamped[worker];
+                const std::span<const Vec3> a = limited ? std::span<const Vec3>(c.wi_i) : wi,
+                                            b = limited ? std::span<const Vec3>(c.wo_o) : wo;
+                c.wi_m.resize(wi.size()), c.wo_m.resize(wi.size());
+                for (std::size_t k = 0; k < wi.size(); ++k)
+                    c.wi_m[k] = {a[k].x, -a[k].y, a[k].z}, c.wo_m[k] = {b[k].x, -b[k].y, b[k].z};
+                swapped[worker].resize(wi.size());
+                brdf.eval(c.wi_m, c.wo_m, swapped[worker]);
             }
             if (both_sides)
                 for (std::size_t k = 0; k < wi.size(); ++k)

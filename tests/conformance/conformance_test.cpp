@@ -40,6 +40,8 @@ const KindCase kKinds[] = {
     {"tabular:res=16x16x32,phih=4,symmetry=reciprocal,dtype=f16", true},
     {"tabular:res=16x16x32,phih=3,symmetry=bilateral,dtype=u8log", false},
     {"svd:rank=2,res=16x16x32,phih=3,symmetry=none", false},
+    {"tabular:res=16x16x16,symmetry=bilateral", false},
+    {"svd:rank=2,res=16x16x16,symmetry=bilateral,dtype=f16", false},
 };
 
 // A basis from a few variations of the source, written where the pca line can name it.

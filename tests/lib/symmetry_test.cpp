@@ -94,7 +94,7 @@ TEST_CASE("the full φd axis: angles, coordinates and the exchange of wi and wo"
     CHECK(g.phi_d_to_u(-M_PI / 2) == Approx(48.0));
     CHECK(grid(16, 16, 64, Symmetry::Reciprocal).phi_d_to_u(-M_PI / 2) == Approx(32.0));
     CHECK(parse_symmetry(symmetry_name(Symmetry::None)) == Symmetry::None);
-    CHECK_THROWS_AS(parse_symmetry("bilateral"), ValueError);
+    CHECK_THROWS_AS(parse_symmetry("mirror"), ValueError);
     std::mt19937_64 rng(3);
     int checked = 0;
     for (int k = 0; k < 20000; ++k) {

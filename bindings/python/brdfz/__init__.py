@@ -245,6 +245,7 @@ def tabulate(brdf: Brdf, res: Resolution = (90, 90, 180), *, lookup: str = "line
     """`brdf` evaluated at the bin centres of a (θh, θd, φd) Rusinkiewicz grid, as a table Brdf
     (its values: ``.table``). Negative values are clamped to 0 or, with negative="invalidate",
     marked invalid. symmetry="reciprocal" folds φd over [0, π) (a bin holds the mean of f(wi, wo)
-    and f(wo, wi)); "none" keeps φd over [0, 2π)."""
+    and f(wo, wi)); "none" keeps φd over [0, 2π); "bilateral" folds |φd| over [0, π] by the mirror
+    y → −y (a bin holds the mean of f at the pair and its mirror image, f(wi, wo) and f(wo, wi) apart)."""
     return _core.tabulate(brdf, res, lookup=lookup, negative=negative, symmetry=symmetry, threads=threads,
                           progress=_hook(progress, "tabulating"))

@@ -17,6 +17,7 @@ const Feature kWarpedThetaD{"factored.warped-theta-d", 2};
 // Readers without it refuse float16 factors by this name rather than misreading them.
 const Feature kFloat16{"factored.float16", 2};
 const Feature kFullPhiD{"factored.full-phi-d", 3};
+const Feature kBilateralPhiD{"factored.bilateral-phi-d", 5};
 
 std::vector<Feature> needs(const Brdf& brdf) {
     const auto* f = dynamic_cast<const FactoredBrdf*>(&brdf);
@@ -25,7 +26,8 @@ std::vector<Feature> needs(const Brdf& brdf) {
     std::vector<Feature> out{kFactored};
     if (f->factors().grid.theta_d_warp != 0.0) out.push_back(kWarpedThetaD);
     if (f->factors().dtype == FactorDtype::F16) out.push_back(kFloat16);
-    if (!f->factors().grid.reciprocal()) out.push_back(kFullPhiD);
+    if (f->factors().grid.full_circle()) out.push_back(kFullPhiD);
+    if (f->factors().grid.bilateral()) out.push_back(kBilateralPhiD);
     return out;
 }
 
@@ -151,7 +153,7 @@ void source_info(const Brdf& brdf, SourceInfo& info) {
 }  // namespace
 
 void register_factored(std::vector<const StorageModule*>& out) {
-    static const StorageModule m{"factored", {kFactored, kWarpedThetaD, kFloat16, kFullPhiD}, &needs, &write, &read, &source_info};
+    static const StorageModule m{"factored", {kFactored, kWarpedThetaD, kFloat16, kFullPhiD, kBilateralPhiD}, &needs, &write, &read, &source_info};
     out.push_back(&m);
 }
 

@@ -35,7 +35,7 @@ std::vector<Feature> needs(const Brdf& brdf) {
     if (!p) return {};
     std::vector<Feature> out{kPca};
     if (p->basis_storage() != PcaBrdf::BasisStorage::Embedded) out.push_back(kPcaExternal);
-    if (!p->basis().grid().reciprocal()) out.push_back(kFullPhiD);
+    if (p->basis().grid().full_circle()) out.push_back(kFullPhiD);
     return out;
 }
 

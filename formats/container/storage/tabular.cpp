@@ -21,6 +21,7 @@ const Feature kFloat16{"tabular.float16", 2};
 const Feature kUint8Log{"tabular.uint8-log", 2};
 const Feature kWarpedThetaD{"tabular.warped-theta-d", 2};
 const Feature kFullPhiD{"tabular.full-phi-d", 3};
+const Feature kBilateralPhiD{"tabular.bilateral-phi-d", 5};
 
 const char* position_name(BinPosition p) { return p == BinPosition::Centre ? "centre" : "start"; }
 
@@ -32,8 +33,10 @@ std::vector<Feature> needs(const Brdf& brdf) {
     // Only a warped grid needs the feature, so linear tables stay readable by readers without it.
     const GridSpec& g = t ? t->table().grid() : c->table().grid();
     if (g.theta_d_warp != 0.0) out.push_back(kWarpedThetaD);
-    // Likewise φd over [0, 2π): a reader without the feature refuses the table instead of folding it.
-    if (!g.reciprocal()) out.push_back(kFullPhiD);
+    // Likewise φd over [0, 2π) or folded by the mirror: a reader without the feature refuses the table
+    // instead of reading its φd axis as the reciprocal one.
+    if (g.full_circle()) out.push_back(kFullPhiD);
+    if (g.bilateral()) out.push_back(kBilateralPhiD);
     return out;
 }
 
@@ -203,18 +206,20 @@ double read_theta_d_warp(const h5::ReadNode& rep) {
 }
 
 void write_phi_d_axis(h5::WriteNode& rep, const GridSpec& g) {
-    if (!g.reciprocal()) rep.attr("phi_d_axis", std::string("full"));
+    if (g.full_circle()) rep.attr("phi_d_axis", std::string("full"));
+    if (g.bilateral()) rep.attr("phi_d_axis", std::string("bilateral"));
 }
 
 Symmetry read_phi_d_symmetry(const h5::ReadNode& rep) {
     if (!rep.has_attr("phi_d_axis")) return Symmetry::Reciprocal;
     const std::string axis = rep.str("phi_d_axis");
-    if (axis != "full") throw FormatError(rep.file(), rep.path() + ": unknown phi_d_axis '" + axis + "'");
-    return Symmetry::None;
+    if (axis == "full") return Symmetry::None;
+    if (axis == "bilateral") return Symmetry::Bilateral;
+    throw FormatError(rep.file(), rep.path() + ": unknown phi_d_axis '" + axis + "'");
 }
 
 void register_tabular(std::vector<const StorageModule*>& out) {
-    static const StorageModule m{"tabular", {kTabular, kFloat32, kFloat16, kUint8Log, kWarpedThetaD, kFullPhiD},
+    static const StorageModule m{"tabular", {kTabular, kFloat32, kFloat16, kUint8Log, kWarpedThetaD, kFullPhiD, kBilateralPhiD},
                                  &needs, &write, &read, &source_info};
     out.push_back(&m);
 }

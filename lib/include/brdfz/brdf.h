@@ -97,6 +97,10 @@ public:
     // reciprocity), so that tabulating onto a reciprocal grid needs one side of each pair. False unless
     // a representation knows better; measured data are not exactly reciprocal (RGL files).
     virtual bool reciprocal() const { return false; }
+    // True when eval(wi, wo) equals eval at their mirror images y → −y by construction (a table whose
+    // grid folds φd by the mirror, table.h's Symmetry::Bilateral), so that tabulating onto such a grid
+    // needs one of the two. False unless a representation knows better.
+    virtual bool bilateral() const { return false; }
 
     // The Rusinkiewicz grid a gridded representation is defined on (tables, compact tables,
     // factorisations, PCA), for callers that sample a BRDF on its own grid; nullptr otherwise.

@@ -5,7 +5,8 @@
 //   θd ∈ [0, π/2) linear, or optionally warped towards grazing (GridSpec::theta_d_warp);
 //   φd ∈ [0, π) linear, folded by reciprocity (φd ~ φd + π: the pair with wi and wo exchanged), or with
 //   Symmetry::None ∈ [0, 2π) linear, for data whose f(wi, wo) differs from f(wo, wi) (real RGL
-//   measurements at grazing angles).
+//   measurements at grazing angles), or with Symmetry::Bilateral ∈ [0, π] linear, folded by the mirror
+//   y → −y (φd ~ −φd at φh = 0), which every isotropic material has, reciprocal or not.
 // Bin index = φd + nφd·(θd + nθd·θh), MERL's order.
 // Nearest lookup is floor() of the continuous bin coordinate with MERL's exact arithmetic, so it picks
 // bit-identically the bin MERL's published lookup picks. Where each bin's value sits for
@@ -51,6 +52,8 @@ inline double phi_d_to_u(double phi_d, int n) {
     if (phi_d < 0.0) phi_d += std::numbers::pi;
     return phi_d / std::numbers::pi * n;
 }
+// φd in (-π, π] folded to [0, π] by the mirror (Symmetry::Bilateral): |φd|.
+inline double bilateral_phi_d_to_u(double phi_d, int n) { return std::fabs(phi_d) / std::numbers::pi * n; }
 // φd in (-π, π] on the full circle [0, 2π] (Symmetry::None).
 inline double full_phi_d_to_u(double phi_d, int n) {
     if (phi_d < 0.0) phi_d += 2.0 * std::numbers::pi;
@@ -69,8 +72,11 @@ inline int bin_of(double u, int n) { return static_cast<int>(std::fmin(std::fmax
 
 // What the φd axis folds (see the top of this file). Reciprocal: f(wi, wo) and f(wo, wi) share a bin;
 // a non-reciprocal source is tabulated as the mean of the two (tabulate.h). None: φd over [0, 2π).
-enum class Symmetry { Reciprocal, None };
-const char* symmetry_name(Symmetry s);            // "reciprocal", "none"
+// Bilateral: the pair and its mirror image (y → −y) share a bin; a source not mirror-symmetric
+// (Brdf::bilateral) is tabulated as the mean of the two. Its spec word is the one a φh axis's mirror
+// fold has (repr/phi_h.h): without a φh axis the mirror folds φd.
+enum class Symmetry { Reciprocal, None, Bilateral };
+const char* symmetry_name(Symmetry s);            // "reciprocal", "none", "bilateral"
 Symmetry parse_symmetry(const std::string& name);  // ValueError otherwise
 
 struct GridSpec {
@@ -100,15 +106,20 @@ struct GridSpec {
     double theta_d_at(int id) const { return axis::u_to_theta_d(id + sample_offset(), n_theta_d, theta_d_warp); }
     double theta_d_to_u(double theta_d) const { return axis::theta_d_to_u(theta_d, n_theta_d, theta_d_warp); }
     double phi_d_at(int ip) const {
-        return reciprocal() ? axis::u_to_phi_d(ip + sample_offset(), n_phi_d)
-                            : axis::u_to_full_phi_d(ip + sample_offset(), n_phi_d);
+        return full_circle() ? axis::u_to_full_phi_d(ip + sample_offset(), n_phi_d)
+                             : axis::u_to_phi_d(ip + sample_offset(), n_phi_d);
     }
     // φd in (-π, π] -> continuous bin coordinate in [0, n_phi_d].
     double phi_d_to_u(double phi_d) const {
-        return reciprocal() ? axis::phi_d_to_u(phi_d, n_phi_d) : axis::full_phi_d_to_u(phi_d, n_phi_d);
+        return full_circle() ? axis::full_phi_d_to_u(phi_d, n_phi_d)
+               : bilateral() ? axis::bilateral_phi_d_to_u(phi_d, n_phi_d)
+                             : axis::phi_d_to_u(phi_d, n_phi_d);
     }
     bool reciprocal() const { return symmetry == Symmetry::Reciprocal; }
-    double phi_d_range() const { return reciprocal() ? std::numbers::pi : 2.0 * std::numbers::pi; }
+    bool bilateral() const { return symmetry == Symmetry::Bilateral; }
+    // φd over [0, 2π) (Symmetry::None); the other two fold it onto [0, π].
+    bool full_circle() const { return symmetry == Symmetry::None; }
+    double phi_d_range() const { return full_circle() ? 2.0 * std::numbers::pi : std::numbers::pi; }
     // Throws ValueError unless every axis is in [1, kMaxAxis], bins() <= kMaxBins (the message gives
     // the table's bytes) and theta_d_warp in [0, kMaxWarp].
     void validate() const;

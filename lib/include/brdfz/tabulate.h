@@ -2,7 +2,9 @@
 // Bins whose wi or wo falls below the horizon are marked invalid (MERL leaves them unmeasured too).
 // Sources are taken as isotropic: bins are evaluated at φh = 0. On a reciprocal grid (table.h) a bin
 // holds the pair (wi, wo) and its exchange (wo, wi): the mean of f at the two, unless the source is
-// reciprocal (Brdf::reciprocal) and one evaluation gives both.
+// reciprocal (Brdf::reciprocal) and one evaluation gives both. On a bilateral grid likewise the pair
+// and its mirror image (y → −y: φd → −φd), unless the source is mirror-symmetric (Brdf::bilateral);
+// the exchange is not averaged in, so non-reciprocal data are kept.
 // A source with a measured range (measured_theta_max() < π/2, brdf.h) is evaluated with the incident
 // elevation clamped to that range and the outgoing one to max(range, outgoing_theta_max_deg), azimuths
 // kept: constant extrapolation, continuous at the edge of the data, where the source's own

@@ -7,6 +7,7 @@
 #pragma once
 
 #include <algorithm>
+#include <bit>
 #include <cmath>
 #include <concepts>
 #include <cstddef>
@@ -26,8 +27,13 @@
 
 namespace brdfz::detail {
 
+// ", symmetry none" or ", symmetry bilateral"; nothing on a reciprocal grid.
+inline std::string symmetry_suffix(const GridSpec& g) {
+    return g.reciprocal() ? "" : std::string(", symmetry ") + symmetry_name(g.symmetry);
+}
+
 // The start of a table's describe(): "tabular 90x90x180", or "bivariate 90x90" for one φd bin, and
-// ", theta_d warp 0.6" on a warped θd axis, ", symmetry none" with φd over [0, 2π).
+// ", theta_d warp 0.6" on a warped θd axis, then symmetry_suffix.
 inline std::string table_shape(const GridSpec& g) {
     std::string warp;
     if (g.theta_d_warp != 0.0) {
@@ -37,7 +43,7 @@ inline std::string table_shape(const GridSpec& g) {
     }
     return (g.n_phi_d == 1 ? "bivariate " + std::to_string(g.n_theta_h) + "x" + std::to_string(g.n_theta_d)
                            : "tabular " + g.str()) +
-           warp + (g.reciprocal() ? "" : ", symmetry none");
+           warp + symmetry_suffix(g);
 }
 
 // Continuous bin coordinates (θh, θd, φd) of a direction pair on a grid.
@@ -73,10 +79,14 @@ constexpr double kIllConditioned = 1e300;
 
 // φd's bin coordinate from (y, x), d_y and d_x in any one positive scale: fast_half_turn_angle folds
 // the angle into [0, π] (a reciprocal grid's axis); the full circle (Symmetry::None) adds π where
-// d_y < 0. Selects, not branches, and on a reciprocal grid the arithmetic of the folded axis exactly.
+// d_y < 0; the mirror fold (Symmetry::Bilateral) takes |d_y|, so |φd|. Selects, not branches, and on a
+// reciprocal grid the arithmetic of the folded axis exactly.
 [[gnu::always_inline]] inline double phi_d_coord(const GridSpec& g, double y, double x) {
-    const bool full = !g.reciprocal();
-    const double phi = fast_half_turn_angle(y, x) + ((full & (y < 0.0)) ? std::numbers::pi : 0.0);
+    const bool full = g.full_circle();
+    // |d_y| by masking its sign bit (all bits kept on the other axes): one AND per pair, not a select.
+    const std::uint64_t keep = g.bilateral() ? ~(std::uint64_t{1} << 63) : ~std::uint64_t{0};
+    const double folded = std::bit_cast<double>(std::bit_cast<std::uint64_t>(y) & keep);
+    const double phi = fast_half_turn_angle(folded, x) + ((full & (y < 0.0)) ? std::numbers::pi : 0.0);
     return phi * (full ? 0.5 / std::numbers::pi : 1.0 / std::numbers::pi) * g.n_phi_d;
 }
 
@@ -155,6 +165,14 @@ inline Span periodic_span(double c, int n) {
     return {i0, i0 + 1 < n ? i0 + 1 : 0, c - i0};
 }
 
+// φd's two samples: around the circle where the axis is periodic (reciprocal: φd ~ φd + π; none: the
+// full circle); on the bilateral axis, whose ends 0 and π are mirror planes, clamped, which is the
+// reflection there: a sample's mirror image about an end is the end sample itself (bin centres) or
+// lies as far beyond the end as the sample inside it (bin starts), so the lookup is flat at the ends.
+inline Span phi_d_span(const GridSpec& g, double c) {
+    return g.bilateral() ? clamped_span(c, g.n_phi_d) : periodic_span(c, g.n_phi_d);
+}
+
 struct Corners {
     Span h, d, p;
 };
@@ -166,7 +184,7 @@ inline Corners linear_corners(const GridSpec& g, BinCoords c, const Vec3& wi, co
         c = bin_coords(g, wi, wo);
     const double off = g.sample_offset();
     return {clamped_span(c.uh - off, g.n_theta_h), clamped_span(c.ud - off, g.n_theta_d),
-            periodic_span(c.up - off, g.n_phi_d)};
+            phi_d_span(g, c.up - off)};
 }
 
 // The blend runs across channels, as vectors of doubles (GCC vector extensions): the three channels
@@ -333,6 +351,13 @@ template <bool Wide, typename Values, typename Wi, typename Emit>
         h0[k] = h.i0, h1[k] = h.i1, ht[k] = h.t, d0[k] = d.i0, d1[k] = d.i1, dt[k] = d.t;
         p0[k] = p.i0, p1[k] = p.i1, pt[k] = p.t;
     }
+    // The bilateral axis's φd spans in a pass of their own, so that the loop above stays the periodic
+    // axes' own: a select per pair would compute both kinds of span.
+    if (g.bilateral())
+        for (std::size_t k = 0; k < m; ++k) {
+            const Span p = clamped_span(c.up[k] - off, g.n_phi_d);
+            p0[k] = p.i0, p1[k] = p.i1, pt[k] = p.t;
+        }
     for (std::size_t k = 0; k < m; ++k)
         if (use[k] && !(c.up[k] <= g.n_phi_d)) [[unlikely]] {  // kIllConditioned or NaN
             const Corners x = linear_corners(g, {c.uh[k], c.ud[k], c.up[k]}, wi(k), wo[k]);

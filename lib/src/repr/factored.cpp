@@ -170,7 +170,7 @@ std::string FactoredBrdf::describe() const {
            factor_space_name(f_.space) + " space, layout " + factor_layout_name(f_.layout) + ", " +
            factor_colour_name(f_.colour) + " colour, on " + f_.grid.str() + " (bin " +
            (f_.grid.position == BinPosition::Start ? "start" : "centre") +
-           warp + (f_.grid.reciprocal() ? "" : ", symmetry none") +
+           warp + (f_.grid.reciprocal() ? "" : std::string(", symmetry ") + symmetry_name(f_.grid.symmetry)) +
            (f_.dtype == FactorDtype::F16 ? "), float16 factors" : "), float32 factors");
 }
 

@@ -156,13 +156,23 @@ template <int W, FactorLayout L, bool Grouped>
         for (std::size_t k = 0; k < m; ++k)
             if (above[k] & !(coords[k].up <= g.n_phi_d)) [[unlikely]]  // kIllConditioned or NaN
                 coords[k] = detail::bin_coords(g, a[k], b[k]);
-        for (std::size_t k = 0; k < m; ++k) {
-            const detail::BinCoords& c = coords[k];
-            set_corners<L>(g,
-                           {detail::clamped_span(c.uh - off, g.n_theta_h), detail::clamped_span(c.ud - off, g.n_theta_d),
-                            detail::periodic_span(c.up - off, g.n_phi_d)},
-                           k, corners);
-        }
+        // One loop per kind of φd axis: a select per pair would compute both kinds of span.
+        if (g.bilateral())
+            for (std::size_t k = 0; k < m; ++k) {
+                const detail::BinCoords& c = coords[k];
+                set_corners<L>(g,
+                               {detail::clamped_span(c.uh - off, g.n_theta_h), detail::clamped_span(c.ud - off, g.n_theta_d),
+                                detail::clamped_span(c.up - off, g.n_phi_d)},
+                               k, corners);
+            }
+        else
+            for (std::size_t k = 0; k < m; ++k) {
+                const detail::BinCoords& c = coords[k];
+                set_corners<L>(g,
+                               {detail::clamped_span(c.uh - off, g.n_theta_h), detail::clamped_span(c.ud - off, g.n_theta_d),
+                                detail::periodic_span(c.up - off, g.n_phi_d)},
+                               k, corners);
+            }
         if (f.prefetch_u)
             for (std::size_t k = 0; k < m; ++k)
                 for (const auto& r : corners.r) __builtin_prefetch(f.u + static_cast<std::size_t>(r[k]) * f.width);

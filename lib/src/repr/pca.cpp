@@ -60,6 +60,9 @@ float median_of(std::vector<float>& v) {
     return 0.5f * (upper + *std::max_element(v.begin(), v.begin() + mid));
 }
 
+// Bases are trained and stored on the reciprocal and full φd axes only.
+constexpr const char* kNoBilateral = "folds φd by the mirror (symmetry bilateral): a basis's φd axis is reciprocal or none";
+
 }  // namespace
 
 PcaBasis::PcaBasis(GridSpec grid, double epsilon, std::vector<float> median, std::vector<float> mean,
@@ -67,6 +70,7 @@ PcaBasis::PcaBasis(GridSpec grid, double epsilon, std::vector<float> median, std
     : grid_(grid), epsilon_(epsilon), median_(std::move(median)), mean_(std::move(mean)),
       components_(std::move(components)), variances_(std::move(variances)), origin_(std::move(origin)) {
     grid_.validate();
+    if (grid_.bilateral()) throw ValueError("PCA basis: grid " + grid_.str() + " " + kNoBilateral);
     const std::size_t d = grid_.bins() * 3;
     if (!(std::isfinite(epsilon_) && epsilon_ > 0.0))
         throw ValueError("PCA basis: epsilon " + std::to_string(epsilon_) + " is not a positive number");
@@ -214,6 +218,7 @@ PcaBasis train_pca_basis(std::span<const Table* const> tables, const PcaTrainOpt
         if (!(tables[t]->grid() == grid))
             throw ValueError("PCA training: table " + std::to_string(t + 1) + " is on grid " + tables[t]->grid().str() +
                              ", table 1 on " + grid.str() + " (all must share one grid)");
+    if (grid.bilateral()) throw ValueError("PCA training: grid " + grid.str() + " " + kNoBilateral);
     const std::size_t bins = grid.bins(), d = 3 * bins;
     const std::vector<float> weight = bin_weights(grid);
     const float eps = static_cast<float>(options.epsilon);

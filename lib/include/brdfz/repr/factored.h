@@ -132,6 +132,7 @@ public:
     std::size_t nbytes() const override;
     std::string describe() const override;
     bool reciprocal() const override { return f_.grid.reciprocal(); }
+    bool bilateral() const override { return f_.grid.bilateral(); }
     const GridSpec* grid() const override { return &f_.grid; }
 
 protected:

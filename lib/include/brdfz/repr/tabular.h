@@ -12,7 +12,7 @@ namespace brdfz {
 
 enum class Lookup {
     Nearest,  // the bin MERL's published lookup picks, bit for bit
-    Linear,   // multilinear over the 8 surrounding samples, skipping invalid ones (φd periodic)
+    Linear,   // multilinear over the 8 surrounding samples, skipping invalid ones (φd periodic; bilateral: reflected)
 };
 
 Lookup parse_lookup(const std::string& name);  // "nearest" | "linear"; ValueError otherwise
@@ -31,6 +31,7 @@ public:
 
     int channels() const override { return 3; }
     bool reciprocal() const override { return grid()->reciprocal(); }
+    bool bilateral() const override { return grid()->bilateral(); }
 
 protected:
     explicit LookupTableBrdf(Lookup lookup) : lookup_(lookup) {}

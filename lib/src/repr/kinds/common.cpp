@@ -30,15 +30,15 @@ double theta_d_warp_option(const ReprSpec& spec) {
     return w;
 }
 
-Symmetry symmetry_option(const ReprSpec& spec, Symmetry fallback) {
+Symmetry symmetry_option(const ReprSpec& spec, const std::string& why_not, Symmetry fallback) {
+    if (spec.get_string("symmetry", "") == "bilateral")
+        throw ValueError(spec.kind() + ": symmetry=bilateral folds φd by the mirror, but " + why_not +
+                         ": use reciprocal or none");
     return parse_symmetry(spec.get_choice("symmetry", symmetry_name(fallback), {"reciprocal", "none"}));
 }
 
-std::string phi_h_symmetry_option(const ReprSpec& spec, int phih, Symmetry fallback) {
-    const std::string s = spec.get_choice("symmetry", symmetry_name(fallback), {"reciprocal", "none", "bilateral"});
-    if (phih == 1 && s == "bilateral")
-        throw ValueError(spec.kind() + ": symmetry=bilateral folds the φh axis: it needs phih >= 2");
-    return s;
+std::string phi_h_symmetry_option(const ReprSpec& spec, Symmetry fallback) {
+    return spec.get_choice("symmetry", symmetry_name(fallback), {"reciprocal", "none", "bilateral"});
 }
 
 Compressed build_phi_h(const Brdf& source, int n, PhiHSymmetry symmetry,

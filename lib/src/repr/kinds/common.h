@@ -28,11 +28,13 @@ inline const SpecKey kPhiHKey{"phih", "1",
                               "interpolated linearly (anisotropic data)"};
 inline const SpecKey kPhiHSymmetryKey{
     "symmetry", "reciprocal",
-    "reciprocal|none|bilateral: φd over [0, π) (a pair and its exchange sharing a bin) or [0, 2π); bilateral (phih >= 2): "
-    "mirror y -> -y, φh over [0, π], φd over [0, 2π)"};
+    "reciprocal|none|bilateral: φd over [0, π) (a pair and its exchange sharing a bin) or [0, 2π); bilateral, the "
+    "mirror y -> -y: with phih = 1 φd over [0, π] (a pair and its mirror image sharing a bin: non-reciprocal data kept "
+    "in none's accuracy at half its φd bins), with phih >= 2 φh over [0, π] and φd over [0, 2π)"};
 
-// symmetry= of a kind with a φh axis, `fallback` when absent; ValueError for bilateral with phih = 1.
-std::string phi_h_symmetry_option(const ReprSpec& spec, int phih, Symmetry fallback = Symmetry::Reciprocal);
+// symmetry= of a kind with a φh axis, `fallback` when absent: the mirror fold of the φh axis with
+// phih >= 2 (PhiHSymmetry::Bilateral), else of φd (Symmetry::Bilateral).
+std::string phi_h_symmetry_option(const ReprSpec& spec, Symmetry fallback = Symmetry::Reciprocal);
 
 // phih=N slices of `source` (tabulate_phi_h), each built by build_slice from the rotated source with
 // the slices' φd symmetry; their notes once each.
@@ -45,8 +47,9 @@ void note_tabulation(const Brdf& source, const Tabulated& t, Compressed& out);
 Lookup lookup_option(const ReprSpec& spec);
 // dwarp=W (GridSpec::theta_d_warp).
 double theta_d_warp_option(const ReprSpec& spec);
-// symmetry=reciprocal|none (GridSpec::symmetry), `fallback` when absent.
-Symmetry symmetry_option(const ReprSpec& spec, Symmetry fallback = Symmetry::Reciprocal);
+// symmetry=reciprocal|none (GridSpec::symmetry), `fallback` when absent, for the kinds without the
+// bilateral fold: ValueError for symmetry=bilateral, saying `why_not` the kind has it.
+Symmetry symmetry_option(const ReprSpec& spec, const std::string& why_not, Symmetry fallback = Symmetry::Reciprocal);
 // weight=bins|solid (TabulateOptions::FitWeight), a key of the least-squares fits only (`lsq`).
 TabulateOptions::FitWeight weight_option(const ReprSpec& spec, bool lsq);
 

@@ -41,7 +41,7 @@ Compressed build_factored(FactorMethod method, const Brdf& source, const ReprSpe
     const Table* table = source.stored_table();
     const int phih = spec.get_int("phih", 1, 1, GridSpec::kMaxAxis);
     const std::string symmetry_text =
-        phi_h_symmetry_option(spec, phih, table ? table->grid().symmetry : Symmetry::Reciprocal);
+        phi_h_symmetry_option(spec, table ? table->grid().symmetry : Symmetry::Reciprocal);
     const Symmetry symmetry = phih > 1 ? Symmetry::None : parse_symmetry(symmetry_text);
     // A φh axis tabulates each slice from the rotated source.
     const bool resample = phih > 1 || !table || spec.has("res") || symmetry != table->grid().symmetry;

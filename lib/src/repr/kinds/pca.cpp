@@ -13,7 +13,7 @@ Compressed build(const Brdf& source, const ReprSpec& spec, const CompressOptions
     const Lookup lookup = lookup_option(spec);
     const bool embed = spec.get_choice("store", "reference", {"reference", "embed"}) == "embed";
     const bool confirm_symmetry = spec.has("symmetry");
-    const Symmetry symmetry = symmetry_option(spec);
+    const Symmetry symmetry = symmetry_option(spec, "a PCA basis's φd axis is reciprocal or none (brdfz pca-train --symmetry)");
     spec.finish();
     if (file.empty()) throw ValueError("pca: name the basis file (brdfz pca-train makes one), e.g. pca:basis=merl.brdfz,k=12");
     if (!options.load_pca_basis)

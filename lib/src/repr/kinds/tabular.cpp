@@ -58,7 +58,7 @@ Compressed build_tabular(const Brdf& source, const ReprSpec& spec, const Compres
     const TabulateOptions::FitWeight weight = weight_option(spec, filter == TabulateOptions::Filter::LeastSquares);
     const double warp = theta_d_warp_option(spec);
     const int phih = spec.get_int("phih", 1, 1, GridSpec::kMaxAxis);
-    const std::string symmetry = phi_h_symmetry_option(spec, phih);
+    const std::string symmetry = phi_h_symmetry_option(spec);
     spec.finish();
     const auto table = [&](const Brdf& from, Symmetry s) {
         return build_table(from, GridSpec{res[0], res[1], res[2], BinPosition::Centre, warp, s}, {ss, ss, ss}, filter,
@@ -79,7 +79,7 @@ Compressed build_bivariate(const Brdf& source, const ReprSpec& spec, const Compr
     const double warp = theta_d_warp_option(spec);
     // (θh, θd) do not change when wi and wo are exchanged: the φd mean is reciprocal either way, and
     // symmetry=none only spreads its phi values over [0, 2π).
-    const Symmetry symmetry = symmetry_option(spec);
+    const Symmetry symmetry = symmetry_option(spec, "a bivariate table averages φd away");
     spec.finish();
     return build_table(source, GridSpec{res[0], res[1], 1, BinPosition::Centre, warp, symmetry}, {ss, ss, phi}, filter,
                        weight, dtype, lookup, options);
