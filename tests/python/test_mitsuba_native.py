@@ -352,15 +352,17 @@ def test_unsupported_variants_and_kinds_are_clear_errors(llvm, glossy, rgl_files
         mi.set_variant("llvm_ad_rgb")
 
 
-def test_symmetry_none_grids_run_natively(llvm, rgl_files):
-    """Tables and factors over the full φd circle (what keeps a non-reciprocal RGL file's two sides of
-    a pair) are ported: they match the library at 10^5 pairs, and exchanging wi and wo changes the
-    native BSDF's value as it changes the file's."""
+def test_non_reciprocal_grids_run_natively(llvm, rgl_files):
+    """Tables and factors over the full φd circle or folded by the mirror (what keeps a non-reciprocal
+    RGL file's two sides of a pair) are ported: they match the library at 10^5 pairs, and exchanging wi
+    and wo changes the native BSDF's value as it changes the file's."""
     source = brdfz.load(rgl_files[0])
     for spec in ("tabular:res=16x16x32,symmetry=none",
-                 "svd:rank=4,space=cos,colour=shared,res=16x16x16,dwarp=0.9,fit=lsq,weight=solid,symmetry=none,dtype=f16"):
+                 "svd:rank=4,space=cos,colour=shared,res=16x16x16,dwarp=0.9,fit=lsq,weight=solid,symmetry=none,dtype=f16",
+                 "tabular:res=16x16x16,symmetry=bilateral,dtype=u8log",
+                 "svd:rank=4,space=cos,colour=shared,res=16x16x8,dwarp=0.9,fit=lsq,weight=solid,symmetry=bilateral,dtype=f16"):
         m = brdfz.compress(source, spec)
-        assert m.parts()["grid"]["symmetry"] == "none"
+        assert m.parts()["grid"]["symmetry"] == spec.split("symmetry=")[1].split(",")[0]
         check_native(m)
         bsdf = brdfz.mitsuba.bsdf(m, native=True)
         rng = np.random.default_rng(5)

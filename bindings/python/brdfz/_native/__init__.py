@@ -5,8 +5,9 @@ Brdf.parts()) and its sampler's tables (Brdf.sampler_parts()), and evaluates, sa
 pdfs with brdf.h's conventions on unit Float64 direction tuples: the same functions as the C++
 library, ported operation by operation, traced into Mitsuba's kernels. Kinds: tabular (f32),
 compact tables (f16, u8log), factored (svd, nmf), PCA and analytic models, on grids folded by
-reciprocity or over the full φd circle (symmetry=none). Anything else (φh stacks, RGL files,
-scattered measurements) raises Unsupported, and the bridge takes its wavefront path.
+reciprocity, over the full φd circle (symmetry=none) or folded by the mirror (symmetry=bilateral).
+Anything else (φh stacks, RGL files, scattered measurements) raises Unsupported, and the bridge takes
+its wavefront path.
 
 Differentiable arrays (params()): a table's values, a u8log table's decoding table or a float16
 table's channel scales, the factors and colour weights, PCA coefficients, analytic parameters.

@@ -9,8 +9,10 @@ with fast_math.h's polynomial arctangent for the angles: within ~1e-10 of C++'s,
 path is within 5e-8 bins of the exact one, so linear lookups agree to ~1e-9 relative and nearest
 lookups pick the same bin except within ~1e-9 bins of an edge.
 
-The φd axis spans [0, π) folded by reciprocity or, on a symmetry=none grid, [0, 2π) (Grid.full):
-the folded angle plus π where d_y < 0, as table_lookup.h's phi_d_coord.
+The φd axis spans [0, π) folded by reciprocity, [0, 2π) on a symmetry=none grid (Grid.full: the
+folded angle plus π where d_y < 0) or [0, π] folded by the mirror on a bilateral one (Grid.mirror:
+the angle of (d_x, |d_y|), and the lookup clamped at the mirror planes φd = 0 and π), as
+table_lookup.h's phi_d_coord and phi_d_span.
 """
 from __future__ import annotations
 
@@ -60,9 +62,10 @@ class Grid:
         self.nh, self.nd, self.np = int(g["n_theta_h"]), int(g["n_theta_d"]), int(g["n_phi_d"])
         self.offset = 0.5 if g["position"] == "centre" else 0.0
         self.warp = float(g["theta_d_warp"])
-        if g["symmetry"] not in ("reciprocal", "none"):
+        if g["symmetry"] not in ("reciprocal", "none", "bilateral"):
             raise Unsupported(f"a grid with symmetry={g['symmetry']}")
         self.full = g["symmetry"] == "none"
+        self.mirror = g["symmetry"] == "bilateral"
         self.per_radian = (0.5 if self.full else 1.0) / PI  # as phi_d_coord rounds it
         self.bins = self.nh * self.nd * self.np
         if 3 * self.bins >= _MAX_INDEX:
@@ -92,7 +95,7 @@ class Grid:
         dz = wi[0] * hx + wi[1] * hy + wi[2] * hz
         theta_h = half_turn_angle(r, hz)
         theta_d = half_turn_angle(dr.sqrt(dx * dx + dy * dy), dz)
-        phi_d = half_turn_angle(dy, dx)  # folded into [0, π]
+        phi_d = half_turn_angle(dr.abs(dy) if self.mirror else dy, dx)  # folded into [0, π]
         if self.full:
             phi_d = phi_d + dr.select(dy < 0.0, PI, 0.0)
         return (dr.sqrt(theta_h * (2.0 / PI)) * self.nh, self.theta_d_coord(theta_d, dz), phi_d * self.per_radian * self.np)
@@ -100,7 +103,8 @@ class Grid:
     def spans(self, c):
         uh, ud, up = c
         o = self.offset
-        return clamped_span(uh - o, self.nh), clamped_span(ud - o, self.nd), periodic_span(up - o, self.np)
+        phi = clamped_span if self.mirror else periodic_span
+        return clamped_span(uh - o, self.nh), clamped_span(ud - o, self.nd), phi(up - o, self.np)
 
     def nearest(self, c):
         uh, ud, up = c
