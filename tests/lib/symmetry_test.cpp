@@ -26,6 +26,7 @@
 #include "brdfz/sample/factor_sampler.h"
 #include "brdfz/tabulate.h"
 #include "detail/table_lookup.h"
+#include "lib/grid_fixtures.h"
 #include "detail/table_sample.h"
 #include "sample_stats.h"
 #include "test_util.h"
@@ -59,31 +60,11 @@ private:
     CoatedDiffuse lobe_;
 };
 
-GridSpec grid(int nh, int nd, int np, Symmetry s) {
-    GridSpec g{nh, nd, np};
-    g.symmetry = s;
-    return g;
-}
-
-Table tabulated(const Brdf& b, const GridSpec& g) {
-    TabulateOptions o;
-    o.grid = g;
-    return tabulate(b, o).table;
-}
-
-MetricOptions directions(std::size_t n = 1 << 16) {
-    MetricOptions o;
-    o.over = Over::Directions;
-    o.directions = n;
-    return o;
-}
-
-Vec3 random_upper(std::mt19937_64& rng) {
-    std::normal_distribution<double> nd;
-    Vec3 v = normalize({nd(rng), nd(rng), nd(rng)});
-    v.z = std::fabs(v.z) + 1e-3;
-    return normalize(v);
-}
+using test::directions;
+using test::FactorSampled;
+using test::grid;
+using test::random_upper;
+using test::tabulated;
 
 }  // namespace
 
@@ -211,18 +192,7 @@ void check_none_samplers(std::size_t draws, test::Chi2Setting chi2) {
     // The factor sampler of non-reciprocal factors.
     const Compressed f = compress(src, "svd:rank=4,space=log,res=45x45x90,symmetry=none");
     const auto& factored = dynamic_cast<const FactoredBrdf&>(*f.brdf);
-    struct FactorSampled final : Brdf {
-        const FactoredBrdf& f;
-        explicit FactorSampled(const FactoredBrdf& x) : f(x) {}
-        int channels() const override { return 3; }
-        std::size_t nbytes() const override { return 0; }
-        std::string describe() const override { return "factor-sampled"; }
-        Rgb eval_above(const Vec3& wi, const Vec3& wo) const override { return f.eval(wi, wo); }
-        BrdfSample sample_above(const Vec3& wo, double u1, double u2) const override {
-            return f.factor_sampler().sample(wo, u1, u2);
-        }
-        double pdf_above(const Vec3& wo, const Vec3& wi) const override { return f.factor_sampler().pdf(wo, wi); }
-    } factor_sampled(factored);
+    const FactorSampled factor_sampled(factored);
     test::check_sampler(factor_sampled, draws, test::kViewsLevel / 4, chi2);
 }
 
