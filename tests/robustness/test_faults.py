@@ -59,26 +59,23 @@ def test_killed_writes_leave_no_file_and_no_temporary(cli, demo_table, tmp_path,
             run(cli, "convert", demo_table, reference, "--res", "90x90x360")
         return reference.read_bytes()
 
-    for attempt in range(3):  # until one signal lands mid-write
-        status = signal_mid_write(cmd, sig)
-        assert temporaries(tmp_path) == [], (attempt, ext)
+    def left_nothing(status):
+        """No temporary; no OUT and the signal's status, or the whole OUT (then removed)."""
+        assert temporaries(tmp_path) == [], ext
         if not out.exists():
-            assert status == -sig, (attempt, ext, status)
-            break
-        assert out.read_bytes() == whole(), (attempt, ext, status)
+            assert status == -sig, (ext, status)
+            return True
+        assert out.read_bytes() == whole(), (ext, status)
         out.unlink()
-    else:
+        return False
+
+    # Until one signal lands mid-write.
+    if not any(left_nothing(signal_mid_write(cmd, sig)) for _ in range(3)):
         pytest.fail("never signalled mid-write")
     proc = subprocess.Popen(cmd, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
     time.sleep(0.3)  # while tabulating, unless it is done already
     proc.send_signal(sig)
-    status = proc.wait(timeout=300)
-    assert temporaries(tmp_path) == []
-    if out.exists():
-        assert out.read_bytes() == whole(), ext
-        out.unlink()
-    else:
-        assert status == -sig, (ext, status)
+    left_nothing(proc.wait(timeout=300))
     run(cli, "convert", demo_table, out)
     before = out.read_bytes()
     signal_mid_write(cmd, sig, after_bytes=(64 << 10) + len(before))
