@@ -35,8 +35,20 @@ void copy(const T* u, std::size_t begin, std::span<std::array<double, 2>> out) {
 
 }  // namespace
 
-std::size_t normalise_rows(const float* xyz, std::size_t begin, std::span<Vec3> out) { return normalise(xyz, begin, out); }
-std::size_t normalise_rows(const double* xyz, std::size_t begin, std::span<Vec3> out) { return normalise(xyz, begin, out); }
+// Built for the x86-64 baseline and for AVX2 and AVX-512, chosen at load (an ifunc): the square roots
+// and divisions take a share of a batch eval's time at two doubles per instruction. IEEE sqrt and
+// division, and no FMA contraction (CMakeLists.txt), give the same bits in every build.
+#if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__)
+#define BRDFZ_ROWS_CLONES [[gnu::target_clones("default", "avx2", "arch=x86-64-v4")]]
+#else
+#define BRDFZ_ROWS_CLONES
+#endif
+BRDFZ_ROWS_CLONES std::size_t normalise_rows(const float* xyz, std::size_t begin, std::span<Vec3> out) {
+    return normalise(xyz, begin, out);
+}
+BRDFZ_ROWS_CLONES std::size_t normalise_rows(const double* xyz, std::size_t begin, std::span<Vec3> out) {
+    return normalise(xyz, begin, out);
+}
 void copy_rows(const float* u, std::size_t begin, std::span<std::array<double, 2>> out) { copy(u, begin, out); }
 void copy_rows(const double* u, std::size_t begin, std::span<std::array<double, 2>> out) { copy(u, begin, out); }
 

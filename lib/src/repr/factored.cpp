@@ -126,8 +126,8 @@ FactoredBrdf::FactoredBrdf(Factors factors) : f_(std::move(factors)) {
         ceiling_[c] = detail::to_space(f_.space, std::min(top, std::numeric_limits<float>::max()));
     }
     // The evaluation copies: rows padded to a whole number of the kernel's SIMD steps.
-    avx2_ = detail::simd_level() >= detail::Simd::Avx2Fma;
-    const std::size_t step = detail::factor_lanes(avx2_ ? detail::Simd::Avx2Fma : detail::Simd::Sse2);
+    simd_ = detail::simd_level();
+    const std::size_t step = detail::factor_lanes(simd_);
     width_ = (m + step - 1) / step * step;
     // U and V each from a 64-byte boundary: a row of 16 floats (separate colour to rank 5, shared to
     // rank 16, under AVX) then fills one cache line instead of straddling two.
@@ -217,7 +217,7 @@ void FactoredBrdf::eval_batch(const Vec3* wi, const Vec3* wo, Rgb* out, std::siz
                           prefetch && static_cast<std::size_t>(f_.rows()) * row_bytes > kL1Bytes,
                           prefetch && static_cast<std::size_t>(f_.columns()) * row_bytes > kL1Bytes,
                           grouped_channels(f_)};
-    detail::eval_factors(avx2_ ? detail::Simd::Avx2Fma : detail::Simd::Sse2, f_.layout, view, f_.space, wi, wo, out,
+    detail::eval_factors(simd_, f_.layout, view, f_.space, wi, wo, out,
                          n, clamped);
     if (clamped) clamped_.fetch_add(clamped, std::memory_order_relaxed);
 }

@@ -1,4 +1,4 @@
-// FactoredBrdf's batch eval kernel (factored.h), built for SSE2 and for AVX2 + FMA.
+// FactoredBrdf's batch eval kernel (factored.h), built for SSE2, for AVX2 + FMA and for AVX-512.
 #include <algorithm>
 #include <cstring>
 #include <type_traits>
@@ -190,8 +190,10 @@ template <int W, FactorLayout L, bool Grouped>
     }
 }
 
-// The kernel's two builds. Single-pair eval runs the same one as the batch (bit for bit: FMA
-// contraction makes the two builds' results differ in the last bits).
+// The kernel's builds. Single-pair eval runs the same one as the batch (bit for bit: FMA contraction
+// makes the SSE2 build's results differ from the others' in the last bits). The AVX-512 one blends 8
+// floats per step as the AVX2 one (the factors' padding is the same), and runs the coordinates and the
+// inverse transform 8 doubles wide.
 template <FactorLayout L, bool Grouped>
 [[gnu::flatten]] void eval_pairs_sse2(const FactorView& f, FactorSpace space, const Vec3* wi, const Vec3* wo,
                                       Rgb* out, std::size_t n, std::uint64_t& clamped) {
@@ -205,12 +207,20 @@ template <FactorLayout L, bool Grouped>
     eval_pairs<8, L, Grouped>(f, space, wi, wo, out, n, clamped);
 }
 
+template <FactorLayout L, bool Grouped>
+[[gnu::flatten, BRDFZ_AVX512]] void eval_pairs_avx512(const FactorView& f, FactorSpace space, const Vec3* wi,
+                                                       const Vec3* wo, Rgb* out, std::size_t n, std::uint64_t& clamped) {
+    eval_pairs<8, L, Grouped>(f, space, wi, wo, out, n, clamped);
+}
+
 template <bool Grouped>
 void eval_kernel(detail::Simd simd, FactorLayout layout, const FactorView& f, FactorSpace space, const Vec3* wi,
                  const Vec3* wo, Rgb* out, std::size_t n, std::uint64_t& clamped) {
     constexpr FactorLayout kHxDP = FactorLayout::HxDP, kHDxP = FactorLayout::HDxP;
     const bool hxdp = layout == kHxDP;
-    if (simd == detail::Simd::Avx2Fma)
+    if (simd == detail::Simd::Avx512)
+        (hxdp ? eval_pairs_avx512<kHxDP, Grouped> : eval_pairs_avx512<kHDxP, Grouped>)(f, space, wi, wo, out, n, clamped);
+    else if (simd == detail::Simd::Avx2Fma)
         (hxdp ? eval_pairs_avx2<kHxDP, Grouped> : eval_pairs_avx2<kHDxP, Grouped>)(f, space, wi, wo, out, n, clamped);
     else
         (hxdp ? eval_pairs_sse2<kHxDP, Grouped> : eval_pairs_sse2<kHDxP, Grouped>)(f, space, wi, wo, out, n, clamped);

@@ -4,6 +4,7 @@
 #include <cstring>
 #include <filesystem>
 #include <limits>
+#include <memory>
 #include <random>
 
 #include "brdfz/compress.h"
@@ -17,6 +18,7 @@
 #include "brdfz/tabulate.h"
 #include "detail/simd.h"
 #include "sample_stats.h"
+#include "simd_levels.h"
 #include "test_util.h"
 
 using namespace brdfz;
@@ -438,16 +440,17 @@ TEST_CASE("factored: eval is the interpolated reconstruction, within 1e-5, at ra
     check_eval_interpolates(false);
 }
 
-// The kernel is built twice (detail/simd.h): for AVX2 + FMA, chosen where the CPU has them, and for
-// the SSE2 baseline. Both blend in float, so they agree to float rounding, not bit for bit (FMA
-// contracts, lanes sum in another order); single-pair eval runs the batch's build, bit for bit, in
-// each. nmf: without cancelling components, float rounding stays relative to each value.
+// The kernel is built for each SIMD level (detail/simd.h): SSE2, AVX2 + FMA and AVX-512, the widest the
+// CPU has chosen. They blend in float, so they agree to float rounding, not bit for bit (FMA contracts,
+// lanes sum in another order); single-pair eval runs the batch's build, bit for bit, in each. nmf:
+// without cancelling components, float rounding stays relative to each value.
 namespace {
 
 // Every space, layout and colour mode (`all`), or the half of them as in check_eval_interpolates:
 // each space, and each layout with each colour mode (the kernel's builds), still among them.
 void check_kernels_agree(bool all) {
-    if (detail::simd_level() < detail::Simd::Avx2Fma) WARN("no AVX2 + FMA on this CPU: both runs use the SSE2 kernel");
+    const std::vector<detail::Simd> levels = test::simd_levels();
+    if (levels.size() == 1) WARN("no AVX2 + FMA on this CPU: every run uses the SSE2 kernel");
     const Table t = coated({12, 10, 16});
     std::mt19937_64 rng(13);
     const std::size_t n = 20000;
@@ -461,35 +464,45 @@ void check_kernels_agree(bool all) {
                 if (!all && odd % 2 != 0) continue;
                 INFO(factor_space_name(space) << " " << factor_layout_name(layout) << " " << factor_colour_name(colour));
                 const Factored f = factor(t, options(FactorMethod::Nmf, 3, space, layout, colour));
-                detail::simd_cap = detail::Simd::Sse2;
-                const FactoredBrdf sse2(f.brdf->factors());
-                detail::simd_cap = detail::Simd::Avx512;
-                f.brdf->eval(wi, wo, wide);
-                sse2.eval(wi, wo, base);
-                double worst = 0.0;
-                std::size_t nonzero = 0, differ = 0;
-                for (std::size_t k = 0; k < n; ++k) {
-                    for (int c = 0; c < 3; ++c) {
-                        worst = std::max(worst, std::fabs(wide[k][c] - base[k][c]) / (std::fabs(base[k][c]) + 1e-12));
-                        nonzero += base[k][c] > 0.0;
-                    }
-                    const Rgb one = sse2.eval(wi[k], wo[k]);
-                    differ += std::memcmp(&one, &base[k], sizeof one) != 0;
+                std::unique_ptr<FactoredBrdf> sse2;
+                {
+                    const test::SimdCap cap(detail::Simd::Sse2);
+                    sse2 = std::make_unique<FactoredBrdf>(f.brdf->factors());
                 }
-                CHECK(nonzero > n / 2);  // a quarter of the pairs have both directions above
-                CHECK(worst < 2e-6);
-                CHECK(differ == 0);
+                sse2->eval(wi, wo, base);
+                for (detail::Simd level : levels) {
+                    INFO(test::simd_label(level));
+                    std::unique_ptr<FactoredBrdf> b;
+                    {
+                        const test::SimdCap cap(level);
+                        b = std::make_unique<FactoredBrdf>(f.brdf->factors());
+                    }
+                    b->eval(wi, wo, wide);
+                    double worst = 0.0;
+                    std::size_t nonzero = 0, differ = 0;
+                    for (std::size_t k = 0; k < n; ++k) {
+                        for (int c = 0; c < 3; ++c) {
+                            worst = std::max(worst, std::fabs(wide[k][c] - base[k][c]) / (std::fabs(base[k][c]) + 1e-12));
+                            nonzero += base[k][c] > 0.0;
+                        }
+                        const Rgb one = b->eval(wi[k], wo[k]);
+                        differ += std::memcmp(&one, &wide[k], sizeof one) != 0;
+                    }
+                    CHECK(nonzero > n / 2);  // a quarter of the pairs have both directions above
+                    CHECK(worst < 2e-6);
+                    CHECK(differ == 0);
+                }
             }
 }
 
 }  // namespace
 
 // The test below compares the kernels on half of the combinations.
-TEST_CASE("factored: the SSE2 and AVX2 kernels agree", "[factored][heavy]") {
+TEST_CASE("factored: the SSE2, AVX2 and AVX-512 kernels agree", "[factored][heavy]") {
     check_kernels_agree(true);
 }
 
-TEST_CASE("factored: the SSE2 and AVX2 kernels agree (half the cases)", "[factored][light]") {
+TEST_CASE("factored: the SSE2, AVX2 and AVX-512 kernels agree (half the cases)", "[factored][light]") {
     check_kernels_agree(false);
 }
 
@@ -507,11 +520,11 @@ TEST_CASE("factored: separate colour of rank 3 and 4 evaluates as its shared one
         wi[k].z = std::fabs(wi[k].z), wo[k].z = std::fabs(wo[k].z);
     }
     std::vector<Rgb> grouped(n), mixed(n);
-    for (detail::Simd simd : {detail::Simd::Avx2Fma, detail::Simd::Sse2})
+    for (detail::Simd simd : test::simd_levels())
         for (int rank : {3, 4})
             for (FactorLayout layout : {FactorLayout::HxDP, FactorLayout::HDxP})
                 for (FactorSpace space : {FactorSpace::Linear, FactorSpace::Log, FactorSpace::Cbrt}) {
-                    INFO((simd == detail::Simd::Sse2 ? "sse2" : "avx2") << " rank " << rank << " "
+                    INFO(test::simd_label(simd) << " rank " << rank << " "
                                                                          << factor_layout_name(layout) << " "
                                                                          << factor_space_name(space));
                     Factors separate;

@@ -53,6 +53,7 @@
 #include "brdfz/sample/factor_sampler.h"
 #include "brdfz/sample/halfvector.h"
 #include "brdfz/sample/lazy.h"
+#include "brdfz/simd.h"
 #include "brdfz/table.h"
 #include "brdfz/tabulate.h"
 
@@ -141,11 +142,11 @@ protected:
 private:
     Factors f_;
     // Evaluation copies (factored.cpp): U and V (u_, v_: in storage_, each from a cache line) with rows
-    // zero-padded from m to width_ entries (whole SIMD steps of the kernel's build: AVX2 + FMA when
-    // avx2_, chosen from the CPU at construction, else SSE2; separate colour of rank 3 or 4 with each
+    // zero-padded from m to width_ entries (whole SIMD steps of the kernel's build, simd_: the widest the
+    // CPU has, chosen at construction; separate colour of rank 3 or 4 with each
     // channel's components from float 4c), and the colour mix, 3 × width_ in f_'s component order: the
     // colour weights, or for separate colour a one-hot selection of each channel's components.
-    bool avx2_ = false;
+    Simd simd_ = Simd::Sse2;
     std::size_t width_ = 0;
     std::vector<float> storage_, mix_;
     const float* u_ = nullptr;
