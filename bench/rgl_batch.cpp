@@ -40,7 +40,7 @@ struct Case {
 }  // namespace
 
 int main(int argc, char** argv) try {
-    std::string path, spec = "svd:rank=8,space=cos,colour=shared,res=64x48x18,dwarp=0.9,fit=lsq,dtype=f16";
+    std::string path, spec = "svd:rank=8,space=cos,colour=shared,res=64x48x18,dwarp=0.9,fit=lsq,symmetry=none,dtype=f16";
     int reps = 7;
     for (int i = 1; i < argc; ++i) {
         const std::string a = argv[i];

@@ -32,8 +32,9 @@ import time
 
 import numpy as np
 
-# The ≤ 16 KB representation of bench/README.md (14,944 bytes).
-DEFAULT_SPEC = "svd:rank=8,space=cos,colour=shared,res=64x48x18,dwarp=0.9,fit=lsq,dtype=f16"
+# The ≤ 16 KB representation of bench/README.md (14,944 bytes); symmetry=none, as the RGL files are not
+# reciprocal (their reciprocal mean is 1.5–9.7 % off on the size benchmark's four).
+DEFAULT_SPEC = "svd:rank=8,space=cos,colour=shared,res=64x48x18,dwarp=0.9,fit=lsq,symmetry=none,dtype=f16"
 TARGETS = ["≥ 1.0", "≥ 1.0", "≥ 1.5", "≥ 1.5", "≤ 1.2"]
 
 
