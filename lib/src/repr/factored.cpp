@@ -217,8 +217,7 @@ void FactoredBrdf::eval_batch(const Vec3* wi, const Vec3* wo, Rgb* out, std::siz
                           prefetch && static_cast<std::size_t>(f_.rows()) * row_bytes > kL1Bytes,
                           prefetch && static_cast<std::size_t>(f_.columns()) * row_bytes > kL1Bytes,
                           grouped_channels(f_)};
-    detail::eval_factors(simd_, f_.layout, view, f_.space, wi, wo, out,
-                         n, clamped);
+    detail::eval_factors(simd_, f_.layout, view, f_.space, wi, wo, out, n, clamped);
     if (clamped) clamped_.fetch_add(clamped, std::memory_order_relaxed);
 }
 

@@ -464,19 +464,15 @@ void check_kernels_agree(bool all) {
                 if (!all && odd % 2 != 0) continue;
                 INFO(factor_space_name(space) << " " << factor_layout_name(layout) << " " << factor_colour_name(colour));
                 const Factored f = factor(t, options(FactorMethod::Nmf, 3, space, layout, colour));
-                std::unique_ptr<FactoredBrdf> sse2;
-                {
-                    const test::SimdCap cap(detail::Simd::Sse2);
-                    sse2 = std::make_unique<FactoredBrdf>(f.brdf->factors());
-                }
-                sse2->eval(wi, wo, base);
+                // A FactoredBrdf picks its kernel's build when constructed.
+                const auto built_at = [&](detail::Simd level) {
+                    const test::SimdCap cap(level);
+                    return std::make_unique<FactoredBrdf>(f.brdf->factors());
+                };
+                built_at(detail::Simd::Sse2)->eval(wi, wo, base);
                 for (detail::Simd level : levels) {
                     INFO(test::simd_label(level));
-                    std::unique_ptr<FactoredBrdf> b;
-                    {
-                        const test::SimdCap cap(level);
-                        b = std::make_unique<FactoredBrdf>(f.brdf->factors());
-                    }
+                    const std::unique_ptr<FactoredBrdf> b = built_at(level);
                     b->eval(wi, wo, wide);
                     double worst = 0.0;
                     std::size_t nonzero = 0, differ = 0;
@@ -524,9 +520,8 @@ TEST_CASE("factored: separate colour of rank 3 and 4 evaluates as its shared one
         for (int rank : {3, 4})
             for (FactorLayout layout : {FactorLayout::HxDP, FactorLayout::HDxP})
                 for (FactorSpace space : {FactorSpace::Linear, FactorSpace::Log, FactorSpace::Cbrt}) {
-                    INFO(test::simd_label(simd) << " rank " << rank << " "
-                                                                         << factor_layout_name(layout) << " "
-                                                                         << factor_space_name(space));
+                    INFO(test::simd_label(simd) << " rank " << rank << " " << factor_layout_name(layout) << " "
+                                                << factor_space_name(space));
                     Factors separate;
                     separate.grid = g, separate.space = space, separate.layout = layout, separate.rank = rank;
                     const std::size_t m = 3 * static_cast<std::size_t>(rank);

@@ -143,8 +143,8 @@ private:
     Factors f_;
     // Evaluation copies (factored.cpp): U and V (u_, v_: in storage_, each from a cache line) with rows
     // zero-padded from m to width_ entries (whole SIMD steps of the kernel's build, simd_: the widest the
-    // CPU has, chosen at construction; separate colour of rank 3 or 4 with each
-    // channel's components from float 4c), and the colour mix, 3 × width_ in f_'s component order: the
+    // CPU has, chosen at construction; separate colour of rank 3 or 4 with each channel's components
+    // from float 4c), and the colour mix, 3 × width_ in f_'s component order: the
     // colour weights, or for separate colour a one-hot selection of each channel's components.
     Simd simd_ = Simd::Sse2;
     std::size_t width_ = 0;
