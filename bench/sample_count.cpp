@@ -1,4 +1,4 @@
-// Instruction counts of the tabular sampler under valgrind (robust to the machine's load, unlike the
+// Instruction counts of the tabular sampler (the fine, half-vector one) under valgrind (robust to the machine's load, unlike the
 // wall clock of bench/sample):
 //   valgrind --tool=callgrind --toggle-collect='measured_*' build/bench/sample_count FILE [N]
 // then callgrind_annotate: each measured_* function's inclusive count divided by N is its cost per
@@ -67,7 +67,9 @@ int main(int argc, char** argv) {
         return 2;
     }
     const std::size_t n = argc > 2 ? std::strtoul(argv[2], nullptr, 10) : 16384;
-    const Loaded l = load(argv[1]);
+    LoadOptions fine;
+    fine.sampler = SamplerKind::Fine;
+    const Loaded l = load(argv[1], fine);
     const auto* t = dynamic_cast<const TabularBrdf*>(l.brdf.get());
     if (!t || n == 0) {
         std::fprintf(stderr, "sample_count: %s is not a table, or N is 0\n", argv[1]);
@@ -82,7 +84,7 @@ int main(int argc, char** argv) {
         const double z = u01(rng), r = std::sqrt(1.0 - z * z), phi = 2.0 * M_PI * u01(rng);
         wo[k] = {r * std::cos(phi), r * std::sin(phi), z};
     }
-    const HalfVectorSampler& sampler = t->sampler();  // built here, outside the measured calls
+    const HalfVectorSampler& sampler = *t->sampler().fine();  // built at load, outside the measured calls
     std::vector<BrdfSample> out(n), drawn(n);
     std::vector<Rgb> f(n);
     double check = measured_sample(*t, wo, u, out);

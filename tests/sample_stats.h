@@ -122,7 +122,7 @@ enum class Draws { OneAtATime, Batch };
 
 // Histogram of `samples` sampled wi against expected counts from the pdf on a cells×cells grid in
 // half-vector coordinates; cells with expected count < 5 are pooled. The expected counts' quadrature
-// (cells·16 points a side, finer where the horizon crosses) also gives the pdf's integral.
+// (cells·32 points a side, finer where the horizon crosses) also gives the pdf's integral.
 inline Chi2Result chi2_test(const Brdf& b, const Vec3& wo, std::size_t samples, int cells = 32,
                             std::uint64_t seed = 1, Draws draws = Draws::OneAtATime) {
     std::vector<double> observed(cells * cells, 0.0), expected(cells * cells, 0.0);
@@ -155,8 +155,10 @@ inline Chi2Result chi2_test(const Brdf& b, const Vec3& wo, std::size_t samples, 
     } else {
         for (std::size_t k = 0; k < samples; ++k) count(b.sample(wo, u(rng), u(rng)));
     }
-    // Expected counts by a midpoint rule on 16×16 points per cell. Cells the horizon crosses (wi.z = 0,
-    // where the pdf may drop to 0) take 64×64, or their quadrature error alone fails the test; the
+    // Expected counts by a midpoint rule on 32×32 points per cell: the compact sampler's density is
+    // piecewise constant on cells whose edges cross these (rows on its own θh edges, columns scaled by
+    // the azimuth the horizon leaves), and on 16×16 points that quadrature's error alone failed the test
+    // at 3·10^6 draws. Cells the horizon crosses (wi.z = 0, where the pdf may drop to 0) take 64×64; the
     // crossing is found on the cell's outline, which the horizon curve must cut to enter the cell.
     PdfRule rule(wo);
     const auto cell_integral = [&](int i, int j, int sub) {
@@ -181,7 +183,7 @@ inline Chi2Result chi2_test(const Brdf& b, const Vec3& wo, std::size_t samples, 
     double integral = 0;
     for (int j = 0; j < cells; ++j)
         for (int i = 0; i < cells; ++i) {
-            const double mass = cell_integral(i, j, horizon_crosses(i, j) ? 64 : 16) / (double(cells) * cells);
+            const double mass = cell_integral(i, j, horizon_crosses(i, j) ? 64 : 32) / (double(cells) * cells);
             integral += mass;
             expected[j * cells + i] = mass * samples;
         }
@@ -211,14 +213,14 @@ inline constexpr double kViewsLevel = 0.01 / std::size(kThetaODeg);
 
 // How check_sampler's χ² draws (one call at a time or through the batch sampler, whose draws
 // check_batch_bits shows are one call's bits) and on how many cells a side: the expected counts'
-// quadrature takes cells·16 points a side, so 16 cells cost a quarter of 32's (for few draws).
+// quadrature takes cells·32 points a side, so 16 cells cost a quarter of 32's (for few draws).
 struct Chi2Setting {
     Draws draws = Draws::OneAtATime;
     int cells = 32;
 };
 
 // At each of kThetaODeg: χ² of `samples` draws against the pdf (fails below p_min: callers Bonferroni-
-// correct it for the number of tests they run), ∫ pdf dωi = 1 ± 1% (on the χ² test's quadrature: 512
+// correct it for the number of tests they run), ∫ pdf dωi = 1 ± 1% (on the χ² test's quadrature: 1024
 // points a side at 32 cells, 2048 where the horizon crosses), and the sample → pdf round trip with the
 // weight f·cosθi/pdf.
 inline void check_sampler(const Brdf& b, std::size_t samples, double p_min = kViewsLevel, Chi2Setting chi2 = {}) {

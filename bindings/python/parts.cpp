@@ -13,8 +13,9 @@
 #include "brdfz/repr/compact_table.h"
 #include "brdfz/repr/factored.h"
 #include "brdfz/repr/pca.h"
+#include "brdfz/repr/phi_h.h"
 #include "brdfz/repr/tabular.h"
-#include "brdfz/sample/halfvector.h"
+#include "brdfz/sample/grid_sampler.h"
 #include "brdfz/sample/lobes.h"
 #include "module.h"
 
@@ -131,23 +132,39 @@ std::optional<py::dict> brdf_parts(const BrdfPtr& brdf) {
     return d;
 }
 
+namespace {
+
+py::dict compact_parts(const CompactSampler& s) {
+    const CompactSampler::Tables& t = s.tables();
+    py::dict d;
+    d["kind"] = "compact";
+    d["slices"] = t.slices;
+    d["rows"] = t.rows;
+    d["cols"] = t.cols;
+    d["cos_theta_max"] = t.cos_theta_max;
+    d["share"] = t.cosine_share;
+    d["s_edges"] = copy(t.s_edges.data(), t.s_edges.size());
+    d["row_cdf"] = copy(t.row_cdf.data(), t.row_cdf.size());
+    d["col_cdf"] = copy(t.col_cdf.data(), t.col_cdf.size());
+    d["edge_weight"] = copy(t.edge_weight.data(), t.edge_weight.size());  // binary16 bits
+    return d;
+}
+
+std::optional<py::dict> grid_sampler_parts(const GridSampler& s) {
+    if (const CompactSampler* c = s.compact()) return compact_parts(*c);
+    if (const HalfVectorSampler* f = s.fine()) return halfvector_parts(*f);
+    return std::nullopt;
+}
+
+}  // namespace
+
 std::optional<py::dict> sampler_parts(const BrdfPtr& brdf) {
-    // Building a sampler takes up to a few hundred milliseconds: without the GIL.
-    const auto build = [](auto&& get) -> decltype(auto) {
-        py::gil_scoped_release release;
-        return get();
-    };
-    if (const auto* t = dynamic_cast<const TabularBrdf*>(brdf.get()))
-        return halfvector_parts(build([t]() -> const HalfVectorSampler& { return t->sampler(); }));
-    if (const auto* c = dynamic_cast<const CompactTableBrdf*>(brdf.get()))
-        return halfvector_parts(build([c]() -> const HalfVectorSampler& { return c->sampler(); }));
-    if (const auto* f = dynamic_cast<const FactoredBrdf*>(brdf.get()))
-        return halfvector_parts(build([f]() -> const HalfVectorSampler& { return f->sampler(); }));
-    if (const auto* p = dynamic_cast<const PcaBrdf*>(brdf.get()))
-        return halfvector_parts(build([p]() -> const HalfVectorSampler& { return p->table().sampler(); }));
+    if (const auto* t = dynamic_cast<const LookupTableBrdf*>(brdf.get())) return grid_sampler_parts(t->sampler());
+    if (const auto* f = dynamic_cast<const FactoredBrdf*>(brdf.get())) return grid_sampler_parts(f->sampler());
+    if (const auto* p = dynamic_cast<const PcaBrdf*>(brdf.get())) return grid_sampler_parts(p->table().sampler());
+    if (const auto* h = dynamic_cast<const PhiHBrdf*>(brdf.get())) return grid_sampler_parts(h->sampler());
     if (const auto* a = dynamic_cast<const AnalyticBrdf*>(brdf.get())) {
-        const LobeMixture& s = build([a]() -> const LobeMixture& { return a->sampler(); });
-        const std::vector<double>& albedo = s.albedo_table();
+        const std::vector<double>& albedo = a->sampler().albedo_table();
         const py::ssize_t terms = static_cast<py::ssize_t>(a->model().terms().size());
         py::array_t<double> table({static_cast<py::ssize_t>(LobeMixture::kAlbedoNodes), terms});
         std::copy(albedo.begin(), albedo.end(), table.mutable_data());

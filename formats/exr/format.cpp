@@ -14,7 +14,7 @@ Loaded read(const std::string& path, const LoadOptions& options) {
     const ValidityCounts counts = detail::invalidate_out_of_range(path, t);
     Loaded out;
     out.info = detail::table_info("exr", t, counts);
-    out.brdf = std::make_unique<TabularBrdf>(std::move(t), options.lookup);
+    out.brdf = std::make_unique<TabularBrdf>(std::move(t), options.lookup, options.sampler);
     return out;
 }
 

@@ -13,7 +13,7 @@ Loaded read(const std::string& path, const LoadOptions& options) {
     merl::ReadResult r = merl::read(path, options.position);
     Loaded out;
     out.info = detail::table_info("merl", r.table, r.counts);
-    out.brdf = std::make_unique<TabularBrdf>(std::move(r.table), options.lookup);
+    out.brdf = std::make_unique<TabularBrdf>(std::move(r.table), options.lookup, options.sampler);
     return out;
 }
 

@@ -145,7 +145,7 @@ Loaded read(const std::string& path, const LoadOptions& options) {
     if (counts.valid == 0) throw FormatError(path, "no valid value in the NPY table (every bin is negative, NaN or Inf)");
     Loaded loaded;
     loaded.info = detail::table_info("npy", table, counts);
-    loaded.brdf = std::make_unique<TabularBrdf>(std::move(table), options.lookup);
+    loaded.brdf = std::make_unique<TabularBrdf>(std::move(table), options.lookup, options.sampler);
     return loaded;
 }
 

@@ -117,6 +117,8 @@ SampledAlbedo sampled_albedo(const Brdf& brdf, double theta_o, std::size_t n, st
 
 namespace {
 
+constexpr double kBelowOne = 0x1.fffffffffffffp-1;  // the largest double below 1
+
 // The luminance of sample weights, relative variance (their variance over their squared mean).
 struct Moments {
     double sum = 0, sum_sq = 0;
@@ -154,6 +156,30 @@ double sampler_variance_ratio(const Brdf& brdf, double theta_o, std::size_t n, d
     const double mine = own.relative_variance(n) + floor2, theirs = cosine.relative_variance(n) + floor2;
     if (theirs > 0.0) return mine / theirs;
     return mine > 0.0 ? std::numeric_limits<double>::infinity() : 1.0;
+}
+
+double sampler_second_moment(const Brdf& brdf, double theta_o, std::size_t n, std::uint64_t seed) {
+    if (!(theta_o >= 0.0 && theta_o < std::numbers::pi / 2.0))
+        throw ValueError("albedo: theta_o must be in [0, pi/2)");
+    if (n < 2) throw ValueError("albedo: at least 2 samples are needed");
+    const Vec3 wo = spherical_direction(theta_o, 0.0);
+    const auto side = static_cast<std::size_t>(std::ceil(std::sqrt(static_cast<double>(n))));
+    std::mt19937_64 rng(seed);
+    std::uniform_real_distribution<double> jitter(0.0, 1.0);
+    Moments m;
+    // A row of the grid at a time, through the batch sampler (one call's draws).
+    const std::vector<Vec3> views(side, wo);
+    std::vector<std::array<double, 2>> us(side);
+    std::vector<BrdfSample> drawn(side);
+    for (std::size_t i = 0; i < side; ++i) {
+        for (std::size_t j = 0; j < side; ++j)
+            us[j] = {std::min((i + jitter(rng)) / side, kBelowOne), std::min((j + jitter(rng)) / side, kBelowOne)};
+        brdf.sample(std::span<const Vec3>(views), std::span<const std::array<double, 2>>(us), std::span(drawn));
+        for (const BrdfSample& s : drawn) m.add(s.weight);
+    }
+    const std::size_t count = side * side;
+    if (!std::isfinite(m.sum_sq)) return std::numeric_limits<double>::infinity();
+    return m.sum > 0.0 ? 1.0 + m.relative_variance(count) : 1.0;
 }
 
 }  // namespace brdfz

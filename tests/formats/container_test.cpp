@@ -227,7 +227,8 @@ TEST_CASE("Compact tables (float16, u8log, bivariate) round-trip through .brdfz 
             CHECK(r.meta.spec == table.describe());
             CHECK(r.meta.achieved.counts.valid == table.table().valid_bins());
             const container::Metadata meta = container::read_metadata(p.string());
-            REQUIRE(meta.datasets.size() == 1);
+            REQUIRE(meta.datasets.size() == 1);  // the representation's own; its sampler's are in a subgroup
+            CHECK(meta.datasets[0].path == "/representation/values");
             CHECK(meta.datasets[0].dtype == (dtype == TableDtype::F16 ? "float16" : "uint8"));
             CHECK(meta.datasets[0].shape == std::vector<std::uint64_t>{std::uint64_t(g.n_theta_h), std::uint64_t(g.n_theta_d),
                                                                         std::uint64_t(g.n_phi_d), 3});
@@ -235,8 +236,10 @@ TEST_CASE("Compact tables (float16, u8log, bivariate) round-trip through .brdfz 
             // A flipped byte in the codes is detected and the dataset named.
             std::vector<unsigned char> bytes = slurp(p);
             const auto extents = extents_of(bytes);
-            REQUIRE(extents.size() == 1);
-            for (std::uint64_t at : {extents[0].first, extents[0].first + extents[0].second - 1}) {
+            REQUIRE(extents.size() == 5);          // the codes, then the compact sampler's four tables
+            const auto codes = extents.front();  // written first
+            REQUIRE(codes.second == table.table().codes().size());
+            for (std::uint64_t at : {codes.first, codes.first + codes.second - 1}) {
                 std::vector<unsigned char> b = bytes;
                 b[at] ^= 0x04;
                 const fs::path bad = dir.path / "bad.brdfz";

@@ -45,15 +45,14 @@ inline Vec3 random_upper(std::mt19937_64& rng) {
 // A factored BRDF whose sample and pdf are its factor sampler's (FactoredBrdf samples half vectors).
 struct FactorSampled final : Brdf {
     const FactoredBrdf& f;
-    explicit FactorSampled(const FactoredBrdf& x) : f(x) {}
+    FactorSampler sampler;
+    explicit FactorSampled(const FactoredBrdf& x) : f(x), sampler(x.factor_sampler()) {}
     int channels() const override { return 3; }
     std::size_t nbytes() const override { return 0; }
     std::string describe() const override { return "factor-sampled"; }
     Rgb eval_above(const Vec3& wi, const Vec3& wo) const override { return f.eval(wi, wo); }
-    BrdfSample sample_above(const Vec3& wo, double u1, double u2) const override {
-        return f.factor_sampler().sample(wo, u1, u2);
-    }
-    double pdf_above(const Vec3& wo, const Vec3& wi) const override { return f.factor_sampler().pdf(wo, wi); }
+    BrdfSample sample_above(const Vec3& wo, double u1, double u2) const override { return sampler.sample(wo, u1, u2); }
+    double pdf_above(const Vec3& wo, const Vec3& wi) const override { return sampler.pdf(wo, wi); }
 };
 
 }  // namespace brdfz::test

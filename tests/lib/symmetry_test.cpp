@@ -208,7 +208,8 @@ TEST_CASE("samplers of symmetry=none tables and factors, fewer draws", "[symmetr
 }
 
 TEST_CASE("a symmetry=none table's sample weight from the draw's angles is eval's", "[symmetry][sample]") {
-    const TabularBrdf t(tabulated(Skewed(0.8, 0.05), grid(45, 45, 90, Symmetry::None)));
+    const TabularBrdf t(tabulated(Skewed(0.8, 0.05), grid(45, 45, 90, Symmetry::None)), Lookup::Linear,
+                        SamplerKind::Fine);
     const GridSpec& g = t.table().grid();
     std::mt19937_64 rng(12);
     std::uniform_real_distribution<double> u(0, 1);
@@ -216,7 +217,7 @@ TEST_CASE("a symmetry=none table's sample weight from the draw's angles is eval'
     for (int k = 0; k < 50000; ++k) {
         const Vec3 wo = random_upper(rng);
         const double u1 = u(rng), u2 = u(rng);
-        const HalfVectorSampler::Draw d = t.sampler().draw(wo, u1, u2);
+        const HalfVectorSampler::Draw d = t.sampler().fine()->draw(wo, u1, u2);
         if (!(d.half && d.sample.pdf > 0)) continue;
         const detail::BinCoords a = detail::drawn_bin_coords(g, d), b = detail::fast_bin_coords(g, d.sample.wi, wo);
         REQUIRE((a.up > g.n_phi_d) == (b.up > g.n_phi_d));

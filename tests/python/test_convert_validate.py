@@ -98,7 +98,7 @@ def test_info_shows_container_metadata(cli, demo_table, tmp_path):
     assert c["units"] == "1/sr" and c["cosine"] == "excluded"
     assert c["datasets"][0]["path"] == "/representation/values"
     text = run(cli, "info", out).stdout
-    assert "container  version 5 (readers >= 1)" in text and "sha256" in text and "dataset    /representation/values" in text
+    assert "container  version 6 (readers >= 1)" in text and "sha256" in text and "dataset    /representation/values" in text
 
 
 @pytest.mark.parametrize("ext", ALL_FORMATS + [".json"])

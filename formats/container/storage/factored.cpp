@@ -7,6 +7,7 @@
 
 #include "brdfz/errors.h"
 #include "brdfz/repr/factored.h"
+#include "container/sampler.h"
 #include "container/storage.h"
 
 namespace brdfz::container::detail {
@@ -38,7 +39,8 @@ std::vector<std::uint16_t> to_half_bits(const std::vector<float>& values) {
 }
 
 void write(h5::WriteNode& rep, const Brdf& brdf) {
-    const Factors& f = dynamic_cast<const FactoredBrdf&>(brdf).factors();
+    const auto& factored = dynamic_cast<const FactoredBrdf&>(brdf);
+    const Factors& f = factored.factors();
     const GridSpec& g = f.grid;
     const std::uint64_t dims[3] = {static_cast<std::uint64_t>(g.n_theta_h), static_cast<std::uint64_t>(g.n_theta_d),
                                    static_cast<std::uint64_t>(g.n_phi_d)};
@@ -68,6 +70,7 @@ void write(h5::WriteNode& rep, const Brdf& brdf) {
     }
     if (f.colour == FactorColour::Shared)
         rep.dataset("colour", h5::DType::F32, {3, static_cast<std::uint64_t>(f.rank)}, f.colour_weights.data());
+    write_sampler(rep, factored.sampler());
 }
 
 std::unique_ptr<Brdf> read(const h5::ReadNode& rep, const ReadContext&) {
@@ -132,7 +135,7 @@ std::unique_ptr<Brdf> read(const h5::ReadNode& rep, const ReadContext&) {
     load("v", cols, m, half, f.v);
     if (f.colour == FactorColour::Shared) load("colour", 3, rank, false, f.colour_weights);
     try {
-        return std::make_unique<FactoredBrdf>(std::move(f));
+        return with_sampler(rep, [&](auto sampler) { return std::make_unique<FactoredBrdf>(std::move(f), std::move(sampler)); });
     } catch (const ValueError& e) {
         bad(e.what());
         throw;  // unreachable

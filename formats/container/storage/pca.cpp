@@ -14,6 +14,7 @@
 #include "brdfz/errors.h"
 #include "brdfz/formats/pca_basis.h"
 #include "container/checksum.h"
+#include "container/sampler.h"
 #include "container/storage.h"
 #include "detail/bytes.h"
 #include "detail/table_io.h"
@@ -64,6 +65,7 @@ void write(h5::WriteNode& rep, const Brdf& brdf) {
     // A basis read from a file carries the hash checked when it was read; a new one is hashed here.
     rep.attr("basis_sha256", basis.origin().sha256.empty() ? pca_basis_sha256(basis) : basis.origin().sha256);
     if (p.k() > 0) rep.dataset("coefficients", h5::DType::F32, {std::uint64_t(p.k())}, p.coefficients().data());
+    write_sampler(rep, p.table().sampler());
     if (!embedded) {
         const std::filesystem::path dir = std::filesystem::absolute(rep.file()).parent_path();
         rep.attr("basis_file", std::filesystem::absolute(basis.origin().path).lexically_relative(dir).generic_string());
@@ -195,8 +197,11 @@ std::unique_ptr<Brdf> read(const h5::ReadNode& rep, const ReadContext& ctx) {
         bad("the basis has " + std::to_string(basis->k_max()) + " components, the file records " + std::to_string(k_max));
     std::unique_ptr<PcaBrdf> brdf;
     try {
-        brdf = std::make_unique<PcaBrdf>(std::move(basis), std::move(coefficients), ctx.lookup,
-                                         embedded ? PcaBrdf::BasisStorage::Embedded : PcaBrdf::BasisStorage::Referenced);
+        const PcaBrdf::BasisStorage stored = embedded ? PcaBrdf::BasisStorage::Embedded : PcaBrdf::BasisStorage::Referenced;
+        brdf = with_sampler(rep, [&](auto sampler) {
+            return std::make_unique<PcaBrdf>(std::move(basis), std::move(coefficients), ctx.lookup, stored,
+                                             std::move(sampler));
+        });
     } catch (const ValueError& e) {
         bad(e.what());
     }

@@ -7,6 +7,7 @@
 
 #include "brdfz/errors.h"
 #include "brdfz/repr/phi_h.h"
+#include "container/sampler.h"
 #include "container/storage.h"
 
 namespace brdfz::container::detail {
@@ -45,6 +46,8 @@ void write(h5::WriteNode& rep, const Brdf& brdf) {
         g.attr("type", std::string(m->type));
         m->write(g, slice);
     }
+    // The stack's own sampler, or "fine" when it samples its slices' (each in its group).
+    write_sampler(rep, stack.sampler_kind(), stack.sampler().compact());
 }
 
 std::unique_ptr<Brdf> read(const h5::ReadNode& rep, const ReadContext& ctx) {
@@ -64,7 +67,7 @@ std::unique_ptr<Brdf> read(const h5::ReadNode& rep, const ReadContext& ctx) {
                 throw FormatError(rep.file(), g.path() + ": slice type '" + type + "' cannot be a φh slice");
             slices.push_back(m->read(g, ctx));
         }
-        return std::make_unique<PhiHBrdf>(std::move(slices), s);
+        return with_sampler(rep, [&](auto sampler) { return std::make_unique<PhiHBrdf>(std::move(slices), s, std::move(sampler)); });
     } catch (const ValueError& e) {
         throw FormatError(rep.file(), rep.path() + ": " + e.what());
     }

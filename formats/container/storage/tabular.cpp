@@ -6,9 +6,11 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <optional>
 
 #include "brdfz/errors.h"
 #include "brdfz/repr/compact_table.h"
+#include "container/sampler.h"
 #include "container/storage.h"
 #include "detail/table_io.h"
 
@@ -78,13 +80,16 @@ void write(h5::WriteNode& rep, const Brdf& brdf) {
             write_codec(rep, "scale", t, &ChannelCodec::scale);
             rep.dataset("values", h5::DType::U8, values_shape(t.grid()), t.codes().data());
         }
+        write_sampler(rep, c->sampler());
         return;
     }
-    const Table& t = dynamic_cast<const TabularBrdf&>(brdf).table();
+    const auto& tabular = dynamic_cast<const TabularBrdf&>(brdf);
+    const Table& t = tabular.table();
     write_grid(rep, t.grid());
     rep.attr("dtype", std::string("float32"));
     rep.attr("invalid", std::string("nan"));
     rep.dataset("values", h5::DType::F32, values_shape(t.grid()), t.data());
+    write_sampler(rep, tabular.sampler());
 }
 
 // One codec field of the three channels.
@@ -136,7 +141,9 @@ std::unique_ptr<Brdf> read(const h5::ReadNode& rep, const ReadContext& ctx) {
                 " negative values (of " + std::to_string(3 * grid.bins()) + "); a table holds values >= 0 and NaN "
                 "for unmeasured entries");
         if (nan == 3 * grid.bins()) bad("dataset 'values' holds no value (every entry is NaN): nothing to evaluate");
-        return std::make_unique<TabularBrdf>(std::move(table), ctx.lookup);
+        return with_sampler(rep, [&](auto sampler) {
+            return std::make_unique<TabularBrdf>(std::move(table), ctx.lookup, std::move(sampler));
+        });
     }
     std::array<ChannelCodec, 3> codecs;
     if (type == h5::DType::F16) {
@@ -150,19 +157,19 @@ std::unique_ptr<Brdf> read(const h5::ReadNode& rep, const ReadContext& ctx) {
     }
     std::vector<std::uint8_t> codes(values.nbytes());
     values.read(codes.data());
-    std::unique_ptr<CompactTableBrdf> brdf;
+    std::optional<CompactTable> table;
     try {
-        brdf = std::make_unique<CompactTableBrdf>(
-            CompactTable(grid, dtype == "float16" ? TableDtype::F16 : TableDtype::U8Log, std::move(codes), codecs),
-            ctx.lookup);
+        table.emplace(grid, dtype == "float16" ? TableDtype::F16 : TableDtype::U8Log, std::move(codes), codecs);
     } catch (const ValueError& e) {
         bad(e.what());
     }
     bool any = false;
     for (std::size_t k = 0; k < grid.bins() && !any; ++k)
-        for (int ch = 0; ch < 3; ++ch) any = any || !std::isnan(brdf->table().at(k, ch));
+        for (int ch = 0; ch < 3; ++ch) any = any || !std::isnan(table->at(k, ch));
     if (!any) bad("dataset 'values' holds no value (every entry is the invalid code): nothing to evaluate");
-    return brdf;
+    return with_sampler(rep, [&](auto sampler) {
+        return std::make_unique<CompactTableBrdf>(std::move(*table), ctx.lookup, std::move(sampler));
+    });
 }
 
 // A compact table's range is that of its decoded values.

@@ -41,4 +41,11 @@ SampledAlbedo sampled_albedo(const Brdf& brdf, double theta_o, std::size_t n, st
 double sampler_variance_ratio(const Brdf& brdf, double theta_o, std::size_t n, double floor = 0.1,
                               std::uint64_t seed = 1);
 
+// How well the Brdf's own sampler matches it at θo (wo in the xz-plane): E[w²]/E[w]² of the luminance
+// of the sample weights w = f·cosθi/pdf, over n draws on a stratified grid (⌈√n⌉² jittered cells of
+// u; failed draws count as 0). 1 when the density is ∝ luminance(f)·cosθi; the factor by which the
+// sampler needs more draws than that ideal one for the same noise. Infinite when a weight is not
+// finite, 1 when every weight is 0. ValueError for θo outside [0, π/2) or n < 2.
+double sampler_second_moment(const Brdf& brdf, double theta_o, std::size_t n, std::uint64_t seed = 1);
+
 }  // namespace brdfz

@@ -19,32 +19,7 @@ struct HalfDiff {
     double phi_d = 0;    // (-π, π]
 };
 
-// The orthonormal frame (t, b, h) around a half vector h; t and b follow MERL's rotations, so that
-// d = (dot(wi, t), dot(wi, b), dot(wi, h)). At the pole (h = ẑ) this is the identity frame.
-struct HalfFrame {
-    Vec3 t, b, h;
-};
-inline HalfFrame half_frame(const Vec3& h) {
-    // sinθh = ‖h_xy‖, cosθh = h.z, and (cosφh, sinφh) = h_xy / ‖h_xy‖: no trigonometric calls.
-    const double r = std::sqrt(h.x * h.x + h.y * h.y);
-    const double cos_phi = r > 0.0 ? h.x / r : 1.0;
-    const double sin_phi = r > 0.0 ? h.y / r : 0.0;
-    const double cos_theta = h.z, sin_theta = r;
-    return {{cos_theta * cos_phi, cos_theta * sin_phi, -sin_theta}, {-sin_phi, cos_phi, 0.0}, h};
-}
-
-// Half vector of a direction pair. Finite for every pair: opposite directions (wi = -wo, possible
-// only at grazing) have no unique half vector and get the normal ẑ, the only choice that keeps h in
-// the upper hemisphere.
-inline Vec3 half_vector(const Vec3& wi, const Vec3& wo) {
-    const Vec3 s = wi + wo;
-    const double n2 = dot(s, s);
-    if (!(n2 > 1e-300)) return {0.0, 0.0, 1.0};
-    return (1.0 / std::sqrt(n2)) * s;
-}
-
-// wi in the half frame of (wi, wo): the difference vector, whose polar angles are (θd, φd).
-inline Vec3 difference_vector(const Vec3& wi, const HalfFrame& f) { return {dot(wi, f.t), dot(wi, f.b), dot(wi, f.h)}; }
+// half_frame, half_vector and difference_vector are the runtime's (brdfz/runtime/vec.h).
 
 HalfDiff to_half_diff(const Vec3& wi, const Vec3& wo);
 

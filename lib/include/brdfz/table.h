@@ -24,6 +24,7 @@
 #include <vector>
 
 #include "brdfz/brdf.h"
+#include "brdfz/runtime/kernels/grid.h"
 
 namespace brdfz {
 
@@ -36,29 +37,12 @@ enum class BinPosition { Start, Centre };
 // Named axis maps: angle -> continuous bin coordinate in [0, n] and back. The forward maps use
 // MERL's operation order (theta_half_index and friends) so floor() matches it bit for bit.
 namespace axis {
-inline double theta_h_to_u(double theta_h, int n) {
-    return theta_h <= 0.0 ? 0.0 : std::sqrt(theta_h / (std::numbers::pi / 2.0) * n * n);
-}
-inline double theta_d_to_u(double theta_d, int n) { return theta_d / (std::numbers::pi * 0.5) * n; }
-// The warped θd axis, w in [0, 0.95]: u/n = (1 − w)·θd/(π/2) + w·(1 − cos θd), bins at 90° narrower
-// than at 0° by 1 + w·π/2/(1 − w) (as the square-root axis makes θh's narrower near 0): glossy measured
-// data change fastest with θd near grazing mirror pairs. w = 0 is the linear axis above, bit for bit.
-inline double theta_d_to_u(double theta_d, int n, double w) {
-    if (w == 0.0) return theta_d_to_u(theta_d, n);
-    return ((1.0 - w) * theta_d * (2.0 / std::numbers::pi) + w * (1.0 - std::cos(theta_d))) * n;
-}
-// φd in (-π, π] folded to [0, π] by reciprocity.
-inline double phi_d_to_u(double phi_d, int n) {
-    if (phi_d < 0.0) phi_d += std::numbers::pi;
-    return phi_d / std::numbers::pi * n;
-}
-// φd in (-π, π] folded to [0, π] by the mirror (Symmetry::Bilateral): |φd|.
-inline double bilateral_phi_d_to_u(double phi_d, int n) { return std::fabs(phi_d) / std::numbers::pi * n; }
-// φd in (-π, π] on the full circle [0, 2π] (Symmetry::None).
-inline double full_phi_d_to_u(double phi_d, int n) {
-    if (phi_d < 0.0) phi_d += 2.0 * std::numbers::pi;
-    return phi_d / (2.0 * std::numbers::pi) * n;
-}
+// The forward maps are the runtime's (brdfz/runtime/kernels/grid.h: the lookups' one source).
+using runtime::kernels::axis::bilateral_phi_d_to_u;
+using runtime::kernels::axis::full_phi_d_to_u;
+using runtime::kernels::axis::phi_d_to_u;
+using runtime::kernels::axis::theta_d_to_u;
+using runtime::kernels::axis::theta_h_to_u;
 inline double u_to_theta_h(double u, int n) { return (u / n) * (u / n) * (std::numbers::pi / 2.0); }
 inline double u_to_theta_d(double u, int n) { return u / n * (std::numbers::pi / 2.0); }
 // Inverse of the warped map by bisection (it is increasing): setup only, never in a lookup.

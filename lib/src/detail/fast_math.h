@@ -9,6 +9,7 @@
 #include <numbers>
 #include <vector>
 
+#include "brdfz/runtime/kernels/math.h"
 #include "brdfz/sample/sincos.h"
 
 namespace brdfz::detail {
@@ -70,30 +71,9 @@ inline double expm1_nonneg_f(float x) {
     return scale * em + (scale - 1.0);
 }
 
-// atan(t) for t in [0, 1] as t·P(t²), a least-squares fit of the relative error: |rel err| < 6e-11.
-// Estrin's scheme: a dependency chain of 4 multiply-adds instead of Horner's 11.
-inline double atan01(double t) {
-    constexpr double c[] = {0.99999999994136979,   -0.33333331572392677, 0.19999912082711904,
-                            -0.1428398114194897,   0.1109324385371387,   -0.089802498131937941,
-                            0.072457466235865964,  -0.054279596397618646, 0.034210157407729216,
-                            -0.016112066961960693, 0.0048510884142120014, -0.00068481937721016906};
-    const double x = t * t, x2 = x * x, x4 = x2 * x2, x8 = x4 * x4;
-    const double p01 = c[0] + c[1] * x, p23 = c[2] + c[3] * x, p45 = c[4] + c[5] * x, p67 = c[6] + c[7] * x;
-    const double p89 = c[8] + c[9] * x, pab = c[10] + c[11] * x;
-    const double q0 = p01 + p23 * x2, q1 = p45 + p67 * x2, q2 = p89 + pab * x2;
-    return t * ((q0 + q1 * x4) + q2 * x8);
-}
-
-// The angle of (x, y) folded into [0, π] (φ ~ φ + π, as MERL folds φd by reciprocity), to ~1e-10
-// relative. No libm call and no branch: octant tests on random directions would mispredict half the
-// time, and branch-free code vectorises. A NaN x gives NaN (a NaN y alone does not).
-inline double fast_half_turn_angle(double y, double x) {
-    const double ax = std::fabs(x), ay = std::fabs(y);
-    const double a = atan01(std::min(ax, ay) / std::max(ax, ay));
-    const double steep = ay > ax ? 1.0 : 0.0, left = (x < 0.0) != (y < 0.0) ? 1.0 : 0.0;
-    const double b = a + steep * (std::numbers::pi / 2 - 2.0 * a);  // π/2 - a when |y| > |x|
-    return b + left * (std::numbers::pi - 2.0 * b);                  // π - b in the 2nd quadrant
-}
+// The arctangents are the runtime's (one source for the library, brdfz::runtime and the shaders).
+using runtime::kernels::atan01;
+using runtime::kernels::fast_half_turn_angle;
 
 // sin and cos of angles in [0, range] from a table at n + 1 equally spaced angles and the angle-addition
 // formulas: a = a_i + δ with |δ| ≤ range/(2n), whose sine and cosine need only a few series terms. For

@@ -22,6 +22,7 @@
 #include "brdfz/coords.h"
 #include "brdfz/repr/tabular.h"
 #include "brdfz/table.h"
+#include "brdfz/runtime/kernels/grid.h"
 #include "detail/fast_math.h"
 #include "detail/simd.h"
 
@@ -46,145 +47,30 @@ inline std::string table_shape(const GridSpec& g) {
            warp + symmetry_suffix(g);
 }
 
-// Continuous bin coordinates (θh, θd, φd) of a direction pair on a grid.
-struct BinCoords {
-    double uh, ud, up;
-};
-
-// MERL's arithmetic (see table.h): what nearest lookup must match bit for bit.
-inline BinCoords bin_coords(const GridSpec& g, const Vec3& wi, const Vec3& wo) {
-    const Vec3 h = half_vector(wi, wo);
-    const Vec3 d = difference_vector(wi, half_frame(h));
-    return {axis::theta_h_to_u(elevation(h), g.n_theta_h), g.theta_d_to_u(elevation(d)),
-            g.phi_d_to_u(std::atan2(d.y, d.x))};
-}
-
-// bin_coords without asin, atan2 or a normalisation: every angle is an arctangent of two lengths
-// in one (arbitrary) scale, from s = wi + wo, the unnormalised half vector:
-//   θh = atan(|s_xy| / s_z),  θd = atan(|wi × s| / wi·s),
-//   φd = atan(d_y / d_x) with d_x, d_y (half_frame's) both multiplied by |s|·|s_xy| > 0 (phi_d_coord).
-// Within 5e-8 bins of bin_coords (angles to 2.2e-10 relative; rounding ~1e-16 / sinθd in φd), except
-// where φd is ill-conditioned (θh or θd below 1e-6): there up is kIllConditioned, beyond any grid, for
-// the callers to fall back to bin_coords. Branch-free, so the compiler vectorises it across pairs.
-constexpr double kIllConditioned = 1e300;
-
-// θd's bin coordinate on the grid's axis, from θd and cosθd: the warped axis (table.h) is a select,
-// so the linear axis stays exact and the callers' loops stay branch-free.
-[[gnu::always_inline]] inline double theta_d_coord(const GridSpec& g, double theta_d, double cos_d) {
-    const double w = g.theta_d_warp;
-    const double ud_linear = theta_d * (2.0 / std::numbers::pi) * g.n_theta_d;
-    const double ud_warped = ((1.0 - w) * theta_d * (2.0 / std::numbers::pi) + w * (1.0 - cos_d)) * g.n_theta_d;
-    return w == 0.0 ? ud_linear : ud_warped;
-}
-
-// φd's bin coordinate from (y, x), d_y and d_x in any one positive scale: fast_half_turn_angle folds
-// the angle into [0, π] (a reciprocal grid's axis); the full circle (Symmetry::None) adds π where
-// d_y < 0; the mirror fold (Symmetry::Bilateral) takes |d_y|, so |φd|. Selects, not branches, and on a
-// reciprocal grid the arithmetic of the folded axis exactly.
-[[gnu::always_inline]] inline double phi_d_coord(const GridSpec& g, double y, double x) {
-    const bool full = g.full_circle();
-    // |d_y| by masking its sign bit (all bits kept on the other axes): one AND per pair, not a select.
-    const std::uint64_t keep = g.bilateral() ? ~(std::uint64_t{1} << 63) : ~std::uint64_t{0};
-    const double folded = std::bit_cast<double>(std::bit_cast<std::uint64_t>(y) & keep);
-    const double phi = fast_half_turn_angle(folded, x) + ((full & (y < 0.0)) ? std::numbers::pi : 0.0);
-    return phi * (full ? 0.5 / std::numbers::pi : 1.0 / std::numbers::pi) * g.n_phi_d;
-}
-
-// Always inlined: a call per pair would keep the callers' coordinate loops from vectorising.
-[[gnu::always_inline]] inline BinCoords fast_bin_coords(const GridSpec& g, const Vec3& wi, const Vec3& wo) {
-    const Vec3 s = wi + wo;
-    const double rxy2 = s.x * s.x + s.y * s.y;
-    const double rxy = std::sqrt(rxy2);
-    const double len = std::sqrt(rxy2 + s.z * s.z);
-    const Vec3 cr{wi.y * s.z - wi.z * s.y, wi.z * s.x - wi.x * s.z, wi.x * s.y - wi.y * s.x};
-    const double sin_d = std::sqrt(dot(cr, cr));  // sinθd·|s|
-    const double theta_h = fast_half_turn_angle(rxy, s.z);
-    const double theta_d = fast_half_turn_angle(sin_d, dot(wi, s));
-    const double up = phi_d_coord(g, -cr.z * len, s.z * (wi.x * s.x + wi.y * s.y) - wi.z * rxy2);
-    constexpr double kMinSin = 1e-6;
-    const bool sure = (rxy > kMinSin * len) & (sin_d > kMinSin * len);
-    return {std::sqrt(theta_h * (2.0 / std::numbers::pi)) * g.n_theta_h, theta_d_coord(g, theta_d, dot(wi, s) / len),
-            std::max(up, sure ? 0.0 : kIllConditioned)};
-}
-
-// Clamp to [0, hi] with comparisons, NaN to 0: std::fmin/fmax are out-of-line libm calls here.
-inline double clamp0(double u, double hi) { return u > 0.0 ? (u < hi ? u : hi) : 0.0; }
-inline int bin_of(double u, int n) { return static_cast<int>(clamp0(u, n - 1.0)); }
-
-// The bin of a fast_bin_coords coordinate, in `bin`; true when the coordinate is far enough from a bin
-// edge (0 and n included) for that bin to be bin_coords' bin. False for NaN and kIllConditioned.
-inline bool clear_bin(double u, int n, int& bin) {
-    constexpr double kMargin = 1e-6;  // 20x fast_bin_coords' error bound (5e-8 bins)
-    const double c = clamp0(u, n);
-    bin = static_cast<int>(c);
-    const double frac = c - bin;
-    return static_cast<bool>((frac > kMargin) & (frac < 1.0 - kMargin) & (bin < n));  // &, not &&: no branch
-}
-
-// Out of line: rare, and it would crowd the hot loop.
-[[gnu::noinline]] inline std::size_t exact_nearest_bin(const GridSpec& g, const Vec3& wi, const Vec3& wo) {
-    const BinCoords c = bin_coords(g, wi, wo);
-    return g.index(bin_of(c.uh, g.n_theta_h), bin_of(c.ud, g.n_theta_d), bin_of(c.up, g.n_phi_d));
-}
-
-// The nearest bin given the pair's fast coordinates.
-inline std::size_t nearest_bin(const GridSpec& g, const BinCoords& c, const Vec3& wi, const Vec3& wo) {
-    int ih, id, ip;
-    const bool ch = clear_bin(c.uh, g.n_theta_h, ih), cd = clear_bin(c.ud, g.n_theta_d, id),
-               cp = clear_bin(c.up, g.n_phi_d, ip);
-    return (ch & cd & cp) ? g.index(ih, id, ip) : exact_nearest_bin(g, wi, wo);
-}
+// The scalar lookup arithmetic is the runtime's (brdfz/runtime/kernels/grid.h), the one source the
+// library and brdfz::runtime share; the batch kernels below run it across pairs.
+using runtime::kernels::BinCoords;
+using runtime::kernels::bin_coords;
+using runtime::kernels::bin_of;
+using runtime::kernels::clamp0;
+using runtime::kernels::clamped_span;
+using runtime::kernels::clear_bin;
+using runtime::kernels::Corners;
+using runtime::kernels::fast_bin_coords;
+using runtime::kernels::kIllConditioned;
+using runtime::kernels::linear_corners;
+using runtime::kernels::nearest_bin;
+using runtime::kernels::periodic_span;
+using runtime::kernels::phi_d_coord;
+using runtime::kernels::phi_d_span;
+using runtime::kernels::Span;
+using runtime::kernels::theta_d_coord;
 
 template <typename Values>
 inline Rgb read_nearest(const Values& values, std::size_t bin) {
-    float v[3];
-    values.load(bin, v);
     Rgb f;
-    for (int ch = 0; ch < 3; ++ch) f[ch] = std::isnan(v[ch]) ? 0.0 : v[ch];
+    runtime::kernels::read_nearest(values, bin, f.data());
     return f;
-}
-
-// Two neighbouring samples along a clamped axis and the weight of the second.
-struct Span {
-    int i0, i1;
-    double t;
-};
-
-inline Span clamped_span(double c, int n) {
-    c = clamp0(c, n - 1.0);
-    const int i0 = static_cast<int>(c);
-    const int i1 = i0 + 1 < n ? i0 + 1 : i0;
-    return {i0, i1, c - i0};
-}
-
-// c is in [-0.5, n] (φd over the axis' range, minus the sample offset) or NaN: one wrap, not fmod.
-inline Span periodic_span(double c, int n) {
-    if (c < 0.0) c += n;
-    if (!(c < n)) c = 0.0;  // c == n after rounding, or NaN
-    const int i0 = static_cast<int>(c);
-    return {i0, i0 + 1 < n ? i0 + 1 : 0, c - i0};
-}
-
-// φd's two samples: around the circle where the axis is periodic (reciprocal: φd ~ φd + π; none: the
-// full circle); on the bilateral axis, whose ends 0 and π are mirror planes, clamped, which is the
-// reflection there: a sample's mirror image about an end is the end sample itself (bin centres) or
-// lies as far beyond the end as the sample inside it (bin starts), so the lookup is flat at the ends.
-inline Span phi_d_span(const GridSpec& g, double c) {
-    return g.bilateral() ? clamped_span(c, g.n_phi_d) : periodic_span(c, g.n_phi_d);
-}
-
-struct Corners {
-    Span h, d, p;
-};
-
-// Linear lookup uses the fast coordinates (5e-8 bins off: ~1e-9 relative in the result) except where
-// they flagged φd as ill-conditioned.
-inline Corners linear_corners(const GridSpec& g, BinCoords c, const Vec3& wi, const Vec3& wo) {
-    if (!(c.up <= g.n_phi_d)) [[unlikely]]  // kIllConditioned or NaN
-        c = bin_coords(g, wi, wo);
-    const double off = g.sample_offset();
-    return {clamped_span(c.uh - off, g.n_theta_h), clamped_span(c.ud - off, g.n_theta_d),
-            phi_d_span(g, c.up - off)};
 }
 
 // The blend runs across channels, as vectors of doubles (GCC vector extensions): the three channels

@@ -97,6 +97,7 @@ void Model::validate(std::span<const double> params) const {
 
 AnalyticBrdf::AnalyticBrdf(Model model, std::vector<double> params) : model_(std::move(model)), params_(std::move(params)) {
     model_.validate(params_);
+    sampler_ = std::make_shared<const LobeMixture>(model_, params_);
 }
 
 std::string AnalyticBrdf::describe() const {
@@ -151,10 +152,6 @@ void AnalyticBrdf::eval_batch(const Vec3* wi, const Vec3* wo, Rgb* out, std::siz
             out[base + k] = {above ? r[k] : 0.0, above ? g[k] : 0.0, above ? b[k] : 0.0};
         }
     }
-}
-
-const LobeMixture& AnalyticBrdf::sampler() const {
-    return sampler_.get([this] { return std::make_unique<LobeMixture>(model_, params_); });
 }
 
 BrdfSample AnalyticBrdf::sample_above(const Vec3& wo, double u1, double u2) const {

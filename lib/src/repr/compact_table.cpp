@@ -9,6 +9,7 @@
 #include <numbers>
 
 #include "brdfz/errors.h"
+#include "brdfz/runtime/kernels/values.h"
 #include "detail/table_lookup.h"
 #include "detail/table_sample.h"
 
@@ -26,34 +27,9 @@ inline std::uint16_t half_at(const std::uint8_t* codes, std::size_t i) {
     return h;
 }
 
-// Lookup policies (detail/table_lookup.h): the invalid code reads as NaN.
-// Codes are checked on construction (no sign, no infinity, no NaN but the invalid code), so a half
-// decodes as its bits moved into a float's place times 2^112 (rebiasing the exponent), then the scale:
-// two exact multiplies, where half_to_float's selects would dominate a linear lookup. Subnormal
-// halves (values below 2^-28 of the channel's maximum) pass through float denormals, so they read as 0
-// where the caller runs with denormals-are-zero.
-struct HalfValues {
-    const std::uint8_t* codes;
-    std::array<float, 3> scale;
-    void load(std::size_t bin, float v[3]) const {
-        for (int ch = 0; ch < 3; ++ch) {
-            const std::uint16_t h = half_at(codes, 3 * bin + ch);
-            const float f = std::bit_cast<float>(static_cast<std::uint32_t>(h) << 13) * 0x1p112f * scale[ch];
-            v[ch] = h == CompactTable::kInvalidF16 ? kNaN : f;
-        }
-    }
-    const void* address(std::size_t bin) const { return codes + 6 * bin; }
-};
-
-struct LogU8Values {
-    const std::uint8_t* codes;
-    const std::array<std::array<float, 256>, 3>* lut;
-    void load(std::size_t bin, float v[3]) const {
-        const std::uint8_t* c = codes + 3 * bin;
-        for (int ch = 0; ch < 3; ++ch) v[ch] = (*lut)[ch][c[ch]];
-    }
-    const void* address(std::size_t bin) const { return codes + 3 * bin; }
-};
+// Lookup policies: the runtime's (brdfz/runtime/kernels/values.h).
+using runtime::kernels::HalfValues;
+using runtime::kernels::LogU8Values;
 
 std::size_t code_size(TableDtype dtype) { return dtype == TableDtype::F16 ? 2 : 1; }
 
@@ -234,7 +210,15 @@ Table CompactTable::decode() const {
     return t;
 }
 
-CompactTableBrdf::CompactTableBrdf(CompactTable table, Lookup lookup) : LookupTableBrdf(lookup), table_(std::move(table)) {}
+CompactTableBrdf::CompactTableBrdf(CompactTable table, Lookup lookup, SamplerKind sampler)
+    : LookupTableBrdf(lookup), table_(std::move(table)) {
+    build_sampler(sampler);
+}
+
+CompactTableBrdf::CompactTableBrdf(CompactTable table, Lookup lookup, CompactSampler sampler)
+    : LookupTableBrdf(lookup), table_(std::move(table)) {
+    set_sampler(GridSampler(std::move(sampler)));
+}
 
 std::string CompactTableBrdf::describe() const {
     const GridSpec& g = table_.grid();
@@ -246,7 +230,7 @@ Rgb CompactTableBrdf::eval_above(const Vec3& wi, const Vec3& wo) const {
     const GridSpec& g = table_.grid();
     if (table_.dtype() == TableDtype::F16)
         return detail::eval_table(g, HalfValues{table_.codes().data(), table_.half_scales()}, lookup(), wi, wo);
-    return detail::eval_table(g, LogU8Values{table_.codes().data(), &table_.lut()}, lookup(), wi, wo);
+    return detail::eval_table(g, LogU8Values{table_.codes().data(), table_.lut()[0].data()}, lookup(), wi, wo);
 }
 
 void CompactTableBrdf::eval_batch(const Vec3* wi, const Vec3* wo, Rgb* out, std::size_t n) const {
@@ -254,29 +238,31 @@ void CompactTableBrdf::eval_batch(const Vec3* wi, const Vec3* wo, Rgb* out, std:
     if (table_.dtype() == TableDtype::F16)
         detail::eval_table_batch(g, HalfValues{table_.codes().data(), table_.half_scales()}, lookup(), wi, wo, out, n);
     else
-        detail::eval_table_batch(g, LogU8Values{table_.codes().data(), &table_.lut()}, lookup(), wi, wo, out, n);
+        detail::eval_table_batch(g, LogU8Values{table_.codes().data(), table_.lut()[0].data()}, lookup(), wi, wo, out, n);
 }
 
-// The weight comes with the draw (detail/table_sample.h), as for TabularBrdf.
+// As TabularBrdf: the fine sampler's weight comes with the draw, the compact one's from eval.
 BrdfSample CompactTableBrdf::sample_above(const Vec3& wo, double u1, double u2) const {
+    const HalfVectorSampler* fine = sampler().fine();
+    if (!fine) return sample_compact(wo, u1, u2);
     const GridSpec& g = table_.grid();
     if (table_.dtype() == TableDtype::F16)
-        return detail::sample_table(g, HalfValues{table_.codes().data(), table_.half_scales()}, lookup(), sampler(), wo,
+        return detail::sample_table(g, HalfValues{table_.codes().data(), table_.half_scales()}, lookup(), *fine, wo,
                                     u1, u2);
-    return detail::sample_table(g, LogU8Values{table_.codes().data(), &table_.lut()}, lookup(), sampler(), wo, u1, u2);
+    return detail::sample_table(g, LogU8Values{table_.codes().data(), table_.lut()[0].data()}, lookup(), *fine, wo, u1, u2);
 }
 
 void CompactTableBrdf::sample_batch(const Vec3* wo, const std::array<double, 2>* u, BrdfSample* out,
                                     std::size_t n) const {
+    const HalfVectorSampler* fine = sampler().fine();
+    if (!fine) return Brdf::sample_batch(wo, u, out, n);
     const GridSpec& g = table_.grid();
     if (table_.dtype() == TableDtype::F16)
-        detail::sample_table_batch(g, HalfValues{table_.codes().data(), table_.half_scales()}, lookup(), sampler(), wo,
-                                   u, out, n);
-    else
-        detail::sample_table_batch(g, LogU8Values{table_.codes().data(), &table_.lut()}, lookup(), sampler(), wo, u,
+        detail::sample_table_batch(g, HalfValues{table_.codes().data(), table_.half_scales()}, lookup(), *fine, wo, u,
                                    out, n);
+    else
+        detail::sample_table_batch(g, LogU8Values{table_.codes().data(), table_.lut()[0].data()}, lookup(), *fine, wo, u, out,
+                                   n);
 }
-
-double CompactTableBrdf::pdf_above(const Vec3& wo, const Vec3& wi) const { return sampler().pdf(wo, wi); }
 
 }  // namespace brdfz

@@ -77,7 +77,11 @@ int Factors::columns() const {
     return layout == FactorLayout::HxDP ? grid.n_theta_d * grid.n_phi_d : grid.n_phi_d;
 }
 
-FactoredBrdf::FactoredBrdf(Factors factors) : f_(std::move(factors)) {
+FactoredBrdf::FactoredBrdf(Factors factors, CompactSampler sampler) : FactoredBrdf(std::move(factors), SamplerKind::None) {
+    sampler_ = GridSampler(std::move(sampler));
+}
+
+FactoredBrdf::FactoredBrdf(Factors factors, SamplerKind sampler) : f_(std::move(factors)) {
     f_.grid.validate();
     const std::size_t rows = static_cast<std::size_t>(f_.rows()), cols = static_cast<std::size_t>(f_.columns());
     if (f_.rank < 1 || static_cast<std::size_t>(f_.rank) > std::min(rows, cols))
@@ -156,6 +160,8 @@ FactoredBrdf::FactoredBrdf(Factors factors) : f_(std::move(factors)) {
             else
                 mix_[c * width_ + c * f_.rank + j] = 1.0f;  // f_'s component order (reconstruct reads it)
         }
+    sampler_ = GridSampler::build(*this, sampler);
+    clamped_ = 0;  // the sampler's own evaluations are not the caller's
 }
 
 std::size_t FactoredBrdf::nbytes() const {
@@ -221,30 +227,22 @@ void FactoredBrdf::eval_batch(const Vec3* wi, const Vec3* wo, Rgb* out, std::siz
     if (clamped) clamped_.fetch_add(clamped, std::memory_order_relaxed);
 }
 
-const HalfVectorSampler& FactoredBrdf::sampler() const {
-    return sampler_.get([this] { return std::make_unique<HalfVectorSampler>(*this); });
-}
+BrdfSample FactoredBrdf::sample_above(const Vec3& wo, double u1, double u2) const { return sampler_.sample(wo, u1, u2); }
 
-const FactorSampler& FactoredBrdf::factor_sampler() const {
-    return factor_sampler_.get([this] { return std::make_unique<FactorSampler>(f_); });
-}
-
-BrdfSample FactoredBrdf::sample_above(const Vec3& wo, double u1, double u2) const {
-    return sampler().sample(wo, u1, u2);
-}
-
-// Blocks of the half-vector sampler's draws (draw_block: draw()'s, bit for bit), then the eval kernel over
+// The compact sampler's draws take Brdf's path (blocks of draws, then the eval kernel for their weights).
+// The fine sampler's: blocks of its draws (draw_block: draw()'s, bit for bit), then the eval kernel over
 // the drawn pairs for their weights (its results are one call's), so each sample is sample()'s.
 void FactoredBrdf::sample_batch(const Vec3* wo, const std::array<double, 2>* u, BrdfSample* out, std::size_t n) const {
+    const HalfVectorSampler* fine = sampler_.fine();
+    if (!fine) return Brdf::sample_batch(wo, u, out, n);
     constexpr std::size_t kBlock = HalfVectorSampler::kBlock;
-    const HalfVectorSampler& s = sampler();
     HalfVectorSampler::Draws d;
     Vec3 wi[kBlock], wos[kBlock];
     Rgb f[kBlock];
     std::size_t slot[kBlock];
     for (std::size_t start = 0; start < n; start += kBlock) {
         const std::size_t m = std::min(kBlock, n - start);
-        s.draw_block(wo + start, u + start, m, d);
+        fine->draw_block(wo + start, u + start, m, d);
         std::size_t drawn = 0;
         for (std::size_t k = 0; k < m; ++k) {
             const BrdfSample x{{d.wi_x[k], d.wi_y[k], d.wi_z[k]}, d.pdf[k], {}};
@@ -262,6 +260,6 @@ void FactoredBrdf::sample_batch(const Vec3* wo, const std::array<double, 2>* u, 
     }
 }
 
-double FactoredBrdf::pdf_above(const Vec3& wo, const Vec3& wi) const { return sampler().pdf(wo, wi); }
+double FactoredBrdf::pdf_above(const Vec3& wo, const Vec3& wi) const { return sampler_.pdf(wo, wi); }
 
 }  // namespace brdfz

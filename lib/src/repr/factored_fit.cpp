@@ -360,7 +360,7 @@ Factored factor(const Table& table, const FactorOptions& o) {
     }
     report.residual = norm > 0.0 ? std::sqrt(objective / norm) : 0.0;
     f.max_value = data_max(table);
-    Factored out{std::make_unique<FactoredBrdf>(std::move(f)), report};
+    Factored out{std::make_unique<FactoredBrdf>(std::move(f), o.sampler), report};
     out.brdf->reconstruct(&out.report.clamped);
     return out;
 }

@@ -372,6 +372,7 @@ Factored factor(const Brdf& source, const Table& table, const FactorOptions& o) 
     FactorOptions first = o;
     first.fit = FactorFit::Samples;
     first.dtype = FactorDtype::F32;
+    first.sampler = SamplerKind::None;  // the refit's start: its factors alone are used
     if (o.progress) first.progress = [&o](double x) { o.progress(0.25 * x); };
     const Factored start = factor(table, first);
     Factors f = start.brdf->factors();
@@ -389,7 +390,7 @@ Factored factor(const Brdf& source, const Table& table, const FactorOptions& o) 
         for (int c = 0; c < 3; ++c)
             for (int j = 0; j < f.rank; ++j)
                 f.colour_weights[static_cast<std::size_t>(c) * f.rank + j] = static_cast<float>(r.s(c, j));
-    Factored out{std::make_unique<FactoredBrdf>(std::move(f)), report};
+    Factored out{std::make_unique<FactoredBrdf>(std::move(f), o.sampler), report};
     out.brdf->reconstruct(&out.report.clamped);
     return out;
 }

@@ -351,11 +351,18 @@ std::vector<float> checked_coefficients(const PcaBasis& basis, std::vector<float
 }  // namespace
 
 PcaBrdf::PcaBrdf(std::shared_ptr<const PcaBasis> basis, std::vector<float> coefficients, Lookup lookup,
-                 BasisStorage storage)
+                 BasisStorage storage, SamplerKind sampler)
     : basis_(basis ? std::move(basis) : throw ValueError("PCA: no basis given")),
       coefficients_(checked_coefficients(*basis_, std::move(coefficients))),
       storage_(storage),
-      table_(basis_->reconstruct(coefficients_, &counts_), lookup) {}
+      table_(basis_->reconstruct(coefficients_, &counts_), lookup, sampler) {}
+
+PcaBrdf::PcaBrdf(std::shared_ptr<const PcaBasis> basis, std::vector<float> coefficients, Lookup lookup,
+                 BasisStorage storage, CompactSampler sampler)
+    : basis_(basis ? std::move(basis) : throw ValueError("PCA: no basis given")),
+      coefficients_(checked_coefficients(*basis_, std::move(coefficients))),
+      storage_(storage),
+      table_(basis_->reconstruct(coefficients_, &counts_), lookup, std::move(sampler)) {}
 
 std::string PcaBrdf::describe() const {
     const PcaBasis& b = *basis_;

@@ -35,14 +35,25 @@ Symmetry slice_symmetry(PhiHSymmetry s) { return s == PhiHSymmetry::Reciprocal ?
 
 double PhiHBrdf::phi_at(int k, int n, PhiHSymmetry symmetry) { return (k + 0.5) * phi_range(symmetry) / n; }
 
-PhiHBrdf::PhiHBrdf(std::vector<std::unique_ptr<Brdf>> slices, PhiHSymmetry symmetry)
-    : slices_(std::move(slices)), symmetry_(symmetry) {
+PhiHBrdf::PhiHBrdf(std::vector<std::unique_ptr<Brdf>> slices, PhiHSymmetry symmetry, SamplerKind sampler)
+    : slices_(std::move(slices)), symmetry_(symmetry), sampler_kind_(sampler) {
     if (slices_.size() < 2 || slices_.size() > static_cast<std::size_t>(GridSpec::kMaxAxis))
         throw ValueError("phih: " + std::to_string(slices_.size()) + " slices, expected 2.." +
                          std::to_string(GridSpec::kMaxAxis));
     for (const auto& s : slices_)
         if (!s || s->channels() != slices_.front()->channels())
             throw ValueError("phih: slices must all be set and have the same channels");
+    if (sampler == SamplerKind::Compact) {
+        CompactSamplerOptions options;
+        options.view_azimuths = kSamplerAzimuths;
+        sampler_ = GridSampler::build(*this, SamplerKind::Compact, options);
+    }
+}
+
+PhiHBrdf::PhiHBrdf(std::vector<std::unique_ptr<Brdf>> slices, PhiHSymmetry symmetry, CompactSampler sampler)
+    : PhiHBrdf(std::move(slices), symmetry, SamplerKind::None) {
+    sampler_kind_ = SamplerKind::Compact;
+    sampler_ = GridSampler(std::move(sampler));
 }
 
 std::size_t PhiHBrdf::nbytes() const {
@@ -90,6 +101,7 @@ Rgb PhiHBrdf::eval_above(const Vec3& wi_, const Vec3& wo_) const {
 }
 
 BrdfSample PhiHBrdf::sample_above(const Vec3& wo, double u1, double u2) const {
+    if (sampler_kind_ != SamplerKind::Fine) return sampler_.sample(wo, u1, u2);
     const std::size_t n = slices_.size();
     const double x = std::fmin(std::fmax(u1, 0.0), 1.0) * static_cast<double>(n);
     const std::size_t k = std::min(static_cast<std::size_t>(x), n - 1);
@@ -100,6 +112,7 @@ BrdfSample PhiHBrdf::sample_above(const Vec3& wo, double u1, double u2) const {
 }
 
 double PhiHBrdf::pdf_above(const Vec3& wo, const Vec3& wi) const {
+    if (sampler_kind_ != SamplerKind::Fine) return sampler_.pdf(wo, wi);
     double sum = 0.0;
     for (const auto& s : slices_) sum += s->pdf(wo, wi);
     return sum / static_cast<double>(slices_.size());
@@ -126,12 +139,13 @@ void RotatedBrdf::eval_batch(const Vec3* wi, const Vec3* wo, Rgb* out, std::size
 }
 
 std::unique_ptr<PhiHBrdf> tabulate_phi_h(const Brdf& source, int n, PhiHSymmetry symmetry,
-                                         const std::function<std::unique_ptr<Brdf>(const Brdf&)>& build) {
+                                         const std::function<std::unique_ptr<Brdf>(const Brdf&)>& build,
+                                         SamplerKind sampler) {
     if (n < 2 || n > GridSpec::kMaxAxis)
         throw ValueError("phih=" + std::to_string(n) + " is outside 2.." + std::to_string(GridSpec::kMaxAxis));
     std::vector<std::unique_ptr<Brdf>> slices;
     for (int k = 0; k < n; ++k) slices.push_back(build(RotatedBrdf(source, PhiHBrdf::phi_at(k, n, symmetry))));
-    return std::make_unique<PhiHBrdf>(std::move(slices), symmetry);
+    return std::make_unique<PhiHBrdf>(std::move(slices), symmetry, sampler);
 }
 
 }  // namespace brdfz

@@ -58,9 +58,8 @@ struct SamplerView {
 using StackView = Piecewise2D::View;
 
 struct Placement {
-    double sin_o, t, v1, v2, sign;  // v1, v2: the slice's u, v1 below 1
-    int slice, other;
-    bool upper;
+    double sin_o, v1, v2, sign;  // v1, v2: the slice's u, v1 below 1
+    int slice;
 };
 
 [[gnu::always_inline]] inline Placement place(const SamplerView& v, const Vec3& wo, double u1, double u2) {
@@ -72,34 +71,7 @@ struct Placement {
     // One bit of u2 picks the side of wo's plane; the rest drives the column.
     const double sign = u2 < 0.5 ? 1.0 : -1.0;
     const double v2 = u2 < 0.5 ? 2.0 * u2 : 2.0 * u2 - 1.0;
-    return {sin_o, sp.t, v1 < kBelowOne ? v1 : kBelowOne, v2, sign, upper ? sp.k0 + 1 : sp.k0,
-            upper ? sp.k0 : sp.k0 + 1, upper};
-}
-
-struct Finish {
-    Vec3 wi;
-    double pdf, sin_h, cos_h, sin_p, cos_p;
-    bool ok;  // wi above the horizon, with a finite positive density
-};
-
-// From the drawn cell point (x, y), its density and the other slice's density of the same cell.
-[[gnu::always_inline]] inline Finish finish(const SamplerView& v, const detail::SinCosTable& table, const Vec3& wo,
-                                            const Placement& pl, double x, double y, double p_cell, double p_other) {
-    // half_at(x, y, sign), with table-based sines and cosines (sinθh is also the Jacobian's).
-    const detail::SinCosTable::SinCos th = table(kPi / 2.0 * y * y), ph = table(kPi * x);
-    const double sin_p = pl.sign * ph.s;
-    const Vec3 h = Azimuth(wo, pl.sin_o).to_world({th.s * ph.c, th.s * sin_p, th.c});
-    const double cos_d = dot(wo, h);
-    const Vec3 wi = (2.0 * cos_d) * h - wo;  // reflect(wo, h)
-    // The pdf from what is known here (the cell, θh, h) rather than by inverting wi again: the same
-    // value pdf(wo, wi) computes, without its atan2 and elevation calls. Both slices share the grid,
-    // so the other slice's density is that of the same cell.
-    const double t = pl.t;
-    const double p_xy = pl.upper ? (1.0 - t) * p_other + t * p_cell : (1.0 - t) * p_cell + t * p_other;
-    const double jac = 4.0 * cos_d * 2.0 * kPi * kPi * y * th.s;
-    const double data = p_xy / jac;
-    const bool ok = (wi.z > 0.0) & (std::fabs(data) < std::numeric_limits<double>::infinity()) & (data > 0.0);
-    return {wi, v.share * wi.z / kPi + (1.0 - v.share) * data, th.s, th.c, sin_p, ph.c, ok};
+    return {sin_o, v1 < kBelowOne ? v1 : kBelowOne, v2, sign, upper ? sp.k0 + 1 : sp.k0};
 }
 
 // The data share's density of wi per unit solid angle, 0 where it has none: pdf()'s, and a cosine
@@ -124,6 +96,27 @@ struct Finish {
     const double jac = 4.0 * ((sin_o * s.x + wo.z * s.z) / len) * 2.0 * kPi * kPi * y * (rxy / len);
     const double p = p_xy / jac;
     return (inside & (std::fabs(p) < std::numeric_limits<double>::infinity()) & (p > 0.0)) ? p : 0.0;
+}
+
+struct Finish {
+    Vec3 wi;
+    double pdf, sin_h, cos_h, sin_p, cos_p;
+    bool ok;  // wi above the horizon, with a finite positive density
+};
+
+// From the drawn cell point (x, y): h, wi, and the pdf as pdf(wo, wi) gives it, from wi itself: the
+// cell density of the draw could differ from it where rounding puts wi across a cell edge.
+[[gnu::always_inline]] inline Finish finish(const SamplerView& v, const StackView& st, const detail::SinCosTable& table,
+                                            const Vec3& wo, const Placement& pl, double x, double y) {
+    // half_at(x, y, sign), with table-based sines and cosines.
+    const detail::SinCosTable::SinCos th = table(kPi / 2.0 * y * y), ph = table(kPi * x);
+    const double sin_p = pl.sign * ph.s;
+    const Vec3 h = Azimuth(wo, pl.sin_o).to_world({th.s * ph.c, th.s * sin_p, th.c});
+    const double cos_d = dot(wo, h);
+    const Vec3 wi = (2.0 * cos_d) * h - wo;  // reflect(wo, h)
+    const double data = data_density(v, st, wo, pl.sin_o, wi);
+    const bool ok = (wi.z > 0.0) & (data > 0.0);
+    return {wi, v.share * wi.z / kPi + (1.0 - v.share) * data, th.s, th.c, sin_p, ph.c, ok};
 }
 
 // A cosine-weighted draw with sample()'s full pdf at it, from u1 in [0, share) and u2 in [0, 1).
@@ -170,10 +163,9 @@ struct CosineDraw {
     return v;
 }
 
-// Piecewise2D::sample(u1, u2) on a slice's stacked tables, with the other slice's density of the cell:
-// the same operations (float differences of CDF entries included), so when `found` the same results.
-// In three steps, each a pass across the block kernel's draws: the row; the guide entry of the column's
-// search; the column, the cell and the densities. One pass for all three ran each draw's chain of
+// Piecewise2D::sample(u1, u2) on a slice's stacked tables: the same operations (float differences of
+// CDF entries included), so when `found` the same point. In three steps, each a pass across the block
+// kernel's draws: the row; the guide entry of the column's search; the column and the cell point. One pass for all three ran each draw's chain of
 // dependent table reads in turn, with few of the next draws' reads overlapping it.
 struct Row {
     int r;      // the row within the slice
@@ -191,30 +183,28 @@ struct Row {
     return guide_entry(v.conditional_guide, (slice * v.rows + r) * v.cols, v.cols, u2);
 }
 struct Cell {
-    double x, y, p_cell, p_other;
+    double x, y;
     bool found;
 };
-[[gnu::always_inline]] inline Cell find_column(const StackView& v, int slice, int other, const Row& row, int start,
-                                               double u2) {
+[[gnu::always_inline]] inline Cell find_column(const StackView& v, int slice, const Row& row, int start, double u2) {
     const int R = v.rows, C = v.cols, rs = slice * R + row.r, cb = rs * (C + 1);
     bool found_c, found_x, found_y;
     const int c = scan_interval(v.conditional, cb, C, start, u2, found_c);
     const float w_c = v.conditional[cb + c + 1] - v.conditional[cb + c];
     const double fx = std::clamp((u2 - v.conditional[cb + c]) / w_c, 0.0, 1.0);
     const double x = cell_coord(c, C, fx, found_x), y = cell_coord(row.r, R, row.fy, found_y);
-    return {x, y, v.density[rs * C + c], v.density[(other * R + row.r) * C + c],
-            static_cast<bool>(row.found & found_c & found_x & found_y)};
+    return {x, y, static_cast<bool>(row.found & found_c & found_x & found_y)};
 }
-[[gnu::always_inline]] inline Cell find_cell(const StackView& v, int slice, int other, double u1, double u2) {
+[[gnu::always_inline]] inline Cell find_cell(const StackView& v, int slice, double u1, double u2) {
     const Row row = find_row(v, slice, u1);
-    return find_column(v, slice, other, row, column_start(v, slice, row.r, u2), u2);
+    return find_column(v, slice, row, column_start(v, slice, row.r, u2), u2);
 }
 
 // Piecewise2D itself, for the draws whose find_cell did not settle (its scans are longer, or its cell
 // coordinates need a nudge).
-Cell exact_cell(const StackView& v, int slice, int other, double u1, double u2) {
+Cell exact_cell(const StackView& v, int slice, double u1, double u2) {
     const Piecewise2D::Point p = v.stacked(slice).sample(u1, u2);
-    return {p.x, p.y, p.pdf, v.stacked(other).density_at(p.row, p.col), true};
+    return {p.x, p.y, true};
 }
 
 // HalfVectorSampler::draw_block's data draws in passes over the block, each across draws: (1) placement;
@@ -227,9 +217,9 @@ Cell exact_cell(const StackView& v, int slice, int other, double u1, double u2) 
     constexpr std::size_t B = HalfVectorSampler::kBlock;
     // Arrays of numbers, not of structs, or the loops do not vectorise; flags as 64-bit integers,
     // the doubles' width (a select on bytes between doubles does not vectorise).
-    double sin_o[B], t[B], v1[B], v2[B], sign[B], x[B], y[B], p_cell[B], p_other[B];
-    int slice[B], other[B];
-    std::int64_t upper[B], data[B], cosine[B];
+    double sin_o[B], v1[B], v2[B], sign[B], x[B], y[B];
+    int slice[B];
+    std::int64_t data[B], cosine[B];
     for (std::size_t k = 0; k < n; ++k) {
         const double u1 = u[k][0], u2 = u[k][1];
         // Brdf::can_draw, split into data and cosine draws.
@@ -237,8 +227,7 @@ Cell exact_cell(const StackView& v, int slice, int other, double u1, double u2) 
         data[k] = can & (u1 >= v.share);
         cosine[k] = can & (u1 < v.share);
         const Placement pl = place(v, wo[k], u1, u2);
-        sin_o[k] = pl.sin_o, t[k] = pl.t, v1[k] = pl.v1, v2[k] = pl.v2, sign[k] = pl.sign;
-        slice[k] = pl.slice, other[k] = pl.other, upper[k] = pl.upper;
+        sin_o[k] = pl.sin_o, v1[k] = pl.v1, v2[k] = pl.v2, sign[k] = pl.sign, slice[k] = pl.slice;
     }
     // find_cell's steps, each a pass.
     int row[B], start[B];
@@ -250,22 +239,22 @@ Cell exact_cell(const StackView& v, int slice, int other, double u1, double u2) 
     }
     for (std::size_t k = 0; k < n; ++k) start[k] = column_start(st, slice[k], row[k], v2[k]);
     for (std::size_t k = 0; k < n; ++k) {
-        const Cell c = find_column(st, slice[k], other[k], {row[k], fy[k], row_found[k] != 0}, start[k], v2[k]);
-        x[k] = c.x, y[k] = c.y, p_cell[k] = c.p_cell, p_other[k] = c.p_other;
+        const Cell c = find_column(st, slice[k], {row[k], fy[k], row_found[k] != 0}, start[k], v2[k]);
+        x[k] = c.x, y[k] = c.y;
         redo[k] = data[k] & !c.found;
     }
     for (std::size_t k = 0; k < n; ++k) {
         if (!redo[k]) continue;
-        const Cell c = exact_cell(st, slice[k], other[k], v1[k], v2[k]);
-        x[k] = c.x, y[k] = c.y, p_cell[k] = c.p_cell, p_other[k] = c.p_other;
+        const Cell c = exact_cell(st, slice[k], v1[k], v2[k]);
+        x[k] = c.x, y[k] = c.y;
     }
     // The results into local arrays first: the compiler cannot rule out that `out` overlaps the sine
     // table it gathers from, and then does not vectorise.
     double wx[B], wy[B], wz[B], pdf[B], sh[B], ch[B], sp[B], cp[B], co[B];
     std::int64_t ok[B];
     for (std::size_t k = 0; k < n; ++k) {
-        const Placement pl{sin_o[k], t[k], v1[k], v2[k], sign[k], slice[k], other[k], upper[k] != 0};
-        const Finish f = finish(v, table, wo[k], pl, x[k], y[k], p_cell[k], p_other[k]);
+        const Placement pl{sin_o[k], v1[k], v2[k], sign[k], slice[k]};
+        const Finish f = finish(v, st, table, wo[k], pl, x[k], y[k]);
         ok[k] = data[k] & f.ok;
         wx[k] = f.wi.x, wy[k] = f.wi.y, wz[k] = f.wi.z, pdf[k] = f.pdf;
         sh[k] = f.sin_h, ch[k] = f.cos_h, sp[k] = f.sin_p, cp[k] = f.cos_p, co[k] = wo[k].z;
@@ -395,9 +384,9 @@ HalfVectorSampler::Draw HalfVectorSampler::draw(const Vec3& wo, double u1, doubl
     }
     const Placement pl = place(v, wo, u1, u2);
     // The block kernel's cell search, and its fallback where that does not settle.
-    Cell c = find_cell(first_, pl.slice, pl.other, pl.v1, pl.v2);
-    if (!c.found) c = exact_cell(first_, pl.slice, pl.other, pl.v1, pl.v2);
-    const Finish f = finish(v, detail::half_turn_sincos(), wo, pl, c.x, c.y, c.p_cell, c.p_other);
+    Cell c = find_cell(first_, pl.slice, pl.v1, pl.v2);
+    if (!c.found) c = exact_cell(first_, pl.slice, pl.v1, pl.v2);
+    const Finish f = finish(v, first_, detail::half_turn_sincos(), wo, pl, c.x, c.y);
     if (!f.ok) return {};
     return {{f.wi, f.pdf, {}}, true, f.sin_h, f.cos_h, f.sin_p, f.cos_p, pl.sin_o, wo.z};
 }

@@ -68,7 +68,7 @@ RandomDraws random_draws(const Brdf& b, int n, std::uint64_t seed) {
 // A FactorSampler as a Brdf (f = 1/π, or another Brdf's f), for the statistical checks.
 class Sampled final : public Brdf {
 public:
-    explicit Sampled(const FactorSampler& s, const Brdf* f = nullptr) : s_(s), f_(f) {}
+    explicit Sampled(FactorSampler s, const Brdf* f = nullptr) : s_(std::move(s)), f_(f) {}
     int channels() const override { return 1; }
     std::size_t nbytes() const override { return s_.nbytes(); }
     std::string describe() const override { return "factor sampler"; }
@@ -81,11 +81,11 @@ protected:
     double pdf_above(const Vec3& wo, const Vec3& wi) const override { return s_.pdf(wo, wi); }
 
 private:
-    const FactorSampler& s_;
+    FactorSampler s_;
     const Brdf* f_;
 };
 
-// The factored BRDF sampled through its factor sampler (sample() itself uses the half-vector sampler).
+// The factored BRDF sampled through its factor sampler (sample() itself uses its compact sampler).
 Sampled by_factors(const Factored& f) { return Sampled(f.brdf->factor_sampler(), f.brdf.get()); }
 
 }  // namespace
@@ -187,10 +187,11 @@ TEST_CASE("factored: every space builds a factor sampler; sample() keeps the hal
         CHECK(s.wi.x == by_hv.wi.x);
         CHECK(s.pdf == by_hv.pdf);
         CHECK(b.pdf(wo, s.wi) == b.sampler().pdf(wo, s.wi));
-        const BrdfSample d = b.factor_sampler().sample(wo, 0.3, 0.6);
+        const FactorSampler by_factors = b.factor_sampler();
+        const BrdfSample d = by_factors.sample(wo, 0.3, 0.6);
         REQUIRE(d.pdf > 0);
-        CHECK(d.pdf == Approx(b.factor_sampler().pdf(wo, d.wi)).epsilon(1e-9));
-        CHECK(d.pdf != b.sampler().pdf(wo, d.wi));  // its own density, not the half-vector sampler's
+        CHECK(d.pdf == Approx(by_factors.pdf(wo, d.wi)).epsilon(1e-9));
+        CHECK(d.pdf != b.sampler().pdf(wo, d.wi));  // its own density, not the compact sampler's
     }
 }
 

@@ -30,10 +30,11 @@ using test::random_views;
 
 namespace {
 
+// A table sampled by the half-vector sampler, which these tests are about.
 TabularBrdf tabulated(double alpha) {
     CoatedDiffuseParams p;
     p.alpha = alpha;
-    return TabularBrdf(tabulate(CoatedDiffuse(p)).table);
+    return TabularBrdf(tabulate(CoatedDiffuse(p)).table, Lookup::Linear, SamplerKind::Fine);
 }
 
 }  // namespace
@@ -147,7 +148,8 @@ TEST_CASE("sampler_variance_ratio: near-ideal samplers compare as equal, a poor 
     // 6-fold "variance blow-up"; against the floor it is no worse than cosine.
     TabulateOptions o;
     o.grid = GridSpec{45, 45, 90};
-    const TabularBrdf diffuse(tabulate(AnalyticBrdf("lambert", {0.6, 0.5, 0.4}), o).table);
+    const TabularBrdf diffuse(tabulate(AnalyticBrdf("lambert", {0.6, 0.5, 0.4}), o).table, Lookup::Linear,
+                              SamplerKind::Fine);
     const SampledAlbedo a = sampled_albedo(diffuse, theta_o, 20000, 11);
     const double spread = a.stderr_[1] * std::sqrt(20000.0) / a.mean[1];
     INFO("relative spread " << spread);
@@ -261,7 +263,8 @@ TEST_CASE("tabular sample: the weight from the draw's angles is eval's", "[sampl
         o.grid = GridSpec{45, 30, 90};
         o.grid.theta_d_warp = 0.8;
         tables.emplace_back("coated diffuse alpha 0.05, 45x30x90, θd warp 0.8",
-                            std::make_unique<TabularBrdf>(tabulate(CoatedDiffuse(p), o).table));
+                            std::make_unique<TabularBrdf>(tabulate(CoatedDiffuse(p), o).table, Lookup::Linear,
+                                                          SamplerKind::Fine));
     }
     const auto files = test::merl_tables();
     if (files.empty())
@@ -269,7 +272,9 @@ TEST_CASE("tabular sample: the weight from the draw's angles is eval's", "[sampl
     else {  // the sharpest material when it is there
         const auto chrome = std::find_if(files.begin(), files.end(), [](const auto& p) { return p.stem() == "chrome"; });
         const std::string path = (chrome != files.end() ? *chrome : files.front()).string();
-        tables.emplace_back(path, load(path).brdf);
+        LoadOptions fine;
+        fine.sampler = SamplerKind::Fine;
+        tables.emplace_back(path, load(path, fine).brdf);
     }
     for (auto& [name, brdf] : tables) {
         auto& t = dynamic_cast<TabularBrdf&>(*brdf);
@@ -284,7 +289,7 @@ TEST_CASE("tabular sample: the weight from the draw's angles is eval's", "[sampl
             Vec3 wo = normalize({nd(rng), nd(rng), nd(rng)});
             wo.z = std::fabs(wo.z);
             const double u1 = u(rng), u2 = u(rng);
-            const HalfVectorSampler::Draw d = t.sampler().draw(wo, u1, u2);
+            const HalfVectorSampler::Draw d = t.sampler().fine()->draw(wo, u1, u2);
             if (!(d.half && d.sample.pdf > 0)) continue;
             ++half;
             const detail::BinCoords a = detail::drawn_bin_coords(g, d), b = detail::fast_bin_coords(g, d.sample.wi, wo);
@@ -384,7 +389,7 @@ TEST_CASE("table sample_batch: each result is the one-at-a-time sample, and bad 
 // angles included, in both builds. A near-specular table has the steepest CDFs (the longest scans).
 TEST_CASE("HalfVectorSampler::draw_block: each draw is draw()'s, in every build", "[sample][tabular]") {
     const TabularBrdf t = tabulated(0.02);
-    const HalfVectorSampler& sampler = t.sampler();
+    const HalfVectorSampler& sampler = *t.sampler().fine();
     auto [wo, us] = random_views(20000, 31);
     const std::size_t count = wo.size();
     us[1] = {0.999999999, 0.9999999999};  // u rounding to 1 in float: the scans' last intervals

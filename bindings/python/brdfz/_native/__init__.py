@@ -1,7 +1,8 @@
 """brdfz representations as Dr.Jit code, for the native Mitsuba 3 bridge (brdfz.mitsuba).
 
 A Model holds a representation's stored arrays as Dr.Jit arrays of the current variant (from
-Brdf.parts()) and its sampler's tables (Brdf.sampler_parts()), and evaluates, samples and returns
+Brdf.parts()) and its sampler's tables (Brdf.sampler_parts(): the compact sampler, or the fine
+half-vector one), and evaluates, samples and returns
 pdfs with brdf.h's conventions on unit Float64 direction tuples: the same functions as the C++
 library, ported operation by operation, traced into Mitsuba's kernels. Kinds: tabular (f32),
 compact tables (f16, u8log), factored (svd, nmf), PCA and analytic models, on grids folded by
@@ -20,6 +21,7 @@ import numpy as np
 import drjit as dr
 import mitsuba as mi
 
+from ._compact import CompactSampler
 from ._halfvector import HalfVectorSampler
 from ._lobes import AnalyticModel
 from ._math import F64, u32
@@ -47,7 +49,10 @@ class Model:
             self.albedo = F64()(np.asarray(brdf.sampler_parts()["albedo"], dtype=np.float64).reshape(-1))
             return
         self.grid = Grid(parts["grid"])
-        self.sampler = HalfVectorSampler(brdf.sampler_parts())
+        sampler = brdf.sampler_parts()
+        if sampler is None:
+            raise Unsupported(f"{self.describe}: no sampler of its own")
+        self.sampler = (CompactSampler if sampler["kind"] == "compact" else HalfVectorSampler)(sampler)
         if kind == "tabular":
             self._diff["values"] = _floats(parts["values"])
         elif kind == "compact":

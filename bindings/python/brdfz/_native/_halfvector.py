@@ -122,7 +122,6 @@ class HalfVectorSampler:
         v2 = dr.select(lower, 2.0 * u2, 2.0 * u2 - 1.0)
         v1 = dr.select(v1 < BELOW_ONE, v1, BELOW_ONE)
         slice_ = dr.select(upper, k0 + 1, k0)
-        other = dr.select(upper, k0, k0 + 1)
 
         row = self.find_interval(self.marginal, u32(slice_) * (R + 1), self.marginal_guide, u32(slice_) * R, R, v1,
                                  data)
@@ -136,20 +135,16 @@ class HalfVectorSampler:
         fx = clamp((v2 - f64(c0)) / f64(c1 - c0), 0.0, 1.0)
         x = self.cell_coord(col, C, fx, data)
         y = self.cell_coord(row, R, fy, data)
-        p_cell = f64(gather32(self.density, rs * C + u32(col), data))
-        p_other = f64(gather32(self.density, (u32(other) * R + u32(row)) * C + u32(col), data))
 
-        # halfvector.cpp finish: h at the cell point in wo's frame, wi its mirror, the pdf from the cell.
+        # halfvector.cpp finish: h at the cell point in wo's frame, wi its mirror, the pdf from wi (pdf()'s).
         th_s, th_c = dr.sincos(PI / 2.0 * y * y)
         ph_s, ph_c = dr.sincos(PI * x)
         sin_p = sign * ph_s
         h = Azimuth(wo, sin_o).to_world((th_s * ph_c, th_s * sin_p, th_c))
         cos_d = dot(wo, h)
         wi_d = (2.0 * cos_d * h[0] - wo[0], 2.0 * cos_d * h[1] - wo[1], 2.0 * cos_d * h[2] - wo[2])
-        p_xy = dr.select(upper, (1.0 - t) * p_other + t * p_cell, (1.0 - t) * p_cell + t * p_other)
-        jac = 4.0 * cos_d * 2.0 * PI * PI * y * th_s
-        density = p_xy / jac
-        ok_d = (wi_d[2] > 0.0) & (dr.abs(density) < dr.inf) & (density > 0.0)
+        density = self.data_density(wo, sin_o, wi_d, data)
+        ok_d = (wi_d[2] > 0.0) & (density > 0.0)
         pdf_d = share * wi_d[2] / PI + (1.0 - share) * density
 
         wi = tuple(dr.select(cosine, a, b) for a, b in zip(wi_c, wi_d))

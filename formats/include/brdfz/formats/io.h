@@ -14,6 +14,7 @@
 #include "brdfz/brdf.h"
 #include "brdfz/compress.h"
 #include "brdfz/measurements.h"
+#include "brdfz/sample/grid_sampler.h"
 #include "brdfz/metrics.h"
 #include "brdfz/repr/tabular.h"
 #include "brdfz/table.h"
@@ -53,6 +54,9 @@ struct LoadedMeasurements {
 struct LoadOptions {
     BinPosition position = BinPosition::Centre;  // tables: where samples sit in their bins
     Lookup lookup = Lookup::Linear;              // tables: lookup used by eval
+    // Tables read from table formats (MERL, EXR, NumPy): their sampler (sample/grid_sampler.h), built at
+    // load. A .brdfz keeps the sampler it was written with.
+    SamplerKind sampler = SamplerKind::Compact;
 };
 
 struct SaveOptions {

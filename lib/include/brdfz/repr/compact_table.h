@@ -21,9 +21,8 @@
 #include <vector>
 
 #include "brdfz/brdf.h"
+#include "brdfz/runtime/kernels/math.h"
 #include "brdfz/repr/tabular.h"
-#include "brdfz/sample/halfvector.h"
-#include "brdfz/sample/lazy.h"
 #include "brdfz/table.h"
 
 namespace brdfz {
@@ -33,16 +32,9 @@ enum class TableDtype { F32, F16, U8Log };
 TableDtype parse_table_dtype(const std::string& name);  // "f32" | "f16" | "u8log"; ValueError otherwise
 const char* table_dtype_name(TableDtype dtype);         // "f32", "f16", "u8log"
 
-// IEEE binary16 <-> binary32. half_to_float is exact for every code (subnormals without float
-// denormals, so it stays exact under flush-to-zero modes); half_from_float rounds to nearest even.
-inline float half_to_float(std::uint16_t h) {
-    const std::uint32_t em = h & 0x7fffu, sign = static_cast<std::uint32_t>(h & 0x8000u) << 16;
-    const float normal = std::bit_cast<float>((em << 13) + (112u << 23));  // rebias 15 -> 127
-    const float subnormal = static_cast<float>(static_cast<int>(em)) * 0x1p-24f;
-    const std::uint32_t special = 0x7f800000u | ((em & 0x3ffu) << 13);    // Inf, NaN
-    const std::uint32_t bits = em >= 0x7c00u ? special : std::bit_cast<std::uint32_t>(em < 0x400u ? subnormal : normal);
-    return std::bit_cast<float>(bits | sign);
-}
+// IEEE binary16 <-> binary32. half_to_float (the runtime's, brdfz/runtime/kernels/math.h) is exact for
+// every code, also under flush-to-zero modes; half_from_float rounds to nearest even.
+using runtime::kernels::half_to_float;
 std::uint16_t half_from_float(float f);
 
 // How one channel's codes decode (see the header comment). f16 uses `scale` only.
@@ -100,7 +92,9 @@ private:
 
 class CompactTableBrdf final : public LookupTableBrdf {
 public:
-    explicit CompactTableBrdf(CompactTable table, Lookup lookup = Lookup::Linear);
+    explicit CompactTableBrdf(CompactTable table, Lookup lookup = Lookup::Linear,
+                              SamplerKind sampler = SamplerKind::Compact);
+    CompactTableBrdf(CompactTable table, Lookup lookup, CompactSampler sampler);
 
     const CompactTable& table() const { return table_; }
     std::size_t nbytes() const override { return table_.nbytes(); }
@@ -108,7 +102,10 @@ public:
     const GridSpec* grid() const override { return &table_.grid(); }
 
 protected:
-    BRDFZ_BRDF_KERNELS;
+    Rgb eval_above(const Vec3& wi, const Vec3& wo) const override;
+    void eval_batch(const Vec3* wi, const Vec3* wo, Rgb* out, std::size_t n) const override;
+    BrdfSample sample_above(const Vec3& wo, double u1, double u2) const override;
+    void sample_batch(const Vec3* wo, const std::array<double, 2>* u, BrdfSample* out, std::size_t n) const override;
 
 private:
     CompactTable table_;

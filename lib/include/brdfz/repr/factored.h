@@ -51,8 +51,7 @@
 
 #include "brdfz/brdf.h"
 #include "brdfz/sample/factor_sampler.h"
-#include "brdfz/sample/halfvector.h"
-#include "brdfz/sample/lazy.h"
+#include "brdfz/sample/grid_sampler.h"
 #include "brdfz/simd.h"
 #include "brdfz/table.h"
 #include "brdfz/tabulate.h"
@@ -109,7 +108,10 @@ public:
     // F16: beyond the float16 range), the factors could reconstruct a value beyond a quarter of the
     // float range (the sum over components of the largest |u|·|v|), or a max_value is NaN or negative. F16 factors are rounded to
     // float16 (round to nearest even).
-    explicit FactoredBrdf(Factors factors);
+    // The sampler of that kind is built from eval (compact unless asked otherwise).
+    explicit FactoredBrdf(Factors factors, SamplerKind sampler = SamplerKind::Compact);
+    // With a stored compact sampler (a container's).
+    FactoredBrdf(Factors factors, CompactSampler sampler);
     FactoredBrdf(const FactoredBrdf&) = delete;
     FactoredBrdf& operator=(const FactoredBrdf&) = delete;
 
@@ -120,14 +122,13 @@ public:
     // Channel values eval has clamped to 0 so far (svd reconstructions below 0), over all threads.
     std::uint64_t clamped_evaluations() const { return clamped_.load(std::memory_order_relaxed); }
 
-    // A sampler drawn from the factors alone (sample/factor_sampler.h; Lawrence et al. 2004), quick to
-    // build (no evaluation grid). Its azimuth follows cosθi only, so where f depends strongly on φh
-    // (glossy paints at oblique views) its variance is well above the half-vector sampler's, and its
-    // draws are slower: sample() does not use it.
-    const FactorSampler& factor_sampler() const;
-    // The sampler sample() and pdf() use: the half-vector sampler (CDFs tabulated from eval, exact
-    // pdf), built on first use: it evaluates f on its grid of view slices.
-    const HalfVectorSampler& sampler() const;
+    // A sampler drawn from the factors alone (sample/factor_sampler.h; Lawrence et al. 2004), built
+    // now, quick to build (no evaluation grid). Its azimuth follows cosθi only, so where f depends
+    // strongly on φh (glossy paints at oblique views) its variance is well above the compact sampler's,
+    // and its draws are slower: sample() does not use it.
+    FactorSampler factor_sampler() const { return FactorSampler(f_); }
+    // The sampler sample() and pdf() use (sample/grid_sampler.h), built with the representation.
+    const GridSampler& sampler() const { return sampler_; }
 
     int channels() const override { return 3; }
     std::size_t nbytes() const override;
@@ -153,8 +154,7 @@ private:
     const float* v_ = nullptr;
     double ceiling_[3];  // max_value in the transform space (within the float range)
     mutable std::atomic<std::uint64_t> clamped_{0};
-    Lazy<HalfVectorSampler> sampler_;
-    Lazy<FactorSampler> factor_sampler_;
+    GridSampler sampler_;
 };
 
 // Options of factor(). The spec-string kinds (compress.h) `svd:...` and `nmf:...` map onto these:
@@ -179,6 +179,7 @@ struct FactorOptions {
     // fit=lsq: how its points weigh (tabulate.h): as the grid's bins, or by solid angle.
     TabulateOptions::FitWeight fit_weight = TabulateOptions::FitWeight::Bins;
     FactorDtype dtype = FactorDtype::F32;
+    SamplerKind sampler = SamplerKind::Compact;  // the result's sampler (sample/grid_sampler.h)
     int threads = 0;          // 0: one per hardware thread
     // Fraction done (0..1] after each iteration, from the calling thread.
     std::function<void(double)> progress;

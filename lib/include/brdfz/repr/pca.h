@@ -119,8 +119,11 @@ public:
     };
 
     // ValueError when there are more coefficients than the basis has components, or one is not finite.
+    // The reconstruction's sampler is built of that kind, or is the stored one given.
     PcaBrdf(std::shared_ptr<const PcaBasis> basis, std::vector<float> coefficients, Lookup lookup = Lookup::Linear,
-            BasisStorage storage = BasisStorage::Referenced);
+            BasisStorage storage = BasisStorage::Referenced, SamplerKind sampler = SamplerKind::Compact);
+    PcaBrdf(std::shared_ptr<const PcaBasis> basis, std::vector<float> coefficients, Lookup lookup,
+            BasisStorage storage, CompactSampler sampler);
 
     const PcaBasis& basis() const { return *basis_; }
     const std::shared_ptr<const PcaBasis>& shared_basis() const { return basis_; }

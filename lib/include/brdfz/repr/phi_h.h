@@ -11,8 +11,10 @@
 //   bilateral   mirror symmetry about the tangent +x (y → −y), (φh, φd) ~ (−φh, −φd): φh over [0, π],
 //               slices at φk = (k + ½)·π/nφh; a pair with φh < 0 is read mirrored. The interpolation is
 //               clamped at 0 and π, where the mirror makes f symmetric in φh. Slices keep φd over [0, 2π).
-// Sampling: an even mixture of the slices' own samplers (each draws over every φh), so the pdf is the
-// mean of their pdfs and is exact; weights use the interpolated f.
+// Sampling (sample/grid_sampler.h): by default one compact sampler of the whole stack, built from its
+// eval averaged over view azimuths (the slices then carry no sampler of their own); with sampler=fine
+// an even mixture of the slices' own fine samplers (each draws over every φh), so the pdf is the mean
+// of their pdfs. Either pdf is exact; weights use the interpolated f.
 #pragma once
 
 #include <functional>
@@ -21,6 +23,7 @@
 #include <vector>
 
 #include "brdfz/brdf.h"
+#include "brdfz/sample/grid_sampler.h"
 #include "brdfz/table.h"
 
 namespace brdfz {
@@ -34,13 +37,24 @@ Symmetry slice_symmetry(PhiHSymmetry s);
 class PhiHBrdf final : public Brdf {
 public:
     // ValueError unless there are 2..GridSpec::kMaxAxis slices, all non-null with the same channels.
-    PhiHBrdf(std::vector<std::unique_ptr<Brdf>> slices, PhiHSymmetry symmetry);
+    // sampler: Compact builds the stack's own sampler now; Fine samples the slices' own samplers; None
+    // draws cosθi/π.
+    PhiHBrdf(std::vector<std::unique_ptr<Brdf>> slices, PhiHSymmetry symmetry,
+             SamplerKind sampler = SamplerKind::Compact);
+    // With a stored compact sampler (a container's).
+    PhiHBrdf(std::vector<std::unique_ptr<Brdf>> slices, PhiHSymmetry symmetry, CompactSampler sampler);
+
+    // View azimuths the compact sampler's integrand is averaged over (the stack is anisotropic).
+    static constexpr int kSamplerAzimuths = 4;
 
     // φh of slice k of n (radians).
     static double phi_at(int k, int n, PhiHSymmetry symmetry);
 
     const std::vector<std::unique_ptr<Brdf>>& slices() const { return slices_; }
     PhiHSymmetry symmetry() const { return symmetry_; }
+    SamplerKind sampler_kind() const { return sampler_kind_; }
+    // The stack's own sampler (compact), or none when it samples its slices' (fine) or draws cosθi/π.
+    const GridSampler& sampler() const { return sampler_; }
 
     int channels() const override { return slices_.front()->channels(); }
     std::size_t nbytes() const override;
@@ -56,6 +70,8 @@ protected:
 private:
     std::vector<std::unique_ptr<Brdf>> slices_;
     PhiHSymmetry symmetry_;
+    SamplerKind sampler_kind_;
+    GridSampler sampler_;
 };
 
 // `source` rotated about the normal by φ: f(wi, wo) = source.f(Rz(φ)·wi, Rz(φ)·wo). Borrows `source`.
@@ -77,9 +93,11 @@ private:
     double phi_, c_, s_;
 };
 
-// The stack of n slices of `source`, slice k built by build(source rotated by phi_at(k)); ValueError
-// for n outside 2..GridSpec::kMaxAxis.
+// The stack of n slices of `source`, slice k built by build(source rotated by phi_at(k)), sampled by
+// `sampler` (the slices are to carry none for Compact, their fine ones for Fine); ValueError for n
+// outside 2..GridSpec::kMaxAxis.
 std::unique_ptr<PhiHBrdf> tabulate_phi_h(const Brdf& source, int n, PhiHSymmetry symmetry,
-                                         const std::function<std::unique_ptr<Brdf>(const Brdf&)>& build);
+                                         const std::function<std::unique_ptr<Brdf>(const Brdf&)>& build,
+                                         SamplerKind sampler = SamplerKind::Compact);
 
 }  // namespace brdfz

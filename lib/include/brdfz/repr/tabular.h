@@ -4,8 +4,7 @@
 #include <string>
 
 #include "brdfz/brdf.h"
-#include "brdfz/sample/halfvector.h"
-#include "brdfz/sample/lazy.h"
+#include "brdfz/sample/grid_sampler.h"
 #include "brdfz/table.h"
 
 namespace brdfz {
@@ -19,15 +18,14 @@ Lookup parse_lookup(const std::string& name);  // "nearest" | "linear"; ValueErr
 const char* lookup_name(Lookup lookup);
 
 // What every table kind shares (float32 here, compact_table.h's codes): the lookup, and the
-// importance sampler, built from eval on first use and dropped when the lookup changes.
+// importance sampler (sample/grid_sampler.h), built from eval with the table and rebuilt (of the same
+// kind) when the lookup changes.
 class LookupTableBrdf : public Brdf {
 public:
     Lookup lookup() const { return lookup_; }
-    void set_lookup(Lookup lookup) {
-        lookup_ = lookup;
-        sampler_.reset();
-    }
-    const HalfVectorSampler& sampler() const;
+    // Not thread-safe against concurrent use of the table: it rebuilds the sampler.
+    void set_lookup(Lookup lookup);
+    const GridSampler& sampler() const { return sampler_; }
 
     int channels() const override { return 3; }
     bool reciprocal() const override { return grid()->reciprocal(); }
@@ -35,15 +33,25 @@ public:
 
 protected:
     explicit LookupTableBrdf(Lookup lookup) : lookup_(lookup) {}
+    // The final classes call one of these at the end of their constructors, when eval works.
+    void build_sampler(SamplerKind kind) { sampler_ = GridSampler::build(*this, kind); }
+    void set_sampler(GridSampler sampler) { sampler_ = std::move(sampler); }
+    // The kernels' shared parts: the compact sampler's draws take Brdf's path (the weight from the eval
+    // kernel), the fine one's are fused with the lookup (detail/table_sample.h).
+    BrdfSample sample_compact(const Vec3& wo, double u1, double u2) const { return sampler_.sample(wo, u1, u2); }
+    double pdf_above(const Vec3& wo, const Vec3& wi) const override { return sampler_.pdf(wo, wi); }
 
 private:
     Lookup lookup_;
-    Lazy<HalfVectorSampler> sampler_;
+    GridSampler sampler_;
 };
 
 class TabularBrdf final : public LookupTableBrdf {
 public:
-    explicit TabularBrdf(Table table, Lookup lookup = Lookup::Linear);
+    // Builds the sampler of that kind (compact unless asked otherwise).
+    explicit TabularBrdf(Table table, Lookup lookup = Lookup::Linear, SamplerKind sampler = SamplerKind::Compact);
+    // With a stored compact sampler (a container's).
+    TabularBrdf(Table table, Lookup lookup, CompactSampler sampler);
 
     const Table& table() const { return table_; }
     std::size_t nbytes() const override { return table_.bins() * 3 * sizeof(float); }
@@ -52,7 +60,10 @@ public:
     const Table* stored_table() const override { return &table_; }
 
 protected:
-    BRDFZ_BRDF_KERNELS;
+    Rgb eval_above(const Vec3& wi, const Vec3& wo) const override;
+    void eval_batch(const Vec3* wi, const Vec3* wo, Rgb* out, std::size_t n) const override;
+    BrdfSample sample_above(const Vec3& wo, double u1, double u2) const override;
+    void sample_batch(const Vec3* wo, const std::array<double, 2>* u, BrdfSample* out, std::size_t n) const override;
 
 private:
     Table table_;

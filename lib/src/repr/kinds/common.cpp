@@ -41,15 +41,20 @@ std::string phi_h_symmetry_option(const ReprSpec& spec, Symmetry fallback) {
     return spec.get_choice("symmetry", symmetry_name(fallback), {"reciprocal", "none", "bilateral"});
 }
 
-Compressed build_phi_h(const Brdf& source, int n, PhiHSymmetry symmetry,
-                       const std::function<Compressed(const Brdf&, Symmetry)>& build_slice) {
+SamplerKind sampler_option(const ReprSpec& spec) {
+    return parse_sampler_kind(spec.get_choice("sampler", "compact", {"compact", "fine"}));
+}
+
+Compressed build_phi_h(const Brdf& source, int n, PhiHSymmetry symmetry, SamplerKind sampler,
+                       const std::function<Compressed(const Brdf&, Symmetry, SamplerKind)>& build_slice) {
     Compressed out;
+    const SamplerKind slices = sampler == SamplerKind::Fine ? SamplerKind::Fine : SamplerKind::None;
     out.brdf = tabulate_phi_h(source, n, symmetry, [&](const Brdf& slice) {
-        Compressed c = build_slice(slice, slice_symmetry(symmetry));
+        Compressed c = build_slice(slice, slice_symmetry(symmetry), slices);
         for (std::string& note : c.notes)
             if (std::find(out.notes.begin(), out.notes.end(), note) == out.notes.end()) out.notes.push_back(std::move(note));
         return std::move(c.brdf);
-    });
+    }, sampler);
     return out;
 }
 

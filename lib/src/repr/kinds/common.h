@@ -32,14 +32,21 @@ inline const SpecKey kPhiHSymmetryKey{
     "mirror y -> -y: with phih = 1 φd over [0, π] (a pair and its mirror image sharing a bin: non-reciprocal data kept "
     "in none's accuracy at half its φd bins), with phih >= 2 φh over [0, π] and φd over [0, 2π)"};
 
+inline const SpecKey kSamplerKey{"sampler", "compact",
+                                 "compact|fine: the importance sampler, ~14 KB of CDFs stored with the representation, "
+                                 "or the 1.6 MB half-vector sampler built from eval at load"};
+// sampler=compact|fine.
+SamplerKind sampler_option(const ReprSpec& spec);
+
 // symmetry= of a kind with a φh axis, `fallback` when absent: the mirror fold of the φh axis with
 // phih >= 2 (PhiHSymmetry::Bilateral), else of φd (Symmetry::Bilateral).
 std::string phi_h_symmetry_option(const ReprSpec& spec, Symmetry fallback = Symmetry::Reciprocal);
 
 // phih=N slices of `source` (tabulate_phi_h), each built by build_slice from the rotated source with
-// the slices' φd symmetry; their notes once each.
-Compressed build_phi_h(const Brdf& source, int n, PhiHSymmetry symmetry,
-                       const std::function<Compressed(const Brdf&, Symmetry)>& build_slice);
+// the slices' φd symmetry and sampler (none when the stack has its own compact sampler, fine for a
+// fine one); their notes once each.
+Compressed build_phi_h(const Brdf& source, int n, PhiHSymmetry symmetry, SamplerKind sampler,
+                       const std::function<Compressed(const Brdf&, Symmetry, SamplerKind)>& build_slice);
 
 // What tabulating `source` left out or changed.
 void note_tabulation(const Brdf& source, const Tabulated& t, Compressed& out);

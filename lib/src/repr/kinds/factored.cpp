@@ -38,6 +38,7 @@ Compressed build_factored(FactorMethod method, const Brdf& source, const ReprSpe
     fo.fit_iterations = spec.get_int("fit_iterations", fo.fit_iterations, 1, 10000);
     fo.fit_weight = weight_option(spec, lsq);
     fo.dtype = parse_factor_dtype(spec.get_choice("dtype", "f32", {"f32", "f16"}));
+    const SamplerKind sampler = sampler_option(spec);
     const Table* table = source.stored_table();
     const int phih = spec.get_int("phih", 1, 1, GridSpec::kMaxAxis);
     const std::string symmetry_text =
@@ -53,20 +54,23 @@ Compressed build_factored(FactorMethod method, const Brdf& source, const ReprSpe
     spec.finish();
     fo.threads = options.threads;
     fo.progress = options.progress;
-    const auto factor_on_grid = [&](const Brdf& from, Symmetry s) {
+    const auto factor_on_grid = [&](const Brdf& from, Symmetry s, SamplerKind slice_sampler) {
         Compressed out;
         TabulateOptions tab;
         tab.grid = GridSpec{res[0], res[1], res[2], BinPosition::Centre, warp, s};
         tab.threads = options.threads;
         const Tabulated t = tabulate_noted(from, tab, out);
-        Factored factored = factor(from, t.table, fo);
+        FactorOptions slice_options = fo;
+        slice_options.sampler = slice_sampler;
+        Factored factored = factor(from, t.table, slice_options);
         note_factoring(method, factored.report, lsq, out);
         out.brdf = std::move(factored.brdf);
         return out;
     };
-    if (phih > 1) return build_phi_h(source, phih, parse_phi_h_symmetry(symmetry_text), factor_on_grid);
-    if (resample) return factor_on_grid(source, symmetry);
+    if (phih > 1) return build_phi_h(source, phih, parse_phi_h_symmetry(symmetry_text), sampler, factor_on_grid);
+    if (resample) return factor_on_grid(source, symmetry, sampler);
     Compressed out;
+    fo.sampler = sampler;
     Factored factored = factor(*table, fo);
     note_factoring(method, factored.report, lsq, out);
     out.brdf = std::move(factored.brdf);
@@ -95,7 +99,8 @@ std::vector<SpecKey> keys(const char* iterations) {
             {"dtype", "f32", "f32|f16: stored factors (f16: half the bytes)"},
             {"symmetry", "(a table source's own, else reciprocal)", kPhiHSymmetryKey.help},
             kPhiHKey,
-            kWeightKey};
+            kWeightKey,
+            kSamplerKey};
 }
 
 }  // namespace

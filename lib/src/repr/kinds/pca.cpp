@@ -14,6 +14,7 @@ Compressed build(const Brdf& source, const ReprSpec& spec, const CompressOptions
     const bool embed = spec.get_choice("store", "reference", {"reference", "embed"}) == "embed";
     const bool confirm_symmetry = spec.has("symmetry");
     const Symmetry symmetry = symmetry_option(spec, "a PCA basis's φd axis is reciprocal or none (brdfz pca-train --symmetry)");
+    const SamplerKind sampler = sampler_option(spec);
     spec.finish();
     if (file.empty()) throw ValueError("pca: name the basis file (brdfz pca-train makes one), e.g. pca:basis=merl.brdfz,k=12");
     if (!options.load_pca_basis)
@@ -39,7 +40,8 @@ Compressed build(const Brdf& source, const ReprSpec& spec, const CompressOptions
     }
     const Table& values = tabulated ? tabulated->table : *table;
     auto pca = std::make_unique<PcaBrdf>(basis, basis->project(values, k), lookup,
-                                         embed ? PcaBrdf::BasisStorage::Embedded : PcaBrdf::BasisStorage::Referenced);
+                                         embed ? PcaBrdf::BasisStorage::Embedded : PcaBrdf::BasisStorage::Referenced,
+                                         sampler);
     if (pca->counts().clamped > 0)
         out.notes.push_back(std::to_string(pca->counts().clamped) + " reconstructed bins with negative values clamped to 0");
     out.brdf = std::move(pca);
@@ -56,7 +58,8 @@ void register_pca(std::vector<ReprKind>& out) {
                     {"k", "12", "coefficients kept, at most the basis's components"},
                     {"store", "reference", "reference|embed: refer to the basis file or embed the basis"},
                     kLookupKey,
-                    {"symmetry", "(the basis's)", "reciprocal|none: must be the basis's φd axis (brdfz pca-train --symmetry)"}},
+                    {"symmetry", "(the basis's)", "reciprocal|none: must be the basis's φd axis (brdfz pca-train --symmetry)"},
+                    kSamplerKey},
                    build});
 }
 

@@ -16,7 +16,7 @@ const SpecKey kSupersample{"ss", "1 (3 with filter=lsq)", "points per bin and ax
 // Tabulates `source` on `grid` (box-filtered by `supersample`) and keeps the table in `dtype`.
 Compressed build_table(const Brdf& source, const GridSpec& grid, std::array<int, 3> supersample,
                        TabulateOptions::Filter filter, TabulateOptions::FitWeight weight, TableDtype dtype,
-                       Lookup lookup, const CompressOptions& options) {
+                       Lookup lookup, SamplerKind sampler, const CompressOptions& options) {
     TabulateOptions tab;
     tab.grid = grid;
     tab.supersample = supersample;
@@ -27,9 +27,9 @@ Compressed build_table(const Brdf& source, const GridSpec& grid, std::array<int,
     Compressed out;
     Tabulated t = tabulate_noted(source, tab, out);
     if (dtype == TableDtype::F32)
-        out.brdf = std::make_unique<TabularBrdf>(std::move(t.table), lookup);
+        out.brdf = std::make_unique<TabularBrdf>(std::move(t.table), lookup, sampler);
     else
-        out.brdf = std::make_unique<CompactTableBrdf>(CompactTable::encode(t.table, dtype), lookup);
+        out.brdf = std::make_unique<CompactTableBrdf>(CompactTable::encode(t.table, dtype), lookup, sampler);
     return out;
 }
 
@@ -59,13 +59,14 @@ Compressed build_tabular(const Brdf& source, const ReprSpec& spec, const Compres
     const double warp = theta_d_warp_option(spec);
     const int phih = spec.get_int("phih", 1, 1, GridSpec::kMaxAxis);
     const std::string symmetry = phi_h_symmetry_option(spec);
+    const SamplerKind sampler = sampler_option(spec);
     spec.finish();
-    const auto table = [&](const Brdf& from, Symmetry s) {
+    const auto table = [&](const Brdf& from, Symmetry s, SamplerKind slice_sampler) {
         return build_table(from, GridSpec{res[0], res[1], res[2], BinPosition::Centre, warp, s}, {ss, ss, ss}, filter,
-                           weight, dtype, lookup, options);
+                           weight, dtype, lookup, slice_sampler, options);
     };
-    if (phih > 1) return build_phi_h(source, phih, parse_phi_h_symmetry(symmetry), table);
-    return table(source, parse_symmetry(symmetry));
+    if (phih > 1) return build_phi_h(source, phih, parse_phi_h_symmetry(symmetry), sampler, table);
+    return table(source, parse_symmetry(symmetry), sampler);
 }
 
 Compressed build_bivariate(const Brdf& source, const ReprSpec& spec, const CompressOptions& options) {
@@ -80,9 +81,10 @@ Compressed build_bivariate(const Brdf& source, const ReprSpec& spec, const Compr
     // (θh, θd) do not change when wi and wo are exchanged: the φd mean is reciprocal either way, and
     // symmetry=none only spreads its phi values over [0, 2π).
     const Symmetry symmetry = symmetry_option(spec, "a bivariate table averages φd away");
+    const SamplerKind sampler = sampler_option(spec);
     spec.finish();
     return build_table(source, GridSpec{res[0], res[1], 1, BinPosition::Centre, warp, symmetry}, {ss, ss, phi}, filter,
-                       weight, dtype, lookup, options);
+                       weight, dtype, lookup, sampler, options);
 }
 
 }  // namespace
@@ -92,7 +94,7 @@ void register_tabular(std::vector<ReprKind>& out) {
                    "a Rusinkiewicz (θh, θd, φd) table resampled on res, square-root θh axis",
                    "",
                    {{"res", "90x90x180", "bins θh x θd x φd"}, kDtype, kLookupKey, kFilter, kSupersample, kWarpKey,
-                    kPhiHSymmetryKey, kPhiHKey, kWeightKey},
+                    kPhiHSymmetryKey, kPhiHKey, kWeightKey, kSamplerKey},
                    build_tabular});
     out.push_back({"bivariate",
                    "a (θh, θd) table without the φd axis, the source averaged over phi values of φd",
@@ -105,7 +107,8 @@ void register_tabular(std::vector<ReprKind>& out) {
                     kSupersample,
                     kWarpKey,
                     kSymmetryKey,
-                    kWeightKey},
+                    kWeightKey,
+                    kSamplerKey},
                    build_bivariate});
 }
 

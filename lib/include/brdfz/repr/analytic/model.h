@@ -7,6 +7,7 @@
 #pragma once
 
 #include <cstddef>
+#include <memory>
 #include <span>
 #include <string>
 #include <string_view>
@@ -14,7 +15,6 @@
 
 #include "brdfz/brdf.h"
 #include "brdfz/repr/analytic/lobe.h"
-#include "brdfz/sample/lazy.h"
 #include "brdfz/sample/lobes.h"
 
 namespace brdfz {
@@ -61,8 +61,8 @@ public:
 
     const Model& model() const { return model_; }
     std::span<const double> params() const { return params_; }
-    // The lobe-mixture importance sampler (sample/lobes.h), built on first use.
-    const LobeMixture& sampler() const;
+    // The lobe-mixture importance sampler (sample/lobes.h), built with the model (copies share it).
+    const LobeMixture& sampler() const { return *sampler_; }
 
     int channels() const override { return 3; }
     std::size_t nbytes() const override { return params_.size() * sizeof(double); }
@@ -74,7 +74,7 @@ protected:
 private:
     Model model_;
     std::vector<double> params_;
-    Lazy<LobeMixture> sampler_;
+    std::shared_ptr<const LobeMixture> sampler_;
 };
 
 }  // namespace brdfz

@@ -1,0 +1,83 @@
+// Elementary functions the kernels share, without libm calls: a call cannot be vectorised and costs
+// more than these branch-free forms. C++17 and the standard library only, as all of brdfz::runtime;
+// the core's kernels use these same functions (one source, the same bits). Always inlined (GCC and
+// Clang): a call in a loop over lanes keeps the loop from vectorising.
+#pragma once
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <cstring>
+
+namespace brdfz::runtime::kernels {
+
+constexpr double kPi = 3.141592653589793238462643383279502884;
+
+template <typename To, typename From>
+inline To bits_as(const From& from) {
+    static_assert(sizeof(To) == sizeof(From), "bits_as: sizes differ");
+    To to;
+    std::memcpy(&to, &from, sizeof to);
+    return to;
+}
+
+// atan(t) for t in [0, 1] as t·P(t²), a least-squares fit of the relative error: |rel err| < 6e-11.
+// Estrin's scheme: a dependency chain of 4 multiply-adds instead of Horner's 11.
+[[gnu::always_inline]] inline double atan01(double t) {
+    constexpr double c[] = {0.99999999994136979,   -0.33333331572392677, 0.19999912082711904,
+                            -0.1428398114194897,   0.1109324385371387,   -0.089802498131937941,
+                            0.072457466235865964,  -0.054279596397618646, 0.034210157407729216,
+                            -0.016112066961960693, 0.0048510884142120014, -0.00068481937721016906};
+    const double x = t * t, x2 = x * x, x4 = x2 * x2, x8 = x4 * x4;
+    const double p01 = c[0] + c[1] * x, p23 = c[2] + c[3] * x, p45 = c[4] + c[5] * x, p67 = c[6] + c[7] * x;
+    const double p89 = c[8] + c[9] * x, pab = c[10] + c[11] * x;
+    const double q0 = p01 + p23 * x2, q1 = p45 + p67 * x2, q2 = p89 + pab * x2;
+    return t * ((q0 + q1 * x4) + q2 * x8);
+}
+
+// The angle of (x, y) folded into [0, π] (φ ~ φ + π, as MERL folds φd by reciprocity), to ~1e-10
+// relative. No branch: octant tests on random directions would mispredict half the time, and
+// branch-free code vectorises. A NaN x gives NaN (a NaN y alone does not); (0, 0) gives NaN.
+[[gnu::always_inline]] inline double fast_half_turn_angle(double y, double x) {
+    const double ax = std::fabs(x), ay = std::fabs(y);
+    const double a = atan01(std::min(ax, ay) / std::max(ax, ay));
+    const double steep = ay > ax ? 1.0 : 0.0, left = (x < 0.0) != (y < 0.0) ? 1.0 : 0.0;
+    const double b = a + steep * (kPi / 2 - 2.0 * a);  // π/2 - a when |y| > |x|
+    return b + left * (kPi - 2.0 * b);                  // π - b in the 2nd quadrant
+}
+
+// sin and cos of a in [0, π] without a table or a branch: a is reduced to |b| ≤ π/4 by the quarter
+// turn it lies nearest (0, π/2 or π), where Taylor series of 9 and 10 terms are below 1e-19 from sin
+// and cos. Within a few ulp of 1 of std::sin and std::cos, and of sin a itself for small a.
+struct SinCos {
+    double s, c;
+};
+[[gnu::always_inline]] inline SinCos sincos_half_turn(double a) {
+    constexpr double kQuarter = kPi / 4, kHalf = kPi / 2;
+    const bool low = a <= kQuarter, high = a > 3 * kQuarter;
+    const double b = low ? a : (high ? kPi - a : a - kHalf);
+    const double x = b * b;
+    // sin b = b Σ (−x)^i/(2i+1)!, cos b = Σ (−x)^i/(2i)!, by Horner (the terms fall off fast).
+    const double sb = b * (1.0 + x * (-1.0 / 6 + x * (1.0 / 120 + x * (-1.0 / 5040 + x * (1.0 / 362880 +
+                       x * (-1.0 / 39916800 + x * (1.0 / 6227020800 + x * (-1.0 / 1307674368000 +
+                       x * (1.0 / 355687428096000)))))))));
+    const double cb = 1.0 + x * (-0.5 + x * (1.0 / 24 + x * (-1.0 / 720 + x * (1.0 / 40320 + x * (-1.0 / 3628800 +
+                      x * (1.0 / 479001600 + x * (-1.0 / 87178291200 + x * (1.0 / 20922789888000 +
+                      x * (-1.0 / 6402373705728000)))))))));
+    // a = b, π − b or π/2 + b.
+    const bool mid = !low & !high;
+    return {mid ? cb : sb, low ? cb : (high ? -cb : -sb)};
+}
+
+// IEEE binary16 -> binary32, exact for every code (subnormals without float denormals, so it stays
+// exact under flush-to-zero modes).
+inline float half_to_float(std::uint16_t h) {
+    const std::uint32_t em = h & 0x7fffu, sign = static_cast<std::uint32_t>(h & 0x8000u) << 16;
+    const float normal = bits_as<float>((em << 13) + (112u << 23));  // rebias 15 -> 127
+    const float subnormal = static_cast<float>(static_cast<int>(em)) * 0x1p-24f;
+    const std::uint32_t special = 0x7f800000u | ((em & 0x3ffu) << 13);  // Inf, NaN
+    const std::uint32_t bits = em >= 0x7c00u ? special : bits_as<std::uint32_t>(em < 0x400u ? subnormal : normal);
+    return bits_as<float>(bits | sign);
+}
+
+}  // namespace brdfz::runtime::kernels
