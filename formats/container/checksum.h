@@ -9,11 +9,12 @@
 #include <cstdint>
 #include <string>
 
+#include "brdfz/runtime/crc32c.h"
+
 namespace brdfz::container {
 
-// Standard CRC-32C (initial value and final xor 0xFFFFFFFF, reflected): crc32c("123456789") ==
-// 0xE3069283. Chain calls by passing the previous result as `crc`.
-std::uint32_t crc32c(const void* data, std::size_t bytes, std::uint32_t crc = 0);
+// CRC-32C is the runtime's (brdfz/runtime/crc32c.h): the runtime layout checks its files with it too.
+using runtime::crc32c;
 
 class Sha256 {
 public:

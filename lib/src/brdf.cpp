@@ -20,9 +20,42 @@ const char* simd_name() {
     }
 }
 
+namespace {
+
+// Whether prepare_direction leaves every direction as it is (the batch kernels then take the caller's
+// arrays directly).
+bool all_prepared(const Vec3* v, std::size_t n) {
+    bool ok = true;
+    for (std::size_t k = 0; k < n; ++k) ok &= std::fabs(dot(v[k], v[k]) - 1.0) <= 1e-14;  // false for NaN
+    return ok;
+}
+
+// Directions as the single-pair calls take them: prepared, an unusable one below the horizon, where
+// every call gives 0 or a failed draw.
+Vec3 prepared(Vec3 v) { return prepare_direction(v) ? v : Vec3{0.0, 0.0, -1.0}; }
+
+// Runs kernel(a, b, k0, m) over [0, n) on the prepared directions, chunk by chunk on the stack where
+// some need preparing.
+template <typename Kernel>
+void with_prepared(const Vec3* a, const Vec3* b, std::size_t n, Kernel&& kernel) {
+    if (all_prepared(a, n) && (!b || all_prepared(b, n))) return kernel(a, b, 0, n);
+    constexpr std::size_t kChunk = 256;
+    Vec3 pa[kChunk], pb[kChunk];
+    for (std::size_t start = 0; start < n; start += kChunk) {
+        const std::size_t m = std::min(kChunk, n - start);
+        for (std::size_t k = 0; k < m; ++k) pa[k] = prepared(a[start + k]);
+        if (b)
+            for (std::size_t k = 0; k < m; ++k) pb[k] = prepared(b[start + k]);
+        kernel(pa, b ? pb : nullptr, start, m);
+    }
+}
+
+}  // namespace
+
 Rgb Brdf::eval_cos(const Vec3& wi, const Vec3& wo) const {
     Rgb f = eval(wi, wo);
-    for (double& c : f) c *= wi.z > 0.0 ? wi.z : 0.0;
+    const Vec3 a = prepared(wi);
+    for (double& c : f) c *= a.z > 0.0 ? a.z : 0.0;
     return f;
 }
 
@@ -30,13 +63,16 @@ void Brdf::eval(std::span<const Vec3> wi, std::span<const Vec3> wo, std::span<Rg
     if (wi.size() != wo.size() || wi.size() != out.size())
         throw ValueError("eval: batch sizes differ (wi " + std::to_string(wi.size()) + ", wo " +
                          std::to_string(wo.size()) + ", out " + std::to_string(out.size()) + ")");
-    eval_batch(wi.data(), wo.data(), out.data(), wi.size());
+    with_prepared(wi.data(), wo.data(), wi.size(), [&](const Vec3* a, const Vec3* b, std::size_t k0, std::size_t m) {
+        eval_batch(a, b, out.data() + k0, m);
+    });
 }
 
 void Brdf::eval_cos(std::span<const Vec3> wi, std::span<const Vec3> wo, std::span<Rgb> out) const {
     eval(wi, wo, out);
     for (std::size_t k = 0; k < out.size(); ++k) {
-        const double c = wi[k].z > 0.0 ? wi[k].z : 0.0;
+        const Vec3 a = prepared(wi[k]);
+        const double c = a.z > 0.0 ? a.z : 0.0;
         for (double& v : out[k]) v *= c;
     }
 }
@@ -60,14 +96,16 @@ void set_weight(BrdfSample& s, const Rgb& f) {
 }  // namespace
 
 BrdfSample Brdf::sample(const Vec3& wo, double u1, double u2) const {
-    BrdfSample s = draw(wo, u1, u2);
-    if (needs_weight(s)) set_weight(s, eval_above(s.wi, wo));
+    const Vec3 v = prepared(wo);
+    BrdfSample s = draw(v, u1, u2);
+    if (needs_weight(s)) set_weight(s, eval_above(s.wi, v));
     return s;
 }
 
 double Brdf::pdf(const Vec3& wo, const Vec3& wi) const {
-    if (!(wo.z > 0.0 && wi.z > 0.0)) return 0.0;
-    return pdf_above(wo, wi);
+    Vec3 a = wo, b = wi;
+    if (!prepare_direction(a) || !prepare_direction(b) || !(a.z > 0.0 && b.z > 0.0)) return 0.0;
+    return pdf_above(a, b);
 }
 
 void Brdf::sample(std::span<const Vec3> wo, std::span<const std::array<double, 2>> u,
@@ -75,7 +113,9 @@ void Brdf::sample(std::span<const Vec3> wo, std::span<const std::array<double, 2
     if (wo.size() != u.size() || wo.size() != out.size())
         throw ValueError("sample: batch sizes differ (wo " + std::to_string(wo.size()) + ", u " +
                          std::to_string(u.size()) + ", out " + std::to_string(out.size()) + ")");
-    sample_batch(wo.data(), u.data(), out.data(), wo.size());
+    with_prepared(wo.data(), nullptr, wo.size(), [&](const Vec3* a, const Vec3*, std::size_t k0, std::size_t m) {
+        sample_batch(a, u.data() + k0, out.data() + k0, m);
+    });
 }
 
 void Brdf::sample_batch(const Vec3* wo, const std::array<double, 2>* u, BrdfSample* out, std::size_t n) const {
@@ -101,7 +141,9 @@ void Brdf::pdf(std::span<const Vec3> wo, std::span<const Vec3> wi, std::span<dou
     if (wo.size() != wi.size() || wo.size() != out.size())
         throw ValueError("pdf: batch sizes differ (wo " + std::to_string(wo.size()) + ", wi " +
                          std::to_string(wi.size()) + ", out " + std::to_string(out.size()) + ")");
-    pdf_batch(wo.data(), wi.data(), out.data(), wo.size());
+    with_prepared(wo.data(), wi.data(), wo.size(), [&](const Vec3* a, const Vec3* b, std::size_t k0, std::size_t m) {
+        pdf_batch(a, b, out.data() + k0, m);
+    });
 }
 
 void Brdf::pdf_batch(const Vec3* wo, const Vec3* wi, double* out, std::size_t n) const {

@@ -93,7 +93,7 @@ def test_info_shows_container_metadata(cli, demo_table, tmp_path):
         "sha256": hashlib.sha256(demo_table.read_bytes()).hexdigest(),
     }
     # Written by a version-5 writer; a float32 table needs only version-1 features.
-    assert c["version"] == 5 and c["min_reader_version"] == 1
+    assert c["version"] == 6 and c["min_reader_version"] == 1
     assert "tabular" in [f.split("@")[0] for f in c["features"]]
     assert c["units"] == "1/sr" and c["cosine"] == "excluded"
     assert c["datasets"][0]["path"] == "/representation/values"

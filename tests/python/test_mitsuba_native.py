@@ -68,6 +68,8 @@ SYNTHETIC_SPECS = [
     "svd:rank=3,res=16x16x32",
     "svd:rank=2,space=cbrt,layout=hd_p,colour=shared,res=16x16x32,dtype=f16",
     "nmf:rank=2,space=linear,res=12x12x24",
+    "tabular:res=16x16x32,sampler=fine",
+    "svd:rank=3,res=16x16x32,sampler=fine",
 ]
 RGL_SPECS = [
     "tabular:res=16x16x32",
@@ -241,7 +243,11 @@ def test_parts_are_read_only_views_of_the_representation(glossy):
     with pytest.raises(ValueError):
         parts["values"][0] = 1.0
     sampler = t.sampler_parts()
-    assert sampler["kind"] == "halfvector" and len(sampler["density"]) == len(sampler["theta_o"]) * 64 * 64
+    K, R, C = sampler["slices"], sampler["rows"], sampler["cols"]
+    assert sampler["kind"] == "compact" and len(sampler["col_cdf"]) == K * R * C and len(sampler["row_cdf"]) == K * R
+    assert len(sampler["s_edges"]) == R + 1 and len(sampler["edge_weight"]) == K * (R + 1)
+    fine = brdfz.compress(glossy, "tabular:res=8x8x16,sampler=fine").sampler_parts()
+    assert fine["kind"] == "halfvector" and len(fine["density"]) == len(fine["theta_o"]) * 64 * 64
     f = brdfz.compress(glossy, "svd:rank=2,colour=shared,res=8x8x16").parts()
     assert f["u"].shape == (8, 2) and f["v"].shape == (8 * 16, 2) and f["colour_weights"].shape == (3, 2)
     a = glossy.parts()

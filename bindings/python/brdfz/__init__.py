@@ -55,7 +55,8 @@ from ._core import (
 __all__ = [
     "Brdf", "Candidate", "ChannelMetrics", "Compressed", "FitReport", "FitResult", "FormatError", "Metrics",
     "Scene", "Selection", "Trial", "UnsupportedError", "ValidationCheck", "ValidationReport", "albedo",
-    "benchmark_specs", "compress", "compress_kinds", "convert", "default_candidates", "fit", "format_of", "formats",
+    "benchmark_specs", "compress", "compress_kinds", "convert", "default_candidates", "export", "fit", "format_of",
+    "formats",
     "load", "metric_samples", "metrics", "metrics_at", "read_scene", "reciprocity_error", "representations", "save",
     "simd", "tabulate", "trial", "validate",
 ]
@@ -109,6 +110,18 @@ def convert(src: Path, dst: Path, *, res: Optional[Resolution] = None, src_forma
     """As ``brdfz convert SRC DST``: load, tabulate where the output format needs it, write atomically."""
     return _core.convert(src, dst, res=res, src_format=src_format, dst_format=dst_format, lookup=lookup,
                          bin_position=bin_position, threads=threads, progress=_hook(progress, "tabulating"))
+
+
+def export(source: Union[Brdf, Path], path: Path, *, repr: Optional[str] = None, threads: int = 0,
+           progress: Progress = None) -> dict:
+    """As ``brdfz export``: the runtime layout (.brdfzrt, formats/SPEC.md §6) of `source` (a Brdf or a
+    file), or of its `repr` representation (a compress() spec), written atomically: the arrays and the
+    compact sampler brdfz::runtime and GPUs read. Returns the path, its bytes and what it holds."""
+    brdf = source if isinstance(source, Brdf) else load(source)
+    if repr:
+        brdf = compress(brdf, repr, threads=threads, progress=progress).brdf
+    save(brdf, path, format="brdfzrt")
+    return {"path": os.fspath(path), "bytes": os.path.getsize(path), "describe": brdf.describe()}
 
 
 def read_scene(source: Union[Path, Mapping, Scene]) -> Scene:

@@ -1,8 +1,10 @@
 // brdfz::Brdf — the one interface every measured or compressed BRDF implements.
 //
 // Conventions (every representation, reader, writer, metric and sampler follows these):
-//  - Local frame: the surface normal is +z. Both `wi` and `wo` point AWAY from the surface and are
-//    unit vectors. `wi` is the incident (light) direction, `wo` the outgoing (view) direction.
+//  - Local frame: the surface normal is +z. Both `wi` and `wo` point AWAY from the surface. `wi` is the
+//    incident (light) direction, `wo` the outgoing (view) direction. Every call takes them as
+//    prepare_direction (runtime/vec.h) makes them: unit vectors as they are, others normalised; a NaN,
+//    infinite or zero direction gives 0 (eval, pdf) or a failed draw.
 //  - `eval(wi, wo)` returns f_r in 1/sr, with NO cosine. `eval_cos(wi, wo)` returns f_r · cosθi.
 //    (pbrt's BxDF::f returns f; Mitsuba, powitacq and Falcor return f·cos: adapters say which.)
 //  - Below the horizon (wi.z <= 0 or wo.z <= 0) eval returns 0; never NaN, for any input.
@@ -52,8 +54,9 @@ public:
 
     // f_r for one direction pair.
     Rgb eval(const Vec3& wi, const Vec3& wo) const {
-        if (!(wi.z > 0.0 && wo.z > 0.0)) return {0.0, 0.0, 0.0};
-        return eval_above(wi, wo);
+        Vec3 a = wi, b = wo;
+        if (!prepare_direction(a) || !prepare_direction(b) || !(a.z > 0.0 && b.z > 0.0)) return {0.0, 0.0, 0.0};
+        return eval_above(a, b);
     }
     // f_r · cosθi for one direction pair.
     Rgb eval_cos(const Vec3& wi, const Vec3& wo) const;

@@ -5,6 +5,7 @@
 #include <numbers>
 
 #include "brdfz/errors.h"
+#include "brdfz/runtime/kernels/phi_h.h"
 
 namespace brdfz {
 namespace {
@@ -68,35 +69,14 @@ std::string PhiHBrdf::describe() const {
 }
 
 Rgb PhiHBrdf::eval_above(const Vec3& wi_, const Vec3& wo_) const {
+    const runtime::kernels::PhiHPick pick =
+        runtime::kernels::phi_h_pick(symmetry_ == PhiHSymmetry::Bilateral, slices_.size(), wi_, wo_);
+    if (!pick.ok) return {0.0, 0.0, 0.0};
     Vec3 wi = wi_, wo = wo_;
-    const Vec3 h{wi.x + wo.x, wi.y + wo.y, wi.z + wo.z};
-    double phi = std::atan2(h.y, h.x);  // (−π, π]; 0 at the normal, where every slice agrees
-    if (!std::isfinite(phi)) return {0.0, 0.0, 0.0};
-    const int n = static_cast<int>(slices_.size());
-    std::size_t k0, k1;
-    double t;
-    if (symmetry_ == PhiHSymmetry::Bilateral) {
-        if (phi < 0.0) {
-            wi.y = -wi.y;
-            wo.y = -wo.y;
-            phi = -phi;
-        }
-        const double u = std::fmin(std::fmax(phi / kPi * n - 0.5, 0.0), n - 1.0);
-        k0 = std::min(static_cast<std::size_t>(u), static_cast<std::size_t>(n - 2));
-        k1 = k0 + 1;
-        t = u - static_cast<double>(k0);
-    } else {
-        if (phi < 0.0) phi += 2.0 * kPi;
-        double u = phi / (2.0 * kPi) * n - 0.5;  // in [−0.5, n − 0.5]
-        if (u < 0.0) u += n;
-        const auto i = std::min(static_cast<std::size_t>(u), static_cast<std::size_t>(n - 1));
-        k0 = i;
-        k1 = (i + 1) % static_cast<std::size_t>(n);
-        t = std::fmin(std::fmax(u - static_cast<double>(i), 0.0), 1.0);
-    }
-    const Rgb a = slices_[k0]->eval(wi, wo), b = slices_[k1]->eval(wi, wo);
+    if (pick.mirrored) wi.y = -wi.y, wo.y = -wo.y;
+    const Rgb a = slices_[pick.k0]->eval(wi, wo), b = slices_[pick.k1]->eval(wi, wo);
     Rgb f;
-    for (int c = 0; c < 3; ++c) f[c] = a[c] * (1.0 - t) + b[c] * t;
+    for (int c = 0; c < 3; ++c) f[c] = a[c] * (1.0 - pick.t) + b[c] * pick.t;
     return f;
 }
 

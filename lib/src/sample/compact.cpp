@@ -98,27 +98,14 @@ void check_tables(const CompactSampler::Tables& t) {
     const auto fail = [](const std::string& why) { throw ValueError("compact sampler: " + why); };
     if (t.slices < 2 || t.slices > 1024 || t.rows < 1 || t.rows > 4096 || t.cols < 1 || t.cols > 4096)
         fail("slices, rows or cols out of range (2-1024, 1-4096, 1-4096)");
-    if (!(t.cos_theta_max >= 0.0 && t.cos_theta_max < 1.0)) fail("cos_theta_max must be in [0, 1)");
-    if (!(t.cosine_share > 0.0 && t.cosine_share < 1.0)) fail("cosine_share must be in (0, 1)");
     const std::size_t rows = static_cast<std::size_t>(t.slices) * t.rows;
     if (t.s_edges.size() != static_cast<std::size_t>(t.rows) + 1 || t.row_cdf.size() != rows ||
-        t.col_cdf.size() != rows * t.cols)
+        t.col_cdf.size() != rows * t.cols || t.edge_weight.size() != static_cast<std::size_t>(t.slices) * (t.rows + 1))
         fail("table sizes do not match slices, rows and cols");
-    if (t.s_edges.front() != 0.0f || t.s_edges.back() != 0.5f) fail("row edges must run from 0 to 0.5");
-    for (int r = 0; r < t.rows; ++r)
-        if (!(t.s_edges[r] < t.s_edges[r + 1])) fail("row edges must increase");
-    if (t.edge_weight.size() != static_cast<std::size_t>(t.slices) * (t.rows + 1))
-        fail("edge weights do not match slices and rows");
-    for (std::uint16_t h : t.edge_weight)
-        if (!(rk::half_to_float(h) >= 0.0f) || !std::isfinite(rk::half_to_float(h)) || (h & 0x8000u))
-            fail("an edge weight is negative or not finite");
-    const auto check_cdf = [&](const auto* ends, int n, double full) {
-        for (int i = 1; i < n; ++i)
-            if (ends[i] < ends[i - 1]) fail("a CDF decreases");
-        if (ends[n - 1] != full) fail("a CDF does not end at full scale");
-    };
-    for (int k = 0; k < t.slices; ++k) check_cdf(&t.row_cdf[static_cast<std::size_t>(k) * t.rows], t.rows, rk::kRowUnits);
-    for (std::size_t row = 0; row < rows; ++row) check_cdf(&t.col_cdf[row * t.cols], t.cols, rk::kColUnits);
+    const rk::CompactSamplerView v{t.slices,         t.rows,           t.cols,           t.cos_theta_max,
+                                   t.cosine_share,   t.s_edges.data(), t.row_cdf.data(), t.col_cdf.data(),
+                                   t.edge_weight.data()};
+    if (const char* why = rk::check_compact_sampler(v)) fail(why);
 }
 
 }  // namespace

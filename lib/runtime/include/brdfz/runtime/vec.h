@@ -59,4 +59,15 @@ inline Vec3 half_vector(const Vec3& wi, const Vec3& wo) {
 // wi in the half frame of (wi, wo): the difference vector, whose polar angles are (θd, φd).
 inline Vec3 difference_vector(const Vec3& wi, const HalfFrame& f) { return {dot(wi, f.t), dot(wi, f.b), dot(wi, f.h)}; }
 
+// The direction a single-pair call uses for v (the library's Brdf and brdfz::runtime alike): v itself,
+// or v normalised where its squared length is off 1 by more than 1e-14 (unit vectors computed in
+// double are within 1e-15, so they pass unchanged; floats and hand-typed vectors are normalised);
+// false for a NaN, infinite or zero v, whose call then gives 0.
+inline bool prepare_direction(Vec3& v) {
+    const double n2 = dot(v, v);
+    if (!(n2 > 0.0 && n2 < 1e300)) return false;
+    if (std::fabs(n2 - 1.0) > 1e-14) v = (1.0 / std::sqrt(n2)) * v;
+    return true;
+}
+
 }  // namespace brdfz

@@ -201,4 +201,35 @@ inline CompactDraw compact_sample(const CompactSamplerView& v, const Vec3& wo, d
     return {wi, compact_pdf(v, wo, wi)};
 }
 
+// Why tables cannot make a sampler, or nullptr when they can: parameters in range, edges increasing
+// from 0 to ½, CDFs non-decreasing to full scale, edge weights finite and not negative. The arrays
+// must hold the sizes the shape gives (callers check that first).
+inline const char* check_compact_sampler(const CompactSamplerView& v) {
+    if (v.slices < 2 || v.slices > 1024 || v.rows < 1 || v.rows > 4096 || v.cols < 1 || v.cols > 4096)
+        return "slices, rows or cols out of range (2-1024, 1-4096, 1-4096)";
+    if (!(v.cos_theta_max >= 0.0 && v.cos_theta_max < 1.0)) return "cos_theta_max must be in [0, 1)";
+    if (!(v.cosine_share > 0.0 && v.cosine_share < 1.0)) return "cosine_share must be in (0, 1)";
+    if (v.s_edges[0] != 0.0f || v.s_edges[v.rows] != 0.5f) return "row edges must run from 0 to 0.5";
+    for (int r = 0; r < v.rows; ++r)
+        if (!(v.s_edges[r] < v.s_edges[r + 1])) return "row edges must increase";
+    const std::size_t rows = static_cast<std::size_t>(v.slices) * v.rows;
+    for (std::size_t row = 0; row < rows; ++row) {
+        const std::uint16_t* c = v.col_cdf + row * v.cols;
+        for (int i = 1; i < v.cols; ++i)
+            if (c[i] < c[i - 1]) return "a CDF decreases";
+        if (c[v.cols - 1] != kColUnits) return "a CDF does not end at full scale";
+    }
+    for (int k = 0; k < v.slices; ++k) {
+        const std::uint32_t* c = v.row_cdf + static_cast<std::size_t>(k) * v.rows;
+        for (int i = 1; i < v.rows; ++i)
+            if (c[i] < c[i - 1]) return "a CDF decreases";
+        if (c[v.rows - 1] != kRowUnits) return "a CDF does not end at full scale";
+    }
+    for (std::size_t i = 0; i < static_cast<std::size_t>(v.slices) * (v.rows + 1); ++i) {
+        const std::uint16_t h = v.edge_weight[i];
+        if ((h & 0x8000u) || (h & 0x7c00u) == 0x7c00u) return "an edge weight is negative or not finite";
+    }
+    return nullptr;
+}
+
 }  // namespace brdfz::runtime::kernels

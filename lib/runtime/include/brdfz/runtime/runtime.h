@@ -1,0 +1,92 @@
+// brdfz::runtime: evaluate, sample and give pdfs of a material exported in the runtime layout (`brdfz
+// export IN -o OUT.brdfzrt`, formats/SPEC.md §6), with nothing but the C++17 standard library.
+//
+//   #include <brdfz/runtime/runtime.h>
+//   std::string error;
+//   const brdfz::runtime::Material m = brdfz::runtime::Material::open("paint.brdfzrt", &error);
+//   if (!m) { /* error says why, in one line */ }
+//   brdfz::runtime::Rgb32 f = m.eval(wi, wo);                   // f_r in 1/sr, no cosine
+//   brdfz::runtime::Sample32 s = m.sample(wo, u1, u2);          // wi, pdf, weight = f·cosθi/pdf
+//   float p = m.pdf(wo, s.wi);                                  // equals s.pdf
+//
+// Conventions are the library's (brdfz/brdf.h): local frame with the normal +z, wi and wo pointing away
+// from the surface; below the horizon eval and pdf are 0 and a draw fails (pdf 0, weight 0). Directions
+// need not be unit: one whose squared length is off 1 by more than 1e-14 is normalised; a NaN,
+// infinite or zero one gives 0 and pdf 0. u outside [0, 1) gives a failed draw.
+//
+// The float32 calls take and return floats; the arithmetic is the library's, in double, so results
+// are the library's to float rounding. No call allocates, throws or locks; a Material is immutable and
+// may be shared by any number of threads. Copies share the data.
+#pragma once
+
+#include <array>
+#include <cstddef>
+#include <cstdint>
+#include <memory>
+#include <string>
+
+#include "brdfz/runtime/vec.h"
+
+namespace brdfz::runtime {
+
+struct Float3 {
+    float x = 0, y = 0, z = 0;
+};
+struct Rgb32 {
+    float r = 0, g = 0, b = 0;
+};
+struct Sample32 {
+    Float3 wi;
+    float pdf = 0;  // per unit solid angle of wi; 0: a failed draw
+    Rgb32 weight;   // f(wi, wo)·cosθi / pdf
+};
+using Rgb64 = std::array<double, 3>;
+struct Sample64 {
+    Vec3 wi;
+    double pdf = 0;
+    Rgb64 weight{};
+};
+
+using brdfz::prepare_direction;  // vec.h: the rule every call applies to its directions
+
+namespace detail {
+struct Data;
+}
+
+class Material {
+public:
+    Material() = default;  // empty: every call gives 0
+
+    // The material in a .brdfzrt file, mapped read-only; empty with *error set (one line) when the
+    // file cannot be read or is not a valid runtime layout (every size and table is checked first).
+    static Material open(const std::string& path, std::string* error = nullptr);
+    // The same from bytes in memory: copied, or borrowed when `copy` is false (they must then outlive
+    // every copy of the Material and stay unchanged).
+    static Material from_memory(const void* data, std::size_t size, bool copy = true, std::string* error = nullptr);
+
+    explicit operator bool() const { return d_ != nullptr; }
+    // What the material is ("svd ... dtype f16"), as the library described it when it was exported.
+    std::string describe() const;
+    // Bytes of the layout (the file), and of the sampler's tables among them.
+    std::size_t nbytes() const;
+    std::size_t sampler_nbytes() const;
+
+    Rgb32 eval(const Float3& wi, const Float3& wo) const noexcept;
+    float pdf(const Float3& wo, const Float3& wi) const noexcept;
+    Sample32 sample(const Float3& wo, float u1, float u2) const noexcept;
+
+    Rgb64 eval(const Vec3& wi, const Vec3& wo) const noexcept;
+    double pdf(const Vec3& wo, const Vec3& wi) const noexcept;
+    Sample64 sample(const Vec3& wo, double u1, double u2) const noexcept;
+
+    // Batches: out[k] for pair or draw k; u holds n (u1, u2) pairs.
+    void eval(const Float3* wi, const Float3* wo, Rgb32* out, std::size_t n) const noexcept;
+    void pdf(const Float3* wo, const Float3* wi, float* out, std::size_t n) const noexcept;
+    void sample(const Float3* wo, const float* u, Sample32* out, std::size_t n) const noexcept;
+
+private:
+    explicit Material(std::shared_ptr<const detail::Data> d) : d_(std::move(d)) {}
+    std::shared_ptr<const detail::Data> d_;
+};
+
+}  // namespace brdfz::runtime

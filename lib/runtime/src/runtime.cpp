@@ -1,0 +1,502 @@
+#include "brdfz/runtime/runtime.h"
+
+#include <algorithm>
+#include <cerrno>
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+#include <limits>
+#include <map>
+#include <utility>
+#include <vector>
+
+#if defined(__unix__) || defined(__APPLE__)
+#include <fcntl.h>
+#include <sys/mman.h>
+#include <sys/stat.h>
+#include <unistd.h>
+#define BRDFZ_RUNTIME_MMAP 1
+#endif
+
+#include "brdfz/runtime/crc32c.h"
+#include "brdfz/runtime/kernels/compact_sampler.h"
+#include "brdfz/runtime/kernels/factored.h"
+#include "brdfz/runtime/kernels/grid.h"
+#include "brdfz/runtime/kernels/phi_h.h"
+#include "brdfz/runtime/kernels/values.h"
+#include "brdfz/runtime/layout.h"
+
+namespace brdfz::runtime {
+namespace detail {
+
+namespace k = kernels;
+namespace L = layout;
+
+// One material object: the root, or a φh stack's slice.
+struct Object {
+    L::Kind kind = L::Kind::Table;
+    // Tables and factorisations.
+    k::Grid grid;
+    bool nearest = false;
+    // Tables: one of the three value kinds.
+    const float* f32 = nullptr;
+    const std::uint8_t* codes = nullptr;  // f16 (2 bytes a channel) or u8
+    bool half = false;
+    std::array<float, 3> half_scale{};
+    const float* lut = nullptr;
+    // Factorisations: float copies of float16 factors are kept in `widened`.
+    k::FactorView factors;
+    std::vector<float> widened;
+    // φh stacks: slices [first, first + count) of Data::slices.
+    bool bilateral = false;
+    std::size_t first = 0, count = 0;
+};
+
+struct Data {
+    std::vector<unsigned char> owned;
+    const unsigned char* bytes = nullptr;
+    std::size_t size = 0;
+    void* mapped = nullptr;
+    std::string describe;
+    Object root;
+    std::vector<Object> slices;
+    bool has_sampler = false;
+    k::CompactSamplerView sampler;
+    std::size_t sampler_bytes = 0;
+
+    Data() = default;
+    Data(const Data&) = delete;
+    Data& operator=(const Data&) = delete;
+    ~Data() {
+#ifdef BRDFZ_RUNTIME_MMAP
+        if (mapped) munmap(mapped, size);
+#endif
+    }
+};
+
+namespace {
+
+template <typename T>
+T read_le(const unsigned char* p) {
+    T v;
+    std::memcpy(&v, p, sizeof v);  // the layout is little-endian, as every platform brdfz builds on
+    return v;
+}
+
+struct Section {
+    L::DType dtype;
+    std::uint64_t offset, count;
+};
+
+struct Failure {
+    std::string what;
+};
+[[noreturn]] void fail(const std::string& what) { throw Failure{what}; }
+
+// The sections of one object, by tag, with typed access that checks dtype and count.
+class Sections {
+public:
+    Sections(const Data& d, std::map<std::uint32_t, Section> s, std::uint32_t object)
+        : d_(d), s_(std::move(s)), object_(object) {}
+
+    bool has(std::uint32_t tag) const { return s_.count(tag) != 0; }
+    template <typename T>
+    const T* get(std::uint32_t tag, L::DType dtype, std::uint64_t count) const {
+        const auto it = s_.find(tag);
+        if (it == s_.end()) fail(where(tag) + " is missing");
+        if (it->second.dtype != dtype) fail(where(tag) + " has the wrong element type");
+        if (it->second.count != count)
+            fail(where(tag) + " holds " + std::to_string(it->second.count) + " elements, expected " + std::to_string(count));
+        return reinterpret_cast<const T*>(d_.bytes + it->second.offset);
+    }
+    const Section* find(std::uint32_t tag) const {
+        const auto it = s_.find(tag);
+        return it == s_.end() ? nullptr : &it->second;
+    }
+    std::string where(std::uint32_t tag) const {
+        char name[5] = {static_cast<char>(tag & 0xFF), static_cast<char>(tag >> 8 & 0xFF),
+                        static_cast<char>(tag >> 16 & 0xFF), static_cast<char>(tag >> 24 & 0xFF), 0};
+        for (char& c : name)
+            if (c && (c < 32 || c > 126)) c = '?';
+        return "section " + std::string(name) + (object_ ? " of slice " + std::to_string(object_ - 1) : "");
+    }
+
+private:
+    const Data& d_;
+    std::map<std::uint32_t, Section> s_;
+    std::uint32_t object_;
+};
+
+std::int32_t one_int(const Sections& s, std::uint32_t tag) { return *s.get<std::int32_t>(tag, L::DType::I32, 1); }
+
+void read_grid(const Sections& s, Object& o) {
+    const std::int32_t* g = s.get<std::int32_t>(L::kGrid, L::DType::I32, 6);
+    for (int i = 0; i < 3; ++i)
+        if (g[i] < 1 || g[i] > 4096) fail(s.where(L::kGrid) + ": a grid axis is outside 1..4096");
+    if (static_cast<std::uint64_t>(g[0]) * g[1] * g[2] > (std::uint64_t{1} << 26)) fail(s.where(L::kGrid) + ": more than 2^26 bins");
+    if (g[3] != 0 && g[3] != 1) fail(s.where(L::kGrid) + ": bin position is neither 0 nor 1");
+    if (g[4] < 0 || g[4] > 2) fail(s.where(L::kGrid) + ": unknown φd axis");
+    if (g[5] != L::kLookupLinear && g[5] != L::kLookupNearest) fail(s.where(L::kGrid) + ": unknown lookup");
+    o.grid.n_theta_h = g[0], o.grid.n_theta_d = g[1], o.grid.n_phi_d = g[2];
+    o.grid.centre = g[3] == 1;
+    o.grid.phi_d_axis = static_cast<k::Grid::Axis>(g[4]);
+    o.nearest = g[5] == L::kLookupNearest;
+    const double w = *s.get<double>(L::kWarp, L::DType::F64, 1);
+    if (!(w >= 0.0 && w <= 0.95)) fail(s.where(L::kWarp) + ": θd warp outside [0, 0.95]");
+    o.grid.theta_d_warp = w;
+}
+
+void read_table(const Sections& s, Object& o) {
+    read_grid(s, o);
+    const std::uint64_t n = 3 * static_cast<std::uint64_t>(o.grid.bins());
+    std::size_t valid = 0;
+    if (s.has(L::kValuesF32)) {
+        o.f32 = s.get<float>(L::kValuesF32, L::DType::F32, n);
+        for (std::uint64_t i = 0; i < n; ++i) {
+            const float v = o.f32[i];
+            if (v != v) continue;
+            if (!(v >= 0.0f && v <= std::numeric_limits<float>::max())) fail(s.where(L::kValuesF32) + ": a value is negative or infinite");
+            ++valid;
+        }
+    } else if (s.has(L::kValuesF16)) {
+        o.half = true;
+        o.codes = s.get<std::uint8_t>(L::kValuesF16, L::DType::F16, n);
+        const float* scale = s.get<float>(L::kHalfScale, L::DType::F32, 3);
+        for (int c = 0; c < 3; ++c) {
+            if (!(scale[c] > 0.0f && std::isfinite(scale[c]))) fail(s.where(L::kHalfScale) + ": a scale is not a finite value > 0");
+            o.half_scale[c] = scale[c];
+        }
+        for (std::uint64_t i = 0; i < n; ++i) {
+            const std::uint16_t h = read_le<std::uint16_t>(o.codes + 2 * i);
+            if (h == k::HalfValues::kInvalid) continue;
+            if ((h & 0x8000u) || (h & 0x7c00u) == 0x7c00u) fail(s.where(L::kValuesF16) + ": a code is negative, infinite or NaN");
+            ++valid;
+        }
+    } else {
+        o.codes = s.get<std::uint8_t>(L::kValuesU8, L::DType::U8, n);
+        o.lut = s.get<float>(L::kLut, L::DType::F32, 3 * 256);
+        for (int c = 0; c < 3; ++c)
+            for (int q = 0; q < 255; ++q)
+                if (!(o.lut[256 * c + q] >= 0.0f && o.lut[256 * c + q] <= std::numeric_limits<float>::max()))
+                    fail(s.where(L::kLut) + ": a decoded value is negative, infinite or NaN");
+        for (std::uint64_t i = 0; i < n; ++i) valid += o.codes[i] != 255 ? 1 : 0;
+    }
+    if (valid == 0) fail("the table holds no value");
+}
+
+void read_factored(const Sections& s, Object& o) {
+    read_grid(s, o);
+    const std::int32_t* p = s.get<std::int32_t>(L::kFactorParams, L::DType::I32, 4);
+    k::FactorView& f = o.factors;
+    f.grid = o.grid;
+    if (p[0] != L::kLayoutHxDP && p[0] != L::kLayoutHDxP) fail(s.where(L::kFactorParams) + ": unknown layout");
+    if (p[1] < L::kSpaceLinear || p[1] > L::kSpaceCbrt) fail(s.where(L::kFactorParams) + ": unknown space");
+    if (p[2] != L::kColourSeparate && p[2] != L::kColourShared) fail(s.where(L::kFactorParams) + ": unknown colour");
+    f.layout = p[0], f.space = p[1], f.shared = p[2] == L::kColourShared;
+    const std::uint64_t rows = f.layout == L::kLayoutHxDP ? o.grid.n_theta_h : std::uint64_t(o.grid.n_theta_h) * o.grid.n_theta_d;
+    const std::uint64_t cols = f.layout == L::kLayoutHxDP ? std::uint64_t(o.grid.n_theta_d) * o.grid.n_phi_d : o.grid.n_phi_d;
+    if (p[3] < 1 || static_cast<std::uint64_t>(p[3]) > std::min(rows, cols)) fail(s.where(L::kFactorParams) + ": rank out of range");
+    f.rank = p[3];
+    const std::uint64_t m = static_cast<std::uint64_t>(f.m());
+    // Float16 factors are widened to float once: evaluation reads floats, as the library's does.
+    const auto factor = [&](std::uint32_t tag, std::uint64_t n, std::size_t at) -> const float* {
+        const Section* x = s.find(tag);
+        if (x && x->dtype == L::DType::F16) {
+            const std::uint8_t* h = s.get<std::uint8_t>(tag, L::DType::F16, n);
+            for (std::uint64_t i = 0; i < n; ++i) o.widened[at + i] = k::half_to_float(read_le<std::uint16_t>(h + 2 * i));
+            return nullptr;
+        }
+        return s.get<float>(tag, L::DType::F32, n);
+    };
+    const Section* us = s.find(L::kFactorU);
+    const Section* vs = s.find(L::kFactorV);
+    o.widened.assign((us && us->dtype == L::DType::F16 ? rows * m : 0) + (vs && vs->dtype == L::DType::F16 ? cols * m : 0), 0.0f);
+    std::size_t used = 0;
+    f.u = factor(L::kFactorU, rows * m, 0);
+    if (!f.u) f.u = o.widened.data(), used = rows * m;
+    f.v = factor(L::kFactorV, cols * m, used);
+    if (!f.v) f.v = o.widened.data() + used;
+    if (f.shared) f.colour = s.get<float>(L::kFactorColour, L::DType::F32, 3 * static_cast<std::uint64_t>(f.rank));
+    const float* top = s.get<float>(L::kFactorMax, L::DType::F32, 3);
+    // Every reconstruction is bounded by the components' largest magnitudes: within a quarter of the
+    // float range, as the library requires, no partial sum overflows.
+    std::vector<double> top_u(m, 0.0), top_v(m, 0.0);
+    for (std::uint64_t i = 0; i < rows * m; ++i) {
+        if (!std::isfinite(f.u[i])) fail("a factor entry is not finite");
+        top_u[i % m] = std::max(top_u[i % m], std::fabs(double{f.u[i]}));
+    }
+    for (std::uint64_t i = 0; i < cols * m; ++i) {
+        if (!std::isfinite(f.v[i])) fail("a factor entry is not finite");
+        top_v[i % m] = std::max(top_v[i % m], std::fabs(double{f.v[i]}));
+    }
+    for (int c = 0; c < 3; ++c) {
+        double bound = 0.0;
+        for (int j = 0; j < f.rank; ++j) {
+            const double w = f.shared ? f.colour[c * f.rank + j] : 1.0;
+            if (!std::isfinite(w)) fail("a colour weight is not finite");
+            const std::size_t at = f.shared ? j : static_cast<std::size_t>(c) * f.rank + j;
+            bound += std::fabs(w) * top_u[at] * top_v[at];
+        }
+        if (!(bound <= 0.25 * std::numeric_limits<float>::max())) fail("the factors reconstruct values beyond the float range");
+        if (!(top[c] >= 0.0f)) fail(s.where(L::kFactorMax) + ": a ceiling is NaN or negative");
+        const double t = std::min(top[c], std::numeric_limits<float>::max());
+        f.ceiling[c] = static_cast<float>(f.space == L::kSpaceLog ? std::log1p(t) : f.space == L::kSpaceCbrt ? std::cbrt(t) : t);
+    }
+}
+
+// The compact sampler's sections, checked as the library checks its tables.
+void read_sampler(const Sections& s, Data& d) {
+    const std::int32_t* shape = s.get<std::int32_t>(L::kSamplerShape, L::DType::I32, 3);
+    if (shape[0] < 2 || shape[0] > 1024 || shape[1] < 1 || shape[1] > 4096 || shape[2] < 1 || shape[2] > 4096)
+        fail(s.where(L::kSamplerShape) + ": slices, rows or cols out of range");
+    const std::uint64_t K = shape[0], R = shape[1], C = shape[2];
+    const double* params = s.get<double>(L::kSamplerParams, L::DType::F64, 2);
+    k::CompactSamplerView v;
+    v.slices = shape[0], v.rows = shape[1], v.cols = shape[2];
+    v.cos_theta_max = params[0], v.cosine_share = params[1];
+    v.s_edges = s.get<float>(L::kSamplerEdges, L::DType::F32, R + 1);
+    v.row_cdf = s.get<std::uint32_t>(L::kSamplerRows, L::DType::U32, K * R);
+    v.col_cdf = s.get<std::uint16_t>(L::kSamplerCols, L::DType::U16, K * R * C);
+    v.edge_weight = s.get<std::uint16_t>(L::kSamplerWeights, L::DType::F16, K * (R + 1));
+    if (const char* why = k::check_compact_sampler(v)) fail("the sampler's tables: " + std::string(why));
+    d.sampler = v;
+    d.has_sampler = true;
+    d.sampler_bytes = (R + 1) * 4 + K * R * 4 + K * R * C * 2 + K * (R + 1) * 2 + 12 + 16;
+}
+
+void parse(Data& d) {
+    const unsigned char* b = d.bytes;
+    if (d.size < L::kHeaderBytes || std::memcmp(b, L::kMagic, 8) != 0) fail("not a brdfz runtime layout");
+    const std::uint32_t version = read_le<std::uint32_t>(b + 8);
+    if (version != L::kVersion)
+        fail("layout version " + std::to_string(version) + ", this runtime reads version " + std::to_string(L::kVersion));
+    if (read_le<std::uint32_t>(b + 12) != L::kHeaderBytes) fail("unexpected header size");
+    if (read_le<std::uint64_t>(b + 16) != d.size)
+        fail("the header says " + std::to_string(read_le<std::uint64_t>(b + 16)) + " bytes, the data has " + std::to_string(d.size));
+    const std::uint32_t n = read_le<std::uint32_t>(b + 24);
+    if (n > L::kMaxSections || L::kHeaderBytes + std::uint64_t(n) * L::kSectionBytes > d.size) fail("the section table does not fit");
+    if (crc32c(b + L::kHeaderBytes, d.size - L::kHeaderBytes) != read_le<std::uint32_t>(b + 28)) fail("checksum mismatch (damaged data)");
+    const std::uint32_t objects = read_le<std::uint32_t>(b + 36);
+    if (objects < 1 || objects > L::kMaxObjects) fail("object count out of range");
+    std::vector<std::map<std::uint32_t, Section>> by_object(objects);
+    const std::uint64_t data_start = L::kHeaderBytes + std::uint64_t(n) * L::kSectionBytes;
+    for (std::uint32_t i = 0; i < n; ++i) {
+        const unsigned char* e = b + L::kHeaderBytes + std::size_t(i) * L::kSectionBytes;
+        const std::uint32_t tag = read_le<std::uint32_t>(e), dtype = read_le<std::uint32_t>(e + 4);
+        const std::uint64_t offset = read_le<std::uint64_t>(e + 8), count = read_le<std::uint64_t>(e + 16);
+        const std::uint32_t object = read_le<std::uint32_t>(e + 24);
+        const std::uint32_t size = dtype >= 1 && dtype <= 7 ? L::dtype_bytes(static_cast<L::DType>(dtype)) : 0;
+        if (!size) fail("section " + std::to_string(i) + " has an unknown element type");
+        if (object >= objects) fail("section " + std::to_string(i) + " belongs to no object");
+        if (offset % L::kAlign || offset < data_start || offset > d.size || count > (d.size - offset) / size)
+            fail("section " + std::to_string(i) + " lies outside the data");
+        if (!by_object[object].emplace(tag, Section{static_cast<L::DType>(dtype), offset, count}).second)
+            fail("section " + std::to_string(i) + " repeats a tag");
+    }
+    const Sections root(d, by_object[0], 0);
+    if (const Section* desc = root.find(L::kDesc); desc && desc->dtype == L::DType::U8)
+        d.describe.assign(reinterpret_cast<const char*>(b + desc->offset), desc->count);
+    const auto kind_of = [&](const Sections& s) {
+        const std::int32_t kind = one_int(s, L::kKind);
+        if (kind < 1 || kind > 4) fail("unknown kind " + std::to_string(kind));
+        return static_cast<L::Kind>(kind);
+    };
+    d.root.kind = kind_of(root);
+    if (static_cast<std::uint32_t>(d.root.kind) != read_le<std::uint32_t>(b + 32)) fail("the header's kind is not the root's");
+    const auto read_object = [&](const Sections& s, Object& o) {
+        switch (o.kind) {
+            case L::Kind::Table: return read_table(s, o);
+            case L::Kind::Factored: return read_factored(s, o);
+            case L::Kind::Analytic: fail("analytic models are not read by this runtime yet");
+            case L::Kind::PhiH: fail("a φh slice cannot be a stack");
+        }
+    };
+    if (d.root.kind == L::Kind::PhiH) {
+        const std::int32_t* p = root.get<std::int32_t>(L::kPhiH, L::DType::I32, 2);
+        if (p[0] < 0 || p[0] > 2) fail("unknown φh symmetry");
+        if (p[1] < 2 || p[1] > 4096 || static_cast<std::uint32_t>(p[1]) + 1 != objects) fail("φh slice count disagrees with the objects");
+        d.root.bilateral = p[0] == 2;
+        d.root.first = 0, d.root.count = static_cast<std::size_t>(p[1]);
+        d.slices.resize(d.root.count);
+        for (std::size_t i = 0; i < d.root.count; ++i) {
+            const Sections s(d, by_object[i + 1], static_cast<std::uint32_t>(i + 1));
+            d.slices[i].kind = kind_of(s);
+            read_object(s, d.slices[i]);
+        }
+    } else {
+        if (objects != 1) fail("objects beyond the root of a material without φh slices");
+        read_object(root, d.root);
+    }
+    read_sampler(root, d);
+}
+
+std::shared_ptr<const Data> parsed(std::unique_ptr<Data> d, std::string* error) {
+    try {
+        parse(*d);
+        return std::shared_ptr<const Data>(std::move(d));
+    } catch (const Failure& f) {
+        if (error) *error = f.what;
+    } catch (const std::bad_alloc&) {
+        if (error) *error = "out of memory";
+    }
+    return nullptr;
+}
+
+// f for a pair above the horizon.
+void eval_object(const Data& d, const Object& o, const Vec3& wi, const Vec3& wo, double f[3]) {
+    switch (o.kind) {
+        case L::Kind::Table: {
+            const k::BinCoords c = k::fast_bin_coords(o.grid, wi, wo);
+            const auto read = [&](const auto& values) {
+                if (o.nearest)
+                    k::read_nearest(values, k::nearest_bin(o.grid, c, wi, wo), f);
+                else
+                    k::blend_linear(o.grid, values, k::linear_corners(o.grid, c, wi, wo), f);
+            };
+            if (o.f32)
+                read(k::Float32Values{o.f32});
+            else if (o.half)
+                read(k::HalfValues{o.codes, o.half_scale});
+            else
+                read(k::LogU8Values{o.codes, o.lut});
+            return;
+        }
+        case L::Kind::Factored: return k::eval_factored(o.factors, wi, wo, f);
+        case L::Kind::PhiH: {
+            const k::PhiHPick pick = k::phi_h_pick(o.bilateral, o.count, wi, wo);
+            f[0] = f[1] = f[2] = 0.0;
+            if (!pick.ok) return;
+            Vec3 a = wi, b = wo;
+            if (pick.mirrored) a.y = -a.y, b.y = -b.y;
+            double x[3], y[3];
+            // Slices are tables or factorisations, whose own eval is 0 below the horizon (never here).
+            eval_object(d, d.slices[o.first + pick.k0], a, b, x);
+            eval_object(d, d.slices[o.first + pick.k1], a, b, y);
+            for (int c = 0; c < 3; ++c) f[c] = x[c] * (1.0 - pick.t) + y[c] * pick.t;
+            return;
+        }
+        case L::Kind::Analytic: break;
+    }
+    f[0] = f[1] = f[2] = 0.0;
+}
+
+Rgb64 eval64(const Data* d, Vec3 wi, Vec3 wo) {
+    Rgb64 f{0.0, 0.0, 0.0};
+    if (!d || !prepare_direction(wi) || !prepare_direction(wo) || !(wi.z > 0.0 && wo.z > 0.0)) return f;
+    eval_object(*d, d->root, wi, wo, f.data());
+    return f;
+}
+
+double pdf64(const Data* d, Vec3 wo, Vec3 wi) {
+    if (!d || !prepare_direction(wo) || !prepare_direction(wi) || !(wi.z > 0.0 && wo.z > 0.0)) return 0.0;
+    return k::compact_pdf(d->sampler, wo, wi);
+}
+
+Sample64 sample64(const Data* d, Vec3 wo, double u1, double u2) {
+    if (!d || !prepare_direction(wo) || !(wo.z > 0.0 && u1 >= 0.0 && u1 < 1.0 && u2 >= 0.0 && u2 < 1.0)) return {};
+    const k::CompactDraw draw = k::compact_sample(d->sampler, wo, u1, u2);
+    if (!(draw.wi.z > 0.0 && draw.pdf > 0.0 && draw.pdf < std::numeric_limits<double>::infinity())) return {};
+    Sample64 s{draw.wi, draw.pdf, {}};
+    double f[3];
+    eval_object(*d, d->root, s.wi, wo, f);
+    for (int c = 0; c < 3; ++c) s.weight[c] = f[c] * s.wi.z / s.pdf;  // the library's arithmetic
+    return s;
+}
+
+Vec3 widen(const Float3& v) { return {v.x, v.y, v.z}; }
+Float3 narrow(const Vec3& v) { return {static_cast<float>(v.x), static_cast<float>(v.y), static_cast<float>(v.z)}; }
+Rgb32 narrow(const Rgb64& f) { return {static_cast<float>(f[0]), static_cast<float>(f[1]), static_cast<float>(f[2])}; }
+
+}  // namespace
+}  // namespace detail
+
+Material Material::from_memory(const void* data, std::size_t size, bool copy, std::string* error) {
+    auto d = std::make_unique<detail::Data>();
+    if (!data) size = 0;
+    if (copy) {
+        try {
+            d->owned.assign(static_cast<const unsigned char*>(data), static_cast<const unsigned char*>(data) + size);
+        } catch (const std::bad_alloc&) {
+            if (error) *error = "out of memory";
+            return {};
+        }
+        d->bytes = d->owned.data();
+    } else {
+        d->bytes = static_cast<const unsigned char*>(data);
+    }
+    d->size = size;
+    return Material(detail::parsed(std::move(d), error));
+}
+
+Material Material::open(const std::string& path, std::string* error) {
+    const auto failed = [&](const std::string& why) {
+        if (error) *error = path + ": " + why;
+        return Material();
+    };
+#ifdef BRDFZ_RUNTIME_MMAP
+    const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
+    if (fd < 0) return failed(std::strerror(errno));
+    struct stat st {};
+    if (fstat(fd, &st) != 0 || !S_ISREG(st.st_mode)) {
+        ::close(fd);
+        return failed("not a regular file");
+    }
+    auto d = std::make_unique<detail::Data>();
+    d->size = static_cast<std::size_t>(st.st_size);
+    if (d->size > 0) {
+        void* p = mmap(nullptr, d->size, PROT_READ, MAP_PRIVATE, fd, 0);
+        if (p == MAP_FAILED) {
+            ::close(fd);
+            return failed(std::strerror(errno));
+        }
+        d->mapped = p;
+        d->bytes = static_cast<const unsigned char*>(p);
+    }
+    ::close(fd);
+#else
+    std::FILE* file = std::fopen(path.c_str(), "rb");
+    if (!file) return failed("cannot open");
+    auto d = std::make_unique<detail::Data>();
+    unsigned char buffer[1 << 16];
+    for (std::size_t got; (got = std::fread(buffer, 1, sizeof buffer, file)) > 0;) d->owned.insert(d->owned.end(), buffer, buffer + got);
+    std::fclose(file);
+    d->bytes = d->owned.data(), d->size = d->owned.size();
+#endif
+    std::string why;
+    Material m(detail::parsed(std::move(d), &why));
+    if (!m) return failed(why);
+    return m;
+}
+
+std::string Material::describe() const { return d_ ? d_->describe : std::string(); }
+std::size_t Material::nbytes() const { return d_ ? d_->size : 0; }
+std::size_t Material::sampler_nbytes() const { return d_ ? d_->sampler_bytes : 0; }
+
+Rgb64 Material::eval(const Vec3& wi, const Vec3& wo) const noexcept { return detail::eval64(d_.get(), wi, wo); }
+double Material::pdf(const Vec3& wo, const Vec3& wi) const noexcept { return detail::pdf64(d_.get(), wo, wi); }
+Sample64 Material::sample(const Vec3& wo, double u1, double u2) const noexcept {
+    return detail::sample64(d_.get(), wo, u1, u2);
+}
+
+Rgb32 Material::eval(const Float3& wi, const Float3& wo) const noexcept {
+    return detail::narrow(detail::eval64(d_.get(), detail::widen(wi), detail::widen(wo)));
+}
+float Material::pdf(const Float3& wo, const Float3& wi) const noexcept {
+    return static_cast<float>(detail::pdf64(d_.get(), detail::widen(wo), detail::widen(wi)));
+}
+Sample32 Material::sample(const Float3& wo, float u1, float u2) const noexcept {
+    const Sample64 s = detail::sample64(d_.get(), detail::widen(wo), u1, u2);
+    return {detail::narrow(s.wi), static_cast<float>(s.pdf), detail::narrow(s.weight)};
+}
+
+void Material::eval(const Float3* wi, const Float3* wo, Rgb32* out, std::size_t n) const noexcept {
+    for (std::size_t i = 0; i < n; ++i) out[i] = eval(wi[i], wo[i]);
+}
+void Material::pdf(const Float3* wo, const Float3* wi, float* out, std::size_t n) const noexcept {
+    for (std::size_t i = 0; i < n; ++i) out[i] = pdf(wo[i], wi[i]);
+}
+void Material::sample(const Float3* wo, const float* u, Sample32* out, std::size_t n) const noexcept {
+    for (std::size_t i = 0; i < n; ++i) out[i] = sample(wo[i], u[2 * i], u[2 * i + 1]);
+}
+
+}  // namespace brdfz::runtime

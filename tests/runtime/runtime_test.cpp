@@ -1,0 +1,292 @@
+// brdfz::runtime against the library: every kind exported to the runtime layout gives the library's
+// eval, pdf and sample in float32 (1e-5 relative) and double; bad layouts are refused with a line;
+// directions are prepared as the library prepares them; calls allocate nothing; threads agree. The
+// library's representations are built at its SSE2 level, whose factor sums the runtime's are
+// (kernels/factored.h); its AVX builds' own deviation is bench/README.md's.
+#include <catch2/catch.hpp>
+
+#include <atomic>
+#include <cstdlib>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <new>
+#include <random>
+#include <thread>
+#include <vector>
+
+#include "brdfz/compress.h"
+#include "brdfz/formats/container.h"
+#include "brdfz/formats/io.h"
+#include "brdfz/formats/pca_basis.h"
+#include "brdfz/formats/runtime_layout.h"
+#include "brdfz/repr/analytic/coated_diffuse.h"
+#include "brdfz/repr/analytic/model.h"
+#include "brdfz/repr/pca.h"
+#include "brdfz/runtime/runtime.h"
+#include "brdfz/tabulate.h"
+#include "detail/simd.h"
+#include "sample_stats.h"
+#include "simd_levels.h"
+#include "test_util.h"
+
+using namespace brdfz;
+namespace rt = brdfz::runtime;
+
+// Allocations made on this thread, for the no-allocation check: the test binary's operator new counts
+// them (every test runs with it; it allocates as the default one does).
+namespace {
+thread_local std::size_t allocations = 0;
+}
+void* operator new(std::size_t n) {
+    ++allocations;
+    if (void* p = std::malloc(n ? n : 1)) return p;
+    throw std::bad_alloc();
+}
+// GCC cannot tell that these replace the global pair, whose new is the malloc above.
+#if defined(__GNUC__) && !defined(__clang__)
+#pragma GCC diagnostic ignored "-Wmismatched-new-delete"
+#endif
+void operator delete(void* p) noexcept { std::free(p); }
+void operator delete(void* p, std::size_t) noexcept { std::free(p); }
+
+namespace {
+
+rt::Material exported(const Brdf& b) {
+    const std::vector<unsigned char> bytes = runtime_layout::encode(b);
+    std::string error;
+    rt::Material m = rt::Material::from_memory(bytes.data(), bytes.size(), true, &error);
+    INFO(error);
+    REQUIRE(m);
+    return m;
+}
+
+rt::Float3 to_float(const Vec3& v) { return {static_cast<float>(v.x), static_cast<float>(v.y), static_cast<float>(v.z)}; }
+Vec3 to_double(const rt::Float3& v) { return {v.x, v.y, v.z}; }
+
+// The worst relative difference of a against b, where b is above `floor` (smaller values compare in
+// absolute terms against the floor).
+double relative(double a, double b, double floor) { return std::fabs(a - b) / std::max(std::fabs(b), floor); }
+
+struct Agreement {
+    double eval = 0, pdf = 0, weight = 0;
+    std::size_t draws_differ = 0, draws = 0;
+};
+
+// n random pairs and draws, the runtime's float32 calls against the library's at the directions the
+// runtime prepares from the floats (so both see the same input).
+Agreement compare(const Brdf& b, const rt::Material& m, std::size_t n, std::uint64_t seed) {
+    auto [wo, us] = test::random_views(n, seed);
+    auto [wi, unused] = test::random_views(n, seed + 1);
+    Agreement a;
+    std::vector<Vec3> wis(n), wos(n);
+    std::vector<rt::Float3> fi(n), fo(n);
+    for (std::size_t k = 0; k < n; ++k) {
+        fi[k] = to_float(wi[k]), fo[k] = to_float(wo[k]);
+        wis[k] = to_double(fi[k]), wos[k] = to_double(fo[k]);
+        prepare_direction(wis[k]), prepare_direction(wos[k]);
+    }
+    std::vector<Rgb> f(n);
+    b.eval(std::span<const Vec3>(wis), std::span<const Vec3>(wos), std::span(f));
+    double top = 0.0;
+    for (const Rgb& x : f) top = std::max({top, x[0], x[1], x[2]});
+    const double floor = 1e-6 * top;  // values near 0 after cancellation: against the data's scale
+    std::vector<double> pdf(n);
+    b.pdf(std::span<const Vec3>(wos), std::span<const Vec3>(wis), std::span(pdf));
+    for (std::size_t k = 0; k < n; ++k) {
+        const rt::Rgb32 r = m.eval(fi[k], fo[k]);
+        a.eval = std::max({a.eval, relative(r.r, f[k][0], floor), relative(r.g, f[k][1], floor), relative(r.b, f[k][2], floor)});
+        a.pdf = std::max(a.pdf, relative(m.pdf(fo[k], fi[k]), pdf[k], 1e-30));
+        const float u1 = static_cast<float>(us[k][0]), u2 = static_cast<float>(us[k][1]);
+        const rt::Sample32 s = m.sample(fo[k], u1, u2);
+        const BrdfSample l = b.sample(wos[k], u1, u2);
+        a.draws += l.pdf > 0.0;
+        if ((s.pdf > 0.0f) != (l.pdf > 0.0)) {
+            ++a.draws_differ;
+            continue;
+        }
+        if (l.pdf == 0.0) continue;
+        const double dw = std::max({std::fabs(s.wi.x - l.wi.x), std::fabs(s.wi.y - l.wi.y), std::fabs(s.wi.z - l.wi.z)});
+        if (dw > 1e-5) {
+            ++a.draws_differ;
+            continue;
+        }
+        a.pdf = std::max(a.pdf, relative(s.pdf, l.pdf, 1e-30));
+        const double wfloor = 1e-6 * (std::fabs(l.weight[0]) + std::fabs(l.weight[1]) + std::fabs(l.weight[2]) + 1e-30);
+        a.weight = std::max({a.weight, relative(s.weight.r, l.weight[0], wfloor), relative(s.weight.g, l.weight[1], wfloor),
+                             relative(s.weight.b, l.weight[2], wfloor)});
+    }
+    return a;
+}
+
+void check_agreement(const Brdf& b, std::size_t n) {
+    const rt::Material m = exported(b);
+    const Agreement a = compare(b, m, n, 17);
+    INFO(b.describe() << ": eval " << a.eval << ", pdf " << a.pdf << ", weight " << a.weight << ", draws differing "
+                      << a.draws_differ << " of " << a.draws);
+    CHECK(a.eval <= 1e-5);
+    CHECK(a.pdf <= 1e-5);
+    CHECK(a.weight <= 1e-5);
+    // A float u can land on the other side of a CDF step than the double the library draws from only
+    // where they differ (never: the library is given the same float u): every draw is the same.
+    CHECK(a.draws_differ == 0);
+    CHECK(a.draws > n / 2);
+}
+
+CoatedDiffuse coated(double alpha) {
+    CoatedDiffuseParams p;
+    p.alpha = alpha;
+    return CoatedDiffuse(p);
+}
+
+}  // namespace
+
+TEST_CASE("runtime: every gridded kind agrees with the library (synthetic material)", "[runtime]") {
+    const test::SimdCap sse2(detail::Simd::Sse2);
+    const CoatedDiffuse source = coated(0.08);
+    for (const char* spec : {"tabular:res=16x16x32", "tabular:res=16x16x32,dtype=f16,symmetry=none",
+                             "tabular:res=16x16x16,dtype=u8log,symmetry=bilateral,lookup=nearest",
+                             "bivariate:res=16x16,dtype=f16", "svd:rank=2,res=16x16x32,dtype=f16",
+                             "nmf:rank=2,res=16x16x32,iterations=20,space=cbrt,layout=hd_p",
+                             "svd:rank=3,res=16x12x16,colour=shared,space=cos,symmetry=bilateral,dwarp=0.8",
+                             "tabular:res=12x12x16,phih=3,symmetry=bilateral,dtype=f16",
+                             "svd:rank=2,res=12x12x16,phih=2,symmetry=none"}) {
+        INFO(spec);
+        check_agreement(*compress(source, spec).brdf, 20000);
+    }
+}
+
+TEST_CASE("runtime: PCA materials and fine-sampled ones are exported with their compact sampler", "[runtime]") {
+    test::TempDir dir;
+    std::vector<Table> tables;
+    for (double alpha : {0.2, 0.35, 0.5, 0.7}) {
+        TabulateOptions t;
+        t.grid = GridSpec{16, 16, 32};
+        tables.push_back(tabulate(coated(alpha), t).table);
+    }
+    std::vector<const Table*> pointers;
+    for (const Table& t : tables) pointers.push_back(&t);
+    const std::string basis = (dir.path / "basis.brdfz").string();
+    container::write_pca_basis(basis, train_pca_basis(pointers));
+    const test::SimdCap sse2(detail::Simd::Sse2);
+    const Compressed pca = compress(coated(0.4), "pca:basis=" + basis + ",k=2", with_file_access({}));
+    check_agreement(*pca.brdf, 20000);
+    // A fine sampler is not what the runtime carries: the export builds the compact one of the material.
+    const Compressed fine = compress(coated(0.1), "tabular:res=16x16x32,sampler=fine");
+    const rt::Material m = exported(*fine.brdf);
+    const Compressed compact = compress(coated(0.1), "tabular:res=16x16x32");
+    const Vec3 wo = normalize({0.3, -0.2, 0.8});
+    const rt::Sample64 s = m.sample(wo, 0.4, 0.7);
+    const BrdfSample l = compact.brdf->sample(wo, 0.4, 0.7);
+    CHECK(s.pdf == l.pdf);
+    CHECK(s.wi.x == l.wi.x);
+}
+
+TEST_CASE("runtime: the shared RGL files' compact representations agree with the library on 10^5 pairs",
+          "[runtime][rgl][heavy]") {
+    const std::filesystem::path file = test::rgl_file("cc_ibiza_sunset");
+    std::error_code ec;
+    if (!std::filesystem::exists(file, ec)) {
+        WARN("skipped: " << file << " missing (../shared)");
+        return;
+    }
+    const Loaded source = load(file.string());
+    const test::SimdCap sse2(detail::Simd::Sse2);
+    for (const char* spec :
+         {"svd:rank=10,space=cos,colour=shared,res=50x40x14,dwarp=0.9,fit=lsq,weight=solid,symmetry=bilateral,dtype=f16",
+          "svd:rank=4,space=log,colour=shared,layout=hd_p,res=20x14x32,fit=lsq,symmetry=none,dtype=f16",
+          "tabular:res=90x90x180,symmetry=bilateral,dtype=f16", "tabular:res=32x32x64,symmetry=none,dtype=u8log",
+          "tabular:res=45x45x90,symmetry=none", "bivariate:res=64x64", "nmf:rank=3,res=32x32x32,iterations=40",
+          "tabular:res=24x24x32,phih=2,symmetry=none,dtype=f16"}) {
+        INFO(spec);
+        check_agreement(*compress(*source.brdf, spec).brdf, 100000);
+    }
+}
+
+TEST_CASE("runtime: bad layouts are refused with a line, never read", "[runtime][robustness]") {
+    const std::vector<unsigned char> good = runtime_layout::encode(*compress(coated(0.1), "svd:rank=2,res=8x8x16").brdf);
+    std::string error;
+    REQUIRE(rt::Material::from_memory(good.data(), good.size(), true, &error));
+    const auto refused = [&](std::vector<unsigned char> bytes, const char* why) {
+        std::string e;
+        const rt::Material m = rt::Material::from_memory(bytes.data(), bytes.size(), true, &e);
+        INFO(why << ": " << e);
+        CHECK(!m);
+        CHECK(!e.empty());
+        CHECK(e.find('\n') == std::string::npos);
+        return e;
+    };
+    CHECK_THAT(refused({}, "empty"), Catch::Contains("not a brdfz runtime layout"));
+    CHECK_THAT(refused(std::vector<unsigned char>(good.begin(), good.end() - 64), "truncated"), Catch::Contains("bytes"));
+    std::vector<unsigned char> b = good;
+    b[good.size() - 100] ^= 1;
+    CHECK_THAT(refused(b, "flipped byte"), Catch::Contains("checksum"));
+    b = good;
+    b[8] = 2;  // version
+    CHECK_THAT(refused(b, "newer version"), Catch::Contains("layout version 2"));
+    b = good;
+    b[0] = 'X';
+    refused(b, "magic");
+    // Every truncation and every single-byte change of the header and section table is refused or
+    // read whole (the CRC covers all but the header, whose fields are each checked).
+    for (std::size_t cut = 0; cut < good.size(); cut += 61) refused(std::vector<unsigned char>(good.begin(), good.begin() + cut), "cut");
+    for (std::size_t at = 0; at < 64; ++at) {
+        if (at >= 28 && at < 32) continue;  // the CRC itself: a changed one is the checksum's failure
+        b = good;
+        b[at] ^= 0x5A;
+        const rt::Material m = rt::Material::from_memory(b.data(), b.size(), true, &error);
+        if (m) CHECK(std::isfinite(m.eval(rt::Float3{0, 0.6f, 0.8f}, rt::Float3{0, -0.6f, 0.8f}).r));
+    }
+    CHECK_THAT(rt::Material::open("/nonexistent/x.brdfzrt", &error) ? std::string() : error, Catch::Contains("/nonexistent/x.brdfzrt"));
+}
+
+TEST_CASE("runtime: directions are prepared as the library prepares them", "[runtime]") {
+    const Compressed c = compress(coated(0.1), "tabular:res=16x16x32,dtype=f16");
+    const rt::Material m = exported(*c.brdf);
+    const Vec3 wi = normalize({0.2, 0.3, 0.8}), wo = normalize({-0.4, 0.1, 0.6});
+    const rt::Rgb64 unit = m.eval(wi, wo);
+    REQUIRE(unit[1] > 0.0);
+    // Non-unit: normalised; NaN, infinite, zero: 0 and pdf 0, and a failed draw.
+    const rt::Rgb64 scaled = m.eval(3.0 * wi, 0.5 * wo);
+    for (int ch = 0; ch < 3; ++ch) CHECK(scaled[ch] == Approx(unit[ch]).epsilon(1e-12));
+    for (const Vec3& bad : {Vec3{NAN, 0, 1}, Vec3{0, 0, 0}, Vec3{INFINITY, 0, 1}}) {
+        CHECK(m.eval(bad, wo)[0] == 0.0);
+        CHECK(m.eval(wi, bad)[0] == 0.0);
+        CHECK(m.pdf(bad, wi) == 0.0);
+        CHECK(m.pdf(wo, bad) == 0.0);
+        CHECK(m.sample(bad, 0.3, 0.3).pdf == 0.0);
+        // The library's single-pair calls alike.
+        CHECK(c.brdf->eval(bad, wo)[0] == 0.0);
+        CHECK(c.brdf->pdf(wo, bad) == 0.0);
+        CHECK(c.brdf->sample(bad, 0.3, 0.3).pdf == 0.0);
+    }
+    const Rgb lib = c.brdf->eval(3.0 * wi, 0.5 * wo);
+    for (int ch = 0; ch < 3; ++ch) CHECK(lib[ch] == Approx(c.brdf->eval(wi, wo)[ch]).epsilon(1e-12));
+    CHECK(m.sample(wo, 1.0, 0.5).pdf == 0.0);
+    CHECK(m.sample(wo, 0.5, -0.1).pdf == 0.0);
+    CHECK(rt::Material().eval(wi, wo)[0] == 0.0);
+}
+
+TEST_CASE("runtime: calls allocate nothing, and threads sharing a material agree with one", "[runtime]") {
+    const Compressed c = compress(coated(0.1), "svd:rank=3,res=16x16x32,dtype=f16,colour=shared,phih=2");
+    const rt::Material m = exported(*c.brdf);
+    auto [wo, us] = test::random_views(4000, 3);
+    std::vector<rt::Float3> fo(wo.size());
+    for (std::size_t k = 0; k < wo.size(); ++k) fo[k] = to_float(wo[k]);
+    const auto run = [&](std::vector<float>& out) {
+        for (std::size_t k = 0; k < wo.size(); ++k) {
+            const rt::Sample32 s = m.sample(fo[k], static_cast<float>(us[k][0]), static_cast<float>(us[k][1]));
+            const rt::Rgb32 f = m.eval(s.wi, fo[k]);
+            out[k] = s.pdf + m.pdf(fo[k], s.wi) + f.r + f.g + f.b;
+        }
+    };
+    std::vector<float> serial(wo.size());
+    const std::size_t before = allocations;
+    run(serial);
+    CHECK(allocations == before);
+    std::vector<std::vector<float>> parallel(4, std::vector<float>(wo.size()));
+    std::vector<std::thread> threads;
+    for (auto& p : parallel) threads.emplace_back([&run, &p] { run(p); });
+    for (auto& t : threads) t.join();
+    for (const auto& p : parallel) CHECK(std::memcmp(p.data(), serial.data(), serial.size() * sizeof(float)) == 0);
+}
