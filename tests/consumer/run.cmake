@@ -1,10 +1,11 @@
 # Installs brdfz, moves the installed tree to another prefix, checks that its CMake files name no path
 # of this machine, then builds and runs each consumer below against it:
 #   cmake -DSOURCE_DIR=SRC -DBUILD_DIR=TREE -DWORK_DIR=DIR -P run.cmake
-# With -DSHARED=ON -DGENERATOR=G, the libraries of SRC are first built shared in WORK_DIR, and those are
-# installed: no command, tests, benchmarks or Python, and what this checks is the package, so built as
-# cheaply as the sanitizer tree's setting allows (clang at -O1 without debug information, which
-# compiles without warnings: scripts/test).
+# With -DSHARED=ON -DGENERATOR=G -DVERSION=V -DSOVERSION=S (the libraries' file version and soname
+# version), the libraries of SRC are first built shared in WORK_DIR, and those are installed: no
+# command, tests, benchmarks or Python, and what this checks is the package, so built as cheaply as
+# the sanitizer tree's setting allows (clang at -O1 without debug information, which compiles without
+# warnings: scripts/test).
 #
 # A consumer is a folder here: a CMake project whose executable `consumer` takes a scratch folder and
 # exits 0 when what it checks holds. Adding one is its folder and a consumer() line at the end.
@@ -51,12 +52,15 @@ endforeach()
 
 # Shared libraries: versioned sonames, and the libraries find each other in the moved prefix.
 if(SHARED)
-  foreach(library core formats fit)
-    set(so ${prefix}/lib/libbrdfz_${library}.so)
-    if(NOT EXISTS ${so}.0.1 OR NOT EXISTS ${so}.0.1.0)
-      message(FATAL_ERROR "${so}: no versioned library (.so.0.1 -> .so.0.1.0)")
+  file(GLOB libraries ${prefix}/lib/libbrdfz_*.so)
+  if(NOT libraries)
+    message(FATAL_ERROR "no shared library installed in ${prefix}/lib")
+  endif()
+  foreach(so IN LISTS libraries)
+    if(NOT EXISTS ${so}.${SOVERSION} OR NOT EXISTS ${so}.${VERSION})
+      message(FATAL_ERROR "${so}: no versioned library (.so.${SOVERSION} -> .so.${VERSION})")
     endif()
-    file(READ_ELF ${so}.0.1.0 RUNPATH runpath RPATH rpath)
+    file(READ_ELF ${so}.${VERSION} RUNPATH runpath RPATH rpath)
     if(NOT "${runpath}${rpath}" STREQUAL "$ORIGIN")
       message(FATAL_ERROR "${so}: run path '${runpath}${rpath}', not $ORIGIN")
     endif()
