@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <stdexcept>
 
 #include "brdfz/errors.h"
 
@@ -20,6 +21,17 @@ Compressed timed(const ReprSpec& spec, Build build) {
     out.build_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     out.spec = spec.str();
     return out;
+}
+
+// What add_representation_kinds was given, and whether the list was built.
+struct Additions {
+    std::vector<void (*)(std::vector<ReprKind>&)> registrations;
+    bool listed = false;
+};
+
+Additions& additions() {
+    static Additions a;
+    return a;
 }
 
 // The kind a spec names, its keys declared on the spec; SpecError naming the known kinds otherwise.
@@ -43,10 +55,17 @@ const std::vector<ReprKind>& representation_kinds() {
     static const std::vector<ReprKind> kinds = [] {
         std::vector<ReprKind> out;
         kinds::register_all(out);
+        for (auto registration : additions().registrations) registration(out);
+        additions().listed = true;
         std::sort(out.begin(), out.end(), [](const ReprKind& a, const ReprKind& b) { return a.name < b.name; });
         return out;
     }();
     return kinds;
+}
+
+void add_representation_kinds(void (*register_kinds)(std::vector<ReprKind>& out)) {
+    if (additions().listed) throw std::logic_error("add_representation_kinds: the kinds were listed already");
+    additions().registrations.push_back(register_kinds);
 }
 
 const ReprKind* find_representation_kind(const std::string& name) {

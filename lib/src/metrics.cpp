@@ -10,7 +10,7 @@
 #include "brdfz/errors.h"
 #include "brdfz/table.h"
 #include "detail/grid_sweep.h"
-#include "fit/random.h"
+#include "detail/random.h"
 
 namespace brdfz {
 namespace {
@@ -158,8 +158,8 @@ void direction_pairs(std::uint64_t first, std::uint64_t seed, double theta_i_max
     };
     for (std::size_t j = 0; j < wi.size(); ++j) {
         const std::uint64_t k = 4 * (first + j);
-        wi[j] = direction(fitting::unit_hash(k, seed), fitting::unit_hash(k + 1, seed), span_i);
-        wo[j] = direction(fitting::unit_hash(k + 2, seed), fitting::unit_hash(k + 3, seed), span_o);
+        wi[j] = direction(detail::unit_hash(k, seed), detail::unit_hash(k + 1, seed), span_i);
+        wo[j] = direction(detail::unit_hash(k + 2, seed), detail::unit_hash(k + 3, seed), span_o);
     }
 }
 

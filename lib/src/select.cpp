@@ -23,6 +23,13 @@ Trial measure(const Source& source, const std::string& spec, const TrialOptions&
     return t;
 }
 
+// The specs whose kind is registered.
+std::vector<std::string> registered(std::vector<std::string> specs) {
+    std::erase_if(specs,
+                  [](const std::string& spec) { return !find_representation_kind(ReprSpec::parse(spec).kind()); });
+    return specs;
+}
+
 }  // namespace
 
 Trial trial(const Brdf& source, const std::string& spec, const TrialOptions& options) {
@@ -34,7 +41,7 @@ Trial trial(const MeasurementSet& source, const std::string& spec, const TrialOp
 }
 
 std::vector<std::string> benchmark_specs() {
-    return {
+    return registered({
         "tabular:res=90x90x180",  // the MERL grid in float32: the baseline
         "tabular:res=45x45x90",          "tabular:res=45x45x90,dtype=f16",   "tabular:res=45x45x90,dtype=u8log",
         "tabular:res=32x32x64,dtype=f16", "tabular:res=32x32x64,dtype=u8log", "tabular:res=16x16x32,dtype=u8log",
@@ -43,7 +50,7 @@ std::vector<std::string> benchmark_specs() {
         "svd:rank=8,space=log",          "svd:rank=4,space=cos",             "nmf:rank=1",
         "nmf:rank=2",                    "nmf:rank=4",                       "analytic:lambert+ggx",
         "analytic:lambert+ggx+ggx",      "analytic:lambert+beckmann",
-    };
+    });
 }
 
 std::vector<std::string> default_candidates() {
@@ -51,7 +58,7 @@ std::vector<std::string> default_candidates() {
     // The symmetry=none ones keep φd over [0, 2π) for non-reciprocal data (RGL files), which a
     // reciprocal grid holds as the mean of the two sides; the symmetry=bilateral ones keep it in half
     // the bins, φd folded by the mirror that isotropic data have.
-    return {
+    return registered({
         "analytic:lambert+ggx",                             // 64
         "analytic:lambert+ggx+ggx",                         // 104
         // At most Neural-BRDF's 2,700 B, for the error over directions.
@@ -80,7 +87,7 @@ std::vector<std::string> default_candidates() {
         "tabular:res=90x90x180",                            // 17,496,000
         "tabular:res=90x90x360,dtype=f16,symmetry=none",    // 17,496,072
         "tabular:res=90x90x360,symmetry=none",              // 34,992,000
-    };
+    });
 }
 
 Selection select_representation(const Brdf& source, const SelectOptions& options) {

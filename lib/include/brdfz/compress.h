@@ -2,7 +2,8 @@
 // point behind `brdfz compress`, Python's brdfz.compress and the budget-driven selection.
 //
 // Kinds register themselves (ReprKind below): `brdfz representations` lists them with their keys,
-// docs/repr-specs.md documents them, and each kind's builder lives in lib/src/repr/kinds/.
+// docs/repr-specs.md documents them, and each kind's builder lives in lib/src/repr/kinds/, or in the
+// kinds/ folder of the library that adds it (lib/fit/src/kinds/: `analytic`, with brdfz::fit).
 #pragma once
 
 #include <functional>
@@ -48,7 +49,8 @@ Compressed compress(const MeasurementSet& source, const std::string& spec, const
 
 // A representation kind, registered from its own file lib/src/repr/kinds/NAME.cpp, which defines
 // `void brdfz::kinds::register_NAME(std::vector<ReprKind>&)`; the build finds the file and calls it
-// (cmake/registry.cmake), so no central file lists kinds.
+// (cmake/registry.cmake), so no central file lists kinds. A library on top of the core registers its
+// kinds' files the same way, into a function it hands to add_representation_kinds.
 struct ReprKind {
     std::string name;                 // the spec's KIND
     std::string summary;              // one line: what it is
@@ -67,5 +69,10 @@ const ReprKind* find_representation_kind(const std::string& name);
 
 // The kinds' names, for help texts.
 std::vector<std::string> compress_kinds();
+
+// Adds the kinds of a library on top of the core (brdfz::fit): `register_kinds` is called beside the
+// core's own registration when the kinds are first listed. Call it from a static initialiser, before
+// that; std::logic_error after.
+void add_representation_kinds(void (*register_kinds)(std::vector<ReprKind>& out));
 
 }  // namespace brdfz

@@ -70,7 +70,8 @@ struct Selection {
 };
 
 // The settings the compression benchmark sweeps (bench/compress_sweep, python -m brdfz.bench): every
-// kind at a few sizes, the float32 MERL-resolution table first as the baseline.
+// kind at a few sizes, the float32 MERL-resolution table first as the baseline. Only registered kinds:
+// the analytic fits where the program links brdfz::fit.
 std::vector<std::string> benchmark_specs();
 
 // The benchmark's CSV (bench/compress_sweep, `brdfz demo`; python -m brdfz.bench writes and reads the
@@ -84,7 +85,7 @@ std::string sweep_csv_row(const std::string& material, const std::string& format
                           std::uintmax_t input_bytes, const Trial* trial, const std::string& error = {});
 
 // Candidates from cheapest to richest: analytic fits of growing lobe count, factorisations of growing
-// rank, compact tables, the full-resolution table.
+// rank, compact tables, the full-resolution table. Only registered kinds, as benchmark_specs().
 std::vector<std::string> default_candidates();
 
 // ValueError for a budget that is not finite and > 0, or an empty candidate list; SpecError for a

@@ -13,7 +13,7 @@
 #include "brdfz/repr/analytic/catalogue.h"
 #include "brdfz/repr/tabular.h"
 #include "brdfz/tabulate.h"
-#include "fit/jacobians.h"
+#include "jacobians.h"
 #include "test_util.h"
 
 using namespace brdfz;

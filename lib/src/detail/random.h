@@ -1,10 +1,11 @@
-// Deterministic pseudo-random numbers for fitting: the same on every platform and standard library
-// (std::uniform_real_distribution is not), so starts and sample subsets are reproducible.
+// Deterministic pseudo-random numbers for fitting and the metrics over directions: the same on every
+// platform and standard library (std::uniform_real_distribution is not), so starts, sample subsets and
+// direction pairs are reproducible.
 #pragma once
 
 #include <cstdint>
 
-namespace brdfz::fitting {
+namespace brdfz::detail {
 
 // SplitMix64's finaliser: a bijective mix of 64 bits.
 inline std::uint64_t mix64(std::uint64_t x) {
@@ -29,4 +30,4 @@ private:
     std::uint64_t state_;
 };
 
-}  // namespace brdfz::fitting
+}  // namespace brdfz::detail

@@ -1,8 +1,8 @@
 // Kind `analytic`: analytic lobes fitted with Ceres (fit/fit.h), from a BRDF or from scattered
 // measurements.
+#include "brdfz/compress.h"
 #include "brdfz/errors.h"
 #include "brdfz/fit/fit.h"
-#include "common.h"
 
 namespace brdfz::kinds {
 namespace {

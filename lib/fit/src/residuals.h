@@ -12,7 +12,7 @@
 
 #include "brdfz/fit/fit.h"
 #include "brdfz/repr/analytic/catalogue.h"
-#include "fit/jacobians.h"
+#include "jacobians.h"
 
 namespace brdfz::fitting {
 

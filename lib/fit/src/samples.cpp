@@ -9,7 +9,7 @@
 #include "brdfz/errors.h"
 #include "brdfz/table.h"
 #include "detail/parallel.h"
-#include "fit/random.h"
+#include "detail/random.h"
 
 namespace brdfz {
 
@@ -46,7 +46,7 @@ GridSamples sample_brdf(const Brdf& brdf, const SampleOptions& options) {
     std::vector<std::size_t> bins;
     for_each_eligible([&](int ih, int id, int ip) {
         const std::size_t bin = g.index(ih, id, ip);
-        if (keep < 1.0 && fitting::unit_hash(bin, options.seed) >= keep) return;
+        if (keep < 1.0 && detail::unit_hash(bin, options.seed) >= keep) return;
         const auto [i, o] = from_half_diff({g.theta_h_at(ih), 0.0, g.theta_d_at(id), g.phi_d_at(ip)});
         wi.push_back(i);
         wo.push_back(o);

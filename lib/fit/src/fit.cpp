@@ -10,8 +10,8 @@
 
 #include "brdfz/errors.h"
 #include "detail/parallel.h"
-#include "fit/random.h"
-#include "fit/residuals.h"
+#include "detail/random.h"
+#include "residuals.h"
 
 namespace brdfz {
 
@@ -239,7 +239,7 @@ Samples subset(const Prepared& all, std::size_t n, std::uint64_t seed, std::vect
     const double keep = n >= total ? 1.0 : static_cast<double>(n) / static_cast<double>(total);
     Samples s;
     for (std::size_t k = 0; k < total; ++k) {
-        if (keep < 1.0 && unit_hash(k, seed ^ 0x5eed) >= keep) continue;
+        if (keep < 1.0 && detail::unit_hash(k, seed ^ 0x5eed) >= keep) continue;
         s.geometry.push_back(all.samples.geometry[k]);
         s.cos_i.push_back(all.samples.cos_i[k]);
         s.target.push_back(all.samples.target[k]);
@@ -310,7 +310,7 @@ FitResult fit_samples(const MeasurementSet& data, const std::string& model_text,
     std::vector<std::array<double, 3>> coarse_values;
     const Samples coarse = subset(all, options.coarse_samples, options.seed, coarse_values);
     std::vector<std::vector<double>> starts(options.starts);
-    Random random(options.seed);
+    detail::Random random(options.seed);
     for (int k = 0; k < options.starts; ++k) {
         std::vector<double> p = first;
         if (k > 0)
