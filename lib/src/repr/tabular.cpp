@@ -3,6 +3,7 @@
 #include <memory>
 
 #include "brdfz/errors.h"
+#include "brdfz/runtime/kernels/values.h"
 #include "detail/table_lookup.h"
 #include "detail/table_sample.h"
 
