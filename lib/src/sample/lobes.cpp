@@ -7,7 +7,7 @@
 
 #include "brdfz/repr/analytic/catalogue.h"
 #include "brdfz/repr/analytic/model.h"
-#include "brdfz/repr/analytic/sampling.h"
+#include "brdfz/runtime/kernels/lobes/sampling.h"
 
 namespace brdfz {
 namespace {
