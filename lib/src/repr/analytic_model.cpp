@@ -119,13 +119,8 @@ bool finite_pair(const Vec3& wi, const Vec3& wo) {
 
 Rgb AnalyticBrdf::eval_above(const Vec3& wi, const Vec3& wo) const {
     if (!finite_pair(wi, wo)) return {0.0, 0.0, 0.0};
-    const Geometry<double> g = make_geometry(wi.x, wi.y, wi.z, wo.x, wo.y, wo.z);
-    Rgb f{0.0, 0.0, 0.0};
-    for (const Model::Term& t : model_.terms()) {
-        double v[3];
-        t.type->eval(g, params_.data() + t.offset, v);
-        for (int c = 0; c < 3; ++c) f[c] += v[c];
-    }
+    Rgb f;
+    runtime::kernels::lobe_mixture_eval(sampler().view(), wi, wo, f.data());
     return f;
 }
 

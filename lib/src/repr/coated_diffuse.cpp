@@ -5,7 +5,7 @@
 
 #include "brdfz/coords.h"
 #include "brdfz/errors.h"
-#include "brdfz/repr/analytic/microfacet.h"
+#include "brdfz/runtime/kernels/lobes/microfacet.h"
 
 namespace brdfz {
 

@@ -7,11 +7,13 @@
 
 #include "brdfz/repr/analytic/catalogue.h"
 #include "brdfz/repr/analytic/model.h"
-#include "brdfz/repr/analytic/sampling.h"
+#include "brdfz/runtime/kernels/lobe_mixture.h"
+#include "brdfz/runtime/kernels/lobes/sampling.h"
 
 namespace brdfz {
 namespace {
 
+namespace rk = runtime::kernels;
 using lobes::sampling::cosine;
 using lobes::sampling::cosine_pdf;
 constexpr double kPi = std::numbers::pi;
@@ -24,7 +26,7 @@ void sample_lanes(const double* p, const Vec3* wo, const double* u1, const doubl
 template <typename F>
 void add_folded_lanes(const double* p, const Vec3* wo, const Vec3* wi, const double* w, std::size_t n, double* pdf) {
     for (std::size_t k = 0; k < n; ++k) {
-        const double d = F::pdf(p, wo[k], wi[k]) + F::pdf(p, wo[k], {wi[k].x, wi[k].y, -wi[k].z});
+        const double d = lobes::folded_pdf<F>(p, wo[k], wi[k]);
         pdf[k] += w[k] > 0.0 ? w[k] * d : 0.0;
     }
 }
@@ -38,15 +40,16 @@ constexpr auto kSamplers = samplers_of(AllLobes{});
 
 double mean(const double v[3]) { return (v[0] + v[1] + v[2]) / 3.0; }
 
+// A family's position in the catalogue: its runtime family id.
+int family_id(const LobeType& type) { return static_cast<int>(&type - lobe_types().data()); }
+
 }  // namespace
 
-const LobeSampler& lobe_sampler(const LobeType& type) {
-    return kSamplers[static_cast<std::size_t>(&type - lobe_types().data())];
-}
+const LobeSampler& lobe_sampler(const LobeType& type) { return kSamplers[family_id(type)]; }
 
 LobeMixture::LobeMixture(const Model& model, std::span<const double> params)
     : params_(params.begin(), params.end()) {
-    for (const Model::Term& t : model.terms()) terms_.push_back({t.type, lobe_sampler(*t.type), t.offset});
+    for (const Model::Term& t : model.terms()) terms_.push_back({family_id(*t.type), t.offset});
     // Albedo of each lobe at each node, estimated with its own sampler over a fixed stratified set of
     // (u1, u2), with wo's azimuth varied too (anisotropic lobes): deterministic and cheap.
     const std::size_t n = terms_.size();
@@ -56,18 +59,18 @@ LobeMixture::LobeMixture(const Model& model, std::span<const double> params)
     for (int k = 0; k < kAlbedoNodes; ++k) {
         const double cos_o = (k + 0.5) / kAlbedoNodes, sin_o = std::sqrt(1.0 - cos_o * cos_o);
         for (std::size_t j = 0; j < n; ++j) {
-            const Term& t = terms_[j];
-            const double* p = params_.data() + t.offset;
+            const rk::LobeFamily& family = rk::kLobeFamilies[terms_[j].family];
+            const double* p = params_.data() + terms_[j].offset;
             double sum = 0.0;
             for (int i = 0; i < kAlbedoSamples; ++i) {
                 const double phi_o = 2.0 * kPi * std::fmod(i * 0.6180339887498949, 1.0);
                 const Vec3 wo{sin_o * std::cos(phi_o), sin_o * std::sin(phi_o), cos_o};
-                Vec3 wi = t.sampler.sample(p, wo, (i % kSide + 0.5) / kSide, (i / kSide + 0.5) / kSide);
+                Vec3 wi = family.sample(p, wo, (i % kSide + 0.5) / kSide, (i / kSide + 0.5) / kSide);
                 wi.z = std::fabs(wi.z);
-                const double pdf = folded_density(t, wo, wi);
+                const double pdf = family.folded_pdf(p, wo, wi);
                 if (!(wi.z > 0.0 && pdf > 0.0)) continue;
                 double f[3];
-                t.type->eval(make_geometry(wi.x, wi.y, wi.z, wo.x, wo.y, wo.z), p, f);
+                family.eval(make_geometry(wi.x, wi.y, wi.z, wo.x, wo.y, wo.z), p, f);
                 sum += mean(f) * wi.z / pdf;
             }
             const double a = sum / kAlbedoSamples;
@@ -76,46 +79,17 @@ LobeMixture::LobeMixture(const Model& model, std::span<const double> params)
     }
 }
 
-double LobeMixture::folded_density(const Term& t, const Vec3& wo, const Vec3& wi) const {
-    const double* p = params_.data() + t.offset;
-    return t.sampler.pdf(p, wo, wi) + t.sampler.pdf(p, wo, {wi.x, wi.y, -wi.z});
-}
-
-bool LobeMixture::lobe_weights(const Vec3& wo, double* w) const {
-    const std::size_t n = terms_.size();
-    const double pos = std::clamp(wo.z * kAlbedoNodes - 0.5, 0.0, kAlbedoNodes - 1.0);
-    const int k0 = std::min(static_cast<int>(pos), kAlbedoNodes - 2);
-    const double t = pos - k0;
-    double total = 0.0;
-    for (std::size_t j = 0; j < n; ++j) {
-        w[j] = (1.0 - t) * albedo_[k0 * n + j] + t * albedo_[(k0 + 1) * n + j];
-        total += w[j];
-    }
-    if (!(total > 0.0)) return false;
-    for (std::size_t j = 0; j < n; ++j) w[j] /= total;
-    return true;
-}
-
 std::vector<double> LobeMixture::weights(const Vec3& wo) const {
     std::vector<double> w(terms_.size());
-    if (!lobe_weights(wo, w.data())) std::fill(w.begin(), w.end(), 0.0);
+    rk::lobe_mixture_weights(view(), wo, w.data());
     return w;
 }
 
-double LobeMixture::pdf(const Vec3& wo, const Vec3& wi) const {
-    double w[Model::kMaxTerms];
-    if (!lobe_weights(wo, w)) return cosine_pdf(wi);
-    double pdf = 0.0;
-    for (std::size_t j = 0; j < terms_.size(); ++j)
-        if (w[j] > 0.0) pdf += w[j] * folded_density(terms_[j], wo, wi);
-    return pdf;
-}
+double LobeMixture::pdf(const Vec3& wo, const Vec3& wi) const { return rk::lobe_mixture_pdf(view(), wo, wi); }
 
 BrdfSample LobeMixture::sample(const Vec3& wo, double u1, double u2) const {
-    const std::array<double, 2> u{u1, u2};
-    BrdfSample s;
-    sample_block(&wo, &u, 1, &s);
-    return s;
+    const rk::LobeMixtureDraw d = rk::lobe_mixture_sample(view(), wo, u1, u2);
+    return d.pdf > 0.0 ? BrdfSample{d.wi, d.pdf, {}} : BrdfSample{};
 }
 
 void LobeMixture::sample_block(const Vec3* wo, const std::array<double, 2>* u, std::size_t n, BrdfSample* out) const {
@@ -128,20 +102,17 @@ void LobeMixture::sample_block(const Vec3* wo, const std::array<double, 2>* u, s
     for (std::size_t start = 0; start < n; start += kBlock) {
         const std::size_t m = std::min(kBlock, n - start);
         const Vec3* o = wo + start;
-        // The lobe weights, as lobe_weights() forms them for each lane.
+        // The lobe weights, as lobe_mixture_weights() forms them for each lane.
         for (std::size_t k = 0; k < m; ++k) total[k] = 0.0;
         for (std::size_t j = 0; j < terms; ++j)
             for (std::size_t k = 0; k < m; ++k) {
-                const double pos = std::clamp(o[k].z * kAlbedoNodes - 0.5, 0.0, kAlbedoNodes - 1.0);
-                const int k0 = std::min(static_cast<int>(pos), kAlbedoNodes - 2);
-                const double t = pos - k0;
-                w[j][k] = (1.0 - t) * albedo_[k0 * terms + j] + t * albedo_[(k0 + 1) * terms + j];
+                w[j][k] = rk::lobe_albedo(albedo_.data(), terms, j, rk::albedo_nodes(o[k].z));
                 total[k] += w[j][k];
             }
         for (std::size_t j = 0; j < terms; ++j)
             for (std::size_t k = 0; k < m; ++k) w[j][k] = total[k] > 0.0 ? w[j][k] / total[k] : 0.0;
-        // The choices: u1 picks the lobe, its position inside the lobe's share, rescaled, drives the lobe's
-        // sampler; a model black at wo (every weight 0) is sampled with the cosine density.
+        // The choices (lobe_mixture_sample's); a model black at wo (every weight 0) is sampled with the
+        // cosine density.
         for (std::size_t k = 0; k < m; ++k) {
             const double u1 = u[start + k][0];
             u2[k] = u[start + k][1];
@@ -150,12 +121,9 @@ void LobeMixture::sample_block(const Vec3* wo, const std::array<double, 2>* u, s
                 wi[k] = cosine(u1, u2[k]);
                 continue;
             }
-            std::size_t j = 0;
-            double first = 0.0;
-            while (j + 1 < terms && !(u1 < first + w[j][k])) first += w[j++][k];
-            while (!(w[j][k] > 0.0)) --j;  // rounding past the last non-empty lobe
-            chosen[k] = static_cast<int>(j);
-            v[k] = std::clamp((u1 - first) / w[j][k], 0.0, std::nextafter(1.0, 0.0));
+            const rk::LobeChoice c = rk::choose_lobe(&w[0][k], kBlock, terms, u1);
+            chosen[k] = static_cast<int>(c.lobe);
+            v[k] = c.v;
         }
         // Each lobe's draws together, then the mixture's density a lobe at a time across the block.
         for (std::size_t j = 0; j < terms; ++j) {
@@ -163,15 +131,13 @@ void LobeMixture::sample_block(const Vec3* wo, const std::array<double, 2>* u, s
             double lane_v[kBlock], lane_u2[kBlock];
             for (std::size_t k = 0; k < m; ++k)
                 if (chosen[k] == static_cast<int>(j)) lanes[count] = k, lane_wo[count] = o[k], lane_v[count] = v[k], lane_u2[count++] = u2[k];
-            const Term& t = terms_[j];
-            t.sampler.sample_n(params_.data() + t.offset, lane_wo, lane_v, lane_u2, count, lane_wi);
+            kSamplers[terms_[j].family].sample_n(params_.data() + terms_[j].offset, lane_wo, lane_v, lane_u2, count,
+                                                 lane_wi);
             for (std::size_t c = 0; c < count; ++c) wi[lanes[c]] = {lane_wi[c].x, lane_wi[c].y, std::fabs(lane_wi[c].z)};
         }
         for (std::size_t k = 0; k < m; ++k) pdf[k] = chosen[k] < 0 ? cosine_pdf(wi[k]) : 0.0;
-        for (std::size_t j = 0; j < terms; ++j) {
-            const Term& t = terms_[j];
-            t.sampler.add_folded_n(params_.data() + t.offset, o, wi, w[j], m, pdf);
-        }
+        for (std::size_t j = 0; j < terms; ++j)
+            kSamplers[terms_[j].family].add_folded_n(params_.data() + terms_[j].offset, o, wi, w[j], m, pdf);
         for (std::size_t k = 0; k < m; ++k) {
             const double p = pdf[k];
             out[start + k] = wi[k].z > 0.0 && std::isfinite(p) && p > 0.0 ? BrdfSample{wi[k], p, {}} : BrdfSample{};

@@ -1,7 +1,9 @@
 // Importance sampling of analytic models (repr/analytic/model.h): one sampler per lobe family, mixed
-// in proportion to each lobe's directional albedo at wo.
+// in proportion to each lobe's directional albedo at wo. The mixture's single calls are brdfz::runtime's
+// kernels (brdfz/runtime/kernels/lobe_mixture.h, which describes the mixture); this class builds the
+// albedo table they read and runs the batch kernel, which shares their pieces.
 //
-// Each family samples with its header's sample and pdf (repr/analytic/*.h):
+// Each family samples with its header's sample and pdf (brdfz/runtime/kernels/lobes/*.h):
 //   lambert                       cosine-weighted hemisphere
 //   ggx*, ggx_aniso               visible normals (Heitz 2018; drawn by Dupuy & Benyoub's spherical caps, 2023)
 //   beckmann*                     visible normals (Heitz & d'Eon 2014): slopes by inverting their CDFs
@@ -14,10 +16,8 @@
 // the same way in h: an h facing away from wo (wo·h ≤ 0) is turned half a revolution about the normal,
 // which faces it toward wo and leaves an isotropic density unchanged.
 //
-// The mixture picks a lobe with probability ∝ its directional albedo (mean over channels) at wo,
-// read from a table over cosθo that each lobe's own sampler estimates when the mixture is built, so
-// the choice is deterministic and the pdf is exactly the density sample() draws from. A model that is
-// black at wo (every albedo 0) is sampled with the cosine density.
+// The albedo table is estimated with each lobe's own sampler when the mixture is built, so the choice
+// is deterministic and the pdf is exactly the density sample() draws from.
 #pragma once
 
 #include <array>
@@ -27,6 +27,7 @@
 
 #include "brdfz/brdf.h"
 #include "brdfz/repr/analytic/lobe.h"
+#include "brdfz/runtime/kernels/lobe_mixture.h"
 
 namespace brdfz {
 
@@ -52,38 +53,33 @@ const LobeSampler& lobe_sampler(const LobeType& type);
 
 class LobeMixture {
 public:
-    static constexpr int kAlbedoNodes = 16;     // cosθo nodes of the albedo table
+    static constexpr int kAlbedoNodes = runtime::kernels::kAlbedoNodes;  // cosθo nodes of the albedo table
     static constexpr int kAlbedoSamples = 256;  // sampled directions per node and lobe
 
     // Params must fit the model (as AnalyticBrdf validates them).
     LobeMixture(const Model& model, std::span<const double> params);
 
-    // For wo above the horizon and u in [0, 1)²: wi and its pdf (pdf 0 for a failed draw).
+    // For wo above the horizon and u in [0, 1)²: wi and its pdf (pdf 0 for a failed draw); the runtime's
+    // lobe_mixture_sample.
     BrdfSample sample(const Vec3& wo, double u1, double u2) const;
     // sample() for n draws (wo finite and above the horizon, u in [0, 1)², as sample() asks), in passes
     // over blocks: the lobe weights, the choices, each lobe's draws together, then the mixture's pdf a
-    // lobe at a time across the block. sample() is this kernel on one draw, so the two agree to the bit.
+    // lobe at a time across the block. The same operations as sample() lane by lane (the runtime
+    // kernel's pieces), so the two agree to the bit.
     void sample_block(const Vec3* wo, const std::array<double, 2>* u, std::size_t n, BrdfSample* out) const;
-    // Density of sample() at wi, for wo and wi above the horizon.
+    // Density of sample() at wi, for wo and wi above the horizon (lobe_mixture_pdf).
     double pdf(const Vec3& wo, const Vec3& wi) const;
     // Probability of choosing each lobe at wo; all 0 when the model is black there (cosine sampling).
     std::vector<double> weights(const Vec3& wo) const;
-    // The albedo table lobe_weights() interpolates: kAlbedoNodes × terms, node-major (node k at
+    // The albedo table the lobe weights interpolate: kAlbedoNodes × terms, node-major (node k at
     // cosθo = (k + ½) / kAlbedoNodes), for ports of the sampler.
     const std::vector<double>& albedo_table() const { return albedo_; }
+    // The model, its parameters and this table as the runtime's kernels read them (valid while this
+    // mixture lives).
+    runtime::kernels::LobeMixtureView view() const { return {terms_.data(), terms_.size(), params_.data(), albedo_.data()}; }
 
 private:
-    struct Term {
-        const LobeType* type;
-        LobeSampler sampler;
-        std::size_t offset;  // of its parameters in params_
-    };
-    // Lobe probabilities at wo into w[0..terms); false when the model is black there.
-    bool lobe_weights(const Vec3& wo, double* w) const;
-    // Term t's density folded onto the upper hemisphere.
-    double folded_density(const Term& t, const Vec3& wo, const Vec3& wi) const;
-
-    std::vector<Term> terms_;
+    std::vector<runtime::kernels::LobeTerm> terms_;
     std::vector<double> params_;
     std::vector<double> albedo_;  // kAlbedoNodes × terms, node-major
 };

@@ -1,5 +1,5 @@
 // sin and cos without libm calls, for samplers whose loops over lanes must vectorise (a call cannot be
-// vectorised): the analytic lobes' samplers (repr/analytic/sampling.h) and the library's table kernels.
+// vectorised): the analytic lobes' samplers (runtime/kernels/lobes/sampling.h) and the library's table kernels.
 #pragma once
 
 #include "brdfz/runtime/kernels/math.h"

@@ -1,19 +1,15 @@
-// Every lobe family a model string can name, in one compile-time list. The runtime catalogue
-// (lobe_types) and the fitting code's autodiff instantiations are both generated from it, in this
-// order, so they cannot disagree.
+// Every lobe family a model string can name: the runtime's list (brdfz/runtime/kernels/lobes/
+// families.h) as the core's catalogue. The runtime catalogue (lobe_types) and the fitting code's
+// autodiff instantiations are both generated from it, in its order, so they cannot disagree with each
+// other or with the runtime's family ids.
 #pragma once
 
 #include <array>
 #include <span>
 #include <string_view>
 
-#include "brdfz/repr/analytic/ashikhmin_shirley.h"
-#include "brdfz/repr/analytic/blinn_phong.h"
-#include "brdfz/repr/analytic/lafortune.h"
-#include "brdfz/repr/analytic/lambert.h"
 #include "brdfz/repr/analytic/lobe.h"
-#include "brdfz/repr/analytic/microfacet.h"
-#include "brdfz/repr/analytic/ward.h"
+#include "brdfz/runtime/kernels/lobes/families.h"
 
 namespace brdfz {
 
@@ -23,19 +19,17 @@ struct LobeList {
     static constexpr std::array<LobeType, size> types{lobe_type<Families>()...};
 };
 
-using AllLobes = LobeList<lobes::Lambert, lobes::BlinnPhong, lobes::Ward, lobes::Ggx, lobes::GgxDielectric,
-                          lobes::GgxConductor, lobes::GgxSep, lobes::GgxDielectricSep, lobes::GgxConductorSep,
-                          lobes::Beckmann, lobes::BeckmannDielectric, lobes::BeckmannConductor, lobes::GgxAniso,
-                          lobes::AshikhminShirley, lobes::Lafortune>;
+namespace detail {
+template <typename... Families>
+LobeList<Families...> lobe_list_of(lobes::FamilyList<Families...>);
+}  // namespace detail
+
+using AllLobes = decltype(detail::lobe_list_of(lobes::AllFamilies{}));
 
 // The runtime catalogue, in AllLobes order.
 inline std::span<const LobeType> lobe_types() { return AllLobes::types; }
 
-// Position of a family in the catalogue, or -1.
-inline int find_lobe_type(std::string_view name) {
-    for (std::size_t i = 0; i < AllLobes::size; ++i)
-        if (AllLobes::types[i].name == name) return static_cast<int>(i);
-    return -1;
-}
+// Position of a family in the catalogue (its runtime family id), or -1.
+inline int find_lobe_type(std::string_view name) { return runtime::kernels::lobe_family(name); }
 
 }  // namespace brdfz

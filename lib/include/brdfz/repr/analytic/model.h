@@ -27,7 +27,7 @@ public:
         std::string label;   // "ggx", or "ggx2" when repeated
     };
 
-    static constexpr std::size_t kMaxTerms = 16;
+    static constexpr std::size_t kMaxTerms = runtime::kernels::kMaxLobeTerms;  // what the runtime samples
 
     // ValueError naming the problem (unknown lobe, bad count, empty term).
     static Model parse(std::string_view text);

@@ -8,13 +8,13 @@
 // its albedo is at most 1; the diffuse term's is about Rd (1 − Rs).
 #pragma once
 
+#include <algorithm>
 #include <array>
 #include <cmath>
-#include <numbers>
 #include <string_view>
 
-#include "brdfz/repr/analytic/lobe.h"
-#include "brdfz/repr/analytic/sampling.h"
+#include "brdfz/runtime/kernels/lobes/lobe.h"
+#include "brdfz/runtime/kernels/lobes/sampling.h"
 
 namespace brdfz::lobes {
 
@@ -45,7 +45,7 @@ struct AshikhminShirley {
         const T e = (nu * (g.hx * g.hx) + nv * (g.hy * g.hy)) / xy;
         const S log_cos = log(std::max(g.hz, S(kTiny)));
         const S denom = std::max(g.d, S(kTiny)) * std::max(std::max(g.iz, g.oz), S(kTiny));
-        const T spec = sqrt((nu + T(1)) * (nv + T(1))) * T(0.125 * std::numbers::inv_pi) * exp(e * log_cos) / denom;
+        const T spec = sqrt((nu + T(1)) * (nv + T(1))) * T(0.125 * kInvPi) * exp(e * log_cos) / denom;
         const S m = S(1) - g.d, schlick = m * m * m * m * m;
         const auto fifth = [](S x) { return x * x * x * x * x; };
         const S diff_shape = (S(1) - fifth(S(1) - g.iz / S(2))) * (S(1) - fifth(S(1) - g.oz / S(2)));
@@ -53,7 +53,7 @@ struct AshikhminShirley {
             const T& rd = p[c];
             const T& rs = p[3 + c];
             const T fresnel = rs + (T(1) - rs) * schlick;
-            out[c] = spec * fresnel + T(28.0 / 23.0 * std::numbers::inv_pi) * rd * (T(1) - rs) * diff_shape;
+            out[c] = spec * fresnel + T(28.0 / 23.0 * kInvPi) * rd * (T(1) - rs) * diff_shape;
         }
     }
 
@@ -70,7 +70,6 @@ struct AshikhminShirley {
         return spec / (spec + diff);
     }
     static Vec3 sample(const double* p, const Vec3& wo, double u1, double u2) {
-        using sampling::kPi;
         const double share = specular_share(p);
         if (!(u1 < share)) return sampling::cosine(std::fmin((u1 - share) / (1.0 - share), std::nextafter(1.0, 0.0)), u2);
         // φ in one quadrant by the paper's inversion, the quadrant from the top two bits of u.
@@ -89,7 +88,7 @@ struct AshikhminShirley {
         const double spec = sampling::reflected_density(wo, w, [nu, nv](const Vec3& h) {
             const double xy = std::fmax(h.x * h.x + h.y * h.y, kTiny);
             const double e = (nu * h.x * h.x + nv * h.y * h.y) / xy;
-            return std::sqrt((nu + 1.0) * (nv + 1.0)) * (0.5 / sampling::kPi) * std::exp(e * std::log(h.z));
+            return std::sqrt((nu + 1.0) * (nv + 1.0)) * (0.5 / kPi) * std::exp(e * std::log(h.z));
         });
         return share * spec + (1.0 - share) * sampling::cosine_pdf(w);
     }

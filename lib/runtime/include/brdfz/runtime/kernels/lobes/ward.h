@@ -4,14 +4,14 @@
 //     = ks / (4π α² d² cos⁴θh) · exp(−tan²θh / α²)          with d = wi·h, since ‖wi+wo‖ = 2d.
 #pragma once
 
+#include <algorithm>
 #include <array>
 #include <cmath>
-#include <numbers>
 #include <string_view>
 
-#include "brdfz/repr/analytic/lobe.h"
-#include "brdfz/repr/analytic/microfacet.h"
-#include "brdfz/repr/analytic/sampling.h"
+#include "brdfz/runtime/kernels/lobes/lobe.h"
+#include "brdfz/runtime/kernels/lobes/microfacet.h"
+#include "brdfz/runtime/kernels/lobes/sampling.h"
 
 namespace brdfz::lobes {
 
@@ -33,7 +33,7 @@ struct Ward {
         const S c2 = std::max(g.hz * g.hz, S(kTiny));
         const S tan2 = (g.hx * g.hx + g.hy * g.hy) / c2;
         const S d2 = std::max(g.d * g.d, S(kTiny));
-        const T lobe = exp(-tan2 / a2) / (T(4 * std::numbers::pi) * a2 * (d2 * c2 * c2));
+        const T lobe = exp(-tan2 / a2) / (T(4 * kPi) * a2 * (d2 * c2 * c2));
         for (int c = 0; c < 3; ++c) out[c] = p[c] * lobe;
     }
 

@@ -2,11 +2,10 @@
 #pragma once
 
 #include <array>
-#include <numbers>
 #include <string_view>
 
-#include "brdfz/repr/analytic/lobe.h"
-#include "brdfz/repr/analytic/sampling.h"
+#include "brdfz/runtime/kernels/lobes/lobe.h"
+#include "brdfz/runtime/kernels/lobes/sampling.h"
 
 namespace brdfz::lobes {
 
@@ -21,7 +20,7 @@ struct Lambert {
 
     template <typename T, typename S>
     static void eval(const Geometry<S>&, const T* p, T out[3]) {
-        for (int c = 0; c < 3; ++c) out[c] = p[c] * T(std::numbers::inv_pi);
+        for (int c = 0; c < 3; ++c) out[c] = p[c] * T(kInvPi);
     }
 
     // Cosine-weighted on the upper hemisphere.

@@ -8,11 +8,10 @@
 
 #include <array>
 #include <cmath>
-#include <numbers>
 #include <string_view>
 
-#include "brdfz/repr/analytic/lobe.h"
-#include "brdfz/repr/analytic/sampling.h"
+#include "brdfz/runtime/kernels/lobes/lobe.h"
+#include "brdfz/runtime/kernels/lobes/sampling.h"
 
 namespace brdfz::lobes {
 
@@ -38,7 +37,7 @@ struct Lafortune {
         // base^n as exp(n ln base), differentiable in n; the floor keeps the logarithm finite where the
         // select discards the value (base <= 0).
         const T power = exp(n * log(fmax(base, T(kTiny))));
-        const T lobe = select(base > T(0), (n + T(2)) * T(0.5 * std::numbers::inv_pi) * power, T(0));
+        const T lobe = select(base > T(0), (n + T(2)) * T(0.5 * kInvPi) * power, T(0));
         for (int c = 0; c < 3; ++c) out[c] = p[c] * lobe;
     }
 
@@ -60,7 +59,7 @@ struct Lafortune {
         Vec3 a;
         if (!axis(p, wo, a)) return sampling::cosine_pdf(w);
         const double c = dot(w, a);
-        return c > 0.0 ? (p[5] + 1.0) * (0.5 / sampling::kPi) * std::exp(p[5] * std::log(c)) : 0.0;
+        return c > 0.0 ? (p[5] + 1.0) * (0.5 / kPi) * std::exp(p[5] * std::log(c)) : 0.0;
     }
 };
 

@@ -1,18 +1,17 @@
 // What the lobe families' samplers share (their `sample` and `pdf`, lobe.h): reflection about a half
 // vector, half vectors folded toward wo, cosine-weighted directions, a bracketed Newton inversion of a
 // CDF. The helpers are always inlined and take sin/cos by polynomial, so that the mixture's loops over
-// lanes (sample/lobes.h) vectorise where a family's code allows: a call stops the vectoriser.
+// lanes (the core's LobeMixture::sample_block) vectorise where a family's code allows: a call stops
+// the vectoriser.
 #pragma once
 
 #include <cmath>
-#include <numbers>
 
-#include "brdfz/frame.h"
-#include "brdfz/sample/sincos.h"
+#include "brdfz/runtime/kernels/lobes/lobe.h"
+#include "brdfz/runtime/kernels/math.h"
+#include "brdfz/runtime/vec.h"
 
 namespace brdfz::lobes::sampling {
-
-inline constexpr double kPi = std::numbers::pi;
 
 [[gnu::always_inline]] inline Vec3 reflect(const Vec3& wo, const Vec3& h) { return (2.0 * dot(wo, h)) * h - wo; }
 
@@ -38,18 +37,26 @@ struct Basis {
 };
 
 // sin and cos of 2πu for u in [0, 1), from the half-turn polynomial (a few ulp of libm's).
-[[gnu::always_inline]] inline detail::SinCos2 turn(double u) {
+[[gnu::always_inline]] inline runtime::kernels::SinCos turn(double u) {
     const bool first = u < 0.5;
-    const detail::SinCos2 r = detail::sincos_half_turn(2.0 * kPi * (first ? u : 1.0 - u));
+    const runtime::kernels::SinCos r = runtime::kernels::sincos_half_turn(2.0 * kPi * (first ? u : 1.0 - u));
     return {first ? r.s : -r.s, r.c};
 }
 
 // max(x, 0) by a select (std::fmax is a call), NaN to 0.
 [[gnu::always_inline]] inline double nonneg(double x) { return x > 0.0 ? x : 0.0; }
 
-// frame.h's cosine-weighted direction with the azimuth 2πu2 from turn(), and its density.
+// Cosine-weighted direction on the upper hemisphere (pdf cosθ/π) by Malley's method: a uniform point on
+// the unit disk (radius √u1, azimuth φ) lifted to the hemisphere. This form takes cos φ and sin φ, for
+// samplers that compute them their own (vectorisable) way.
+[[gnu::always_inline]] inline Vec3 cosine_hemisphere(double u1, double cos_phi, double sin_phi) {
+    const double r = std::sqrt(u1), z2 = 1.0 - u1;
+    return {r * cos_phi, r * sin_phi, std::sqrt(z2 > 0.0 ? z2 : 0.0)};
+}
+
+// The cosine-weighted direction with the azimuth 2πu2 from turn(), and its density.
 [[gnu::always_inline]] inline Vec3 cosine(double u1, double u2) {
-    const detail::SinCos2 phi = turn(u2);
+    const runtime::kernels::SinCos phi = turn(u2);
     return cosine_hemisphere(u1, phi.c, phi.s);
 }
 [[gnu::always_inline]] inline double cosine_pdf(const Vec3& w) { return w.z > 0.0 ? w.z / kPi : 0.0; }
@@ -57,7 +64,7 @@ struct Basis {
 // Direction at polar angle cosine c (around +z) and azimuth 2π u.
 [[gnu::always_inline]] inline Vec3 around_z(double c, double u) {
     const double s = std::sqrt(nonneg(1.0 - c * c));
-    const detail::SinCos2 phi = turn(u);
+    const runtime::kernels::SinCos phi = turn(u);
     return {s * phi.c, s * phi.s, c};
 }
 

@@ -5,13 +5,13 @@
 // 0.96 ks at n = 100), so ks <= 1 conserves energy.
 #pragma once
 
+#include <algorithm>
 #include <array>
 #include <cmath>
-#include <numbers>
 #include <string_view>
 
-#include "brdfz/repr/analytic/lobe.h"
-#include "brdfz/repr/analytic/sampling.h"
+#include "brdfz/runtime/kernels/lobes/lobe.h"
+#include "brdfz/runtime/kernels/lobes/sampling.h"
 
 namespace brdfz::lobes {
 
@@ -32,7 +32,7 @@ struct BlinnPhong {
         const T& n = p[3];
         // cos^n θh as exp(n ln cosθh): one form for every n, differentiable in n.
         const S log_cos = log(std::max(g.hz, S(kTiny)));
-        const T lobe = (n + T(2)) * T(0.125 * std::numbers::inv_pi) * exp(n * log_cos);
+        const T lobe = (n + T(2)) * T(0.125 * kInvPi) * exp(n * log_cos);
         for (int c = 0; c < 3; ++c) out[c] = p[c] * lobe;
     }
 
@@ -44,7 +44,7 @@ struct BlinnPhong {
     static double pdf(const double* p, const Vec3& wo, const Vec3& w) {
         const double n = p[3];
         return sampling::reflected_density(wo, w, [n](const Vec3& h) {
-            return (n + 2.0) * (0.5 / sampling::kPi) * std::exp((n + 1.0) * std::log(h.z));
+            return (n + 2.0) * (0.5 / kPi) * std::exp((n + 1.0) * std::log(h.z));
         });
     }
 };

@@ -2,14 +2,14 @@
 // evaluation and ceres::Jet autodiff. Angles enter as cosines; callers guarantee the ranges noted.
 #pragma once
 
+#include <algorithm>
 #include <array>
 #include <cmath>
 #include <cstddef>
-#include <numbers>
 #include <string_view>
 
-#include "brdfz/repr/analytic/lobe.h"
-#include "brdfz/repr/analytic/sampling.h"
+#include "brdfz/runtime/kernels/lobes/lobe.h"
+#include "brdfz/runtime/kernels/lobes/sampling.h"
 
 namespace brdfz::microfacet {
 
@@ -19,7 +19,7 @@ T ggx_d(const T& cos_m, const T& alpha) {
     const T a2 = alpha * alpha;
     const T c2 = cos_m * cos_m;
     const T k = c2 * (a2 - T(1)) + T(1);
-    return a2 / (T(std::numbers::pi) * k * k);
+    return a2 / (T(lobes::kPi) * k * k);
 }
 
 // Smith Λ for GGX; height-correlated masking-shadowing G2 = 1 / (1 + Λ(wi) + Λ(wo)). cos in (0, 1].
@@ -56,7 +56,7 @@ T beckmann_d(const S& cos_m, const T& alpha) {
     using std::exp;
     const S c2 = std::max(cos_m * cos_m, S(kTiny));
     const T a2 = alpha * alpha;
-    return exp(-((S(1) - c2) / c2) / a2) / (T(std::numbers::pi) * a2 * (c2 * c2));
+    return exp(-((S(1) - c2) / c2) / a2) / (T(lobes::kPi) * a2 * (c2 * c2));
 }
 
 // √(cos²θ (1−α²) + α²) = cosθ·√(1 + α² tan²θ), the root in GGX's Smith Λ and G1, from a2 = α².
@@ -105,7 +105,7 @@ template <typename T, typename S>
 T ggx_aniso_d(const S& hx, const S& hy, const S& hz, const T& ax, const T& ay) {
     const T x = hx / ax, y = hy / ay;
     const T k = x * x + y * y + hz * hz;
-    return T(1) / (T(std::numbers::pi) * ax * ay * k * k);
+    return T(1) / (T(lobes::kPi) * ax * ay * k * k);
 }
 
 // Height-correlated anisotropic visibility: cosθ·√(1 + 2Λ...) becomes √(cos²θ + αx² vx² + αy² vy²).
@@ -178,7 +178,7 @@ inline constexpr double kSlopeRange = 8.0;  // |slope| beyond 8 (in α units) ca
 // from which Newton needs about three steps. 1 − z² is formed as 4u(1 − u) to keep the tails exact.
 inline double inverse_erf_guess(double u) {
     constexpr double a = 0.147;
-    const double l = std::log(4.0 * u * (1.0 - u)), t = 2.0 / (std::numbers::pi * a) + 0.5 * l;
+    const double l = std::log(4.0 * u * (1.0 - u)), t = 2.0 / (lobes::kPi * a) + 0.5 * l;
     return std::clamp(std::copysign(std::sqrt(std::sqrt(t * t - l / a) - t), u - 0.5), -kSlopeRange, kSlopeRange);
 }
 
@@ -234,16 +234,6 @@ constexpr std::array<ParamSpec, A + B> concat(const std::array<ParamSpec, A>& a,
     for (std::size_t i = 0; i < B; ++i) out[A + i] = b[i];
     return out;
 }
-
-// A string literal usable as a template argument, so each lobe's name is part of its type.
-template <std::size_t N>
-struct Name {
-    char text[N];
-    constexpr Name(const char (&s)[N]) {
-        for (std::size_t i = 0; i < N; ++i) text[i] = s[i];
-    }
-    constexpr std::string_view view() const { return {text, N - 1}; }
-};
 
 inline constexpr std::array<ParamSpec, 4> kSpecularWeightsAndAlpha{{
     {"ks_r", 0.0, 1.0, 1.0, ParamKind::Weight},
@@ -318,10 +308,10 @@ struct Conductor {
     }
 };
 
-// Parameters: ks_r, ks_g, ks_b, alpha, then the Fresnel term's.
-template <typename Distribution, typename Fresnel, detail::Name kName>
+// Parameters: ks_r, ks_g, ks_b, alpha, then the Fresnel term's. The families below derive from it and
+// add their name.
+template <typename Distribution, typename Fresnel>
 struct Microfacet {
-    static constexpr std::string_view name = kName.view();
     static constexpr bool linear_weights = true;
     static constexpr auto params = detail::concat(detail::kSpecularWeightsAndAlpha, Fresnel::params);
 
@@ -338,16 +328,34 @@ struct Microfacet {
     static double pdf(const double* p, const Vec3& wo, const Vec3& w) { return Distribution::pdf(wo, w, p[3]); }
 };
 
-using Ggx = Microfacet<GgxCorrelated, Schlick, "ggx">;
-using GgxDielectric = Microfacet<GgxCorrelated, Dielectric, "ggx_dielectric">;
-using GgxConductor = Microfacet<GgxCorrelated, Conductor, "ggx_conductor">;
+struct Ggx : Microfacet<GgxCorrelated, Schlick> {
+    static constexpr std::string_view name = "ggx";
+};
+struct GgxDielectric : Microfacet<GgxCorrelated, Dielectric> {
+    static constexpr std::string_view name = "ggx_dielectric";
+};
+struct GgxConductor : Microfacet<GgxCorrelated, Conductor> {
+    static constexpr std::string_view name = "ggx_conductor";
+};
 // Separable masking, to match renderers that use it (Mitsuba 3).
-using GgxSep = Microfacet<GgxSeparable, Schlick, "ggx_sep">;
-using GgxDielectricSep = Microfacet<GgxSeparable, Dielectric, "ggx_dielectric_sep">;
-using GgxConductorSep = Microfacet<GgxSeparable, Conductor, "ggx_conductor_sep">;
-using Beckmann = Microfacet<BeckmannSeparable, Schlick, "beckmann">;
-using BeckmannDielectric = Microfacet<BeckmannSeparable, Dielectric, "beckmann_dielectric">;
-using BeckmannConductor = Microfacet<BeckmannSeparable, Conductor, "beckmann_conductor">;
+struct GgxSep : Microfacet<GgxSeparable, Schlick> {
+    static constexpr std::string_view name = "ggx_sep";
+};
+struct GgxDielectricSep : Microfacet<GgxSeparable, Dielectric> {
+    static constexpr std::string_view name = "ggx_dielectric_sep";
+};
+struct GgxConductorSep : Microfacet<GgxSeparable, Conductor> {
+    static constexpr std::string_view name = "ggx_conductor_sep";
+};
+struct Beckmann : Microfacet<BeckmannSeparable, Schlick> {
+    static constexpr std::string_view name = "beckmann";
+};
+struct BeckmannDielectric : Microfacet<BeckmannSeparable, Dielectric> {
+    static constexpr std::string_view name = "beckmann_dielectric";
+};
+struct BeckmannConductor : Microfacet<BeckmannSeparable, Conductor> {
+    static constexpr std::string_view name = "beckmann_conductor";
+};
 
 // Anisotropic GGX with height-correlated masking and Schlick Fresnel; αx along the tangent +x.
 struct GgxAniso {
