@@ -10,30 +10,11 @@
 #include "brdfz/repr/tabular.h"
 #include "brdfz/runtime/layout.h"
 #include "brdfz/runtime/runtime.h"
+#include "brdfzrt/runtime_brdf.h"
 #include "detail/examples.h"
 
 namespace brdfz::formats {
 namespace {
-
-// A material read through brdfz::runtime, in double.
-class RuntimeBrdf final : public Brdf {
-public:
-    explicit RuntimeBrdf(runtime::Material m) : m_(std::move(m)) {}
-    int channels() const override { return 3; }
-    std::size_t nbytes() const override { return m_.nbytes(); }
-    std::string describe() const override { return "runtime layout of " + m_.describe(); }
-
-protected:
-    Rgb eval_above(const Vec3& wi, const Vec3& wo) const override { return m_.eval(wi, wo); }
-    BrdfSample sample_above(const Vec3& wo, double u1, double u2) const override {
-        const runtime::Sample64 s = m_.sample(wo, u1, u2);
-        return {s.wi, s.pdf, s.weight};
-    }
-    double pdf_above(const Vec3& wo, const Vec3& wi) const override { return m_.pdf(wo, wi); }
-
-private:
-    runtime::Material m_;
-};
 
 Loaded read(const std::string& path, const LoadOptions&) {
     std::string error;

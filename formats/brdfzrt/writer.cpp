@@ -17,6 +17,7 @@
 #include "brdfz/runtime/crc32c.h"
 #include "brdfz/runtime/layout.h"
 #include "brdfz/tabulate.h"
+#include "brdfzrt/runtime_brdf.h"
 #include "detail/atomic_file.h"
 
 namespace brdfz::runtime_layout {
@@ -173,13 +174,24 @@ const GridSampler& own_sampler(const Brdf& brdf) {
 }  // namespace
 
 std::vector<unsigned char> encode(const Brdf& brdf, const std::string& describe) {
+    // A layout read back is written as it was.
+    if (const auto* read = dynamic_cast<const formats::RuntimeBrdf*>(&brdf)) {
+        const auto* bytes = static_cast<const unsigned char*>(read->material().data());
+        return std::vector<unsigned char>(bytes, bytes + read->material().nbytes());
+    }
     Builder b;
     const std::string text = describe.empty() ? brdf.describe() : describe;
     b.add(L::kDesc, 0, L::DType::U8, text.data(), text.size());
     if (const auto* a = dynamic_cast<const AnalyticBrdf*>(&brdf)) {
         b.add_int(L::kKind, 0, {static_cast<std::int32_t>(L::Kind::Analytic)});
-        const std::string model = a->model().text();
-        b.add(L::kModel, 0, L::DType::U8, model.data(), model.size());
+        // The families term by term ("lafortune3" as three "lafortune"), so that a reader needs no
+        // model-string grammar: parameters follow in the terms' order.
+        std::string terms;
+        for (const Model::Term& t : a->model().terms()) {
+            if (!terms.empty()) terms += '+';
+            terms += t.type->name;
+        }
+        b.add(L::kModel, 0, L::DType::U8, terms.data(), terms.size());
         b.add(L::kParams, 0, L::DType::F64, a->params().data(), a->params().size());
         const std::vector<double>& albedo = a->sampler().albedo_table();
         b.add(L::kAlbedo, 0, L::DType::F64, albedo.data(), albedo.size());

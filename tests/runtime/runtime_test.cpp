@@ -156,6 +156,15 @@ TEST_CASE("runtime: every gridded kind agrees with the library (synthetic materi
     }
 }
 
+TEST_CASE("runtime: analytic models agree with the library", "[runtime][analytic]") {
+    for (const char* text : {"lambert+ggx", "lambert+beckmann+ward", "lafortune3", "ggx_aniso+ashikhmin_shirley",
+                             "lambert+ggx_conductor+blinn_phong+ggx_sep"}) {
+        INFO(text);
+        const Model model = Model::parse(text);
+        check_agreement(AnalyticBrdf(model, model.defaults()), 20000);
+    }
+}
+
 TEST_CASE("runtime: PCA materials and fine-sampled ones are exported with their compact sampler", "[runtime]") {
     test::TempDir dir;
     std::vector<Table> tables;

@@ -22,6 +22,7 @@
 #include "brdfz/runtime/kernels/compact_sampler.h"
 #include "brdfz/runtime/kernels/factored.h"
 #include "brdfz/runtime/kernels/grid.h"
+#include "brdfz/runtime/kernels/lobe_mixture.h"
 #include "brdfz/runtime/kernels/phi_h.h"
 #include "brdfz/runtime/kernels/values.h"
 #include "brdfz/runtime/layout.h"
@@ -50,6 +51,9 @@ struct Object {
     // φh stacks: slices [first, first + count) of Data::slices.
     bool bilateral = false;
     std::size_t first = 0, count = 0;
+    // Analytic models: the terms, the parameters and the lobe mixture's albedo table.
+    std::vector<k::LobeTerm> terms;
+    k::LobeMixtureView lobes;
 };
 
 struct Data {
@@ -244,6 +248,33 @@ void read_factored(const Sections& s, Object& o) {
     }
 }
 
+void read_analytic(const Sections& s, Object& o) {
+    const Section* text = s.find(L::kModel);
+    if (!text || text->dtype != L::DType::U8 || text->count == 0 || text->count > 4096) fail(s.where(L::kModel) + " is missing or malformed");
+    const std::string model = std::string(s.get<char>(L::kModel, L::DType::U8, text->count), text->count);
+    std::size_t params = 0;
+    for (std::size_t at = 0; at <= model.size();) {
+        const std::size_t plus = std::min(model.find('+', at), model.size());
+        const int family = k::lobe_family(std::string_view(model).substr(at, plus - at));
+        if (family < 0) fail("unknown lobe family '" + model.substr(at, plus - at) + "'");
+        if (o.terms.size() == k::kMaxLobeTerms) fail("more than " + std::to_string(k::kMaxLobeTerms) + " lobes");
+        o.terms.push_back({family, params});
+        params += k::kLobeFamilies[family].params;
+        at = plus + 1;
+    }
+    const double* p = s.get<double>(L::kParams, L::DType::F64, params);
+    for (const k::LobeTerm& t : o.terms) {
+        const k::LobeFamily& f = k::kLobeFamilies[t.family];
+        for (std::size_t i = 0; i < f.params; ++i)
+            if (!(p[t.offset + i] >= f.specs[i].lo && p[t.offset + i] <= f.specs[i].hi))
+                fail("parameter " + std::string(f.name) + "." + std::string(f.specs[i].name) + " outside its bounds");
+    }
+    const double* albedo = s.get<double>(L::kAlbedo, L::DType::F64, k::kAlbedoNodes * o.terms.size());
+    for (std::size_t i = 0; i < k::kAlbedoNodes * o.terms.size(); ++i)
+        if (!(albedo[i] >= 0.0 && albedo[i] < std::numeric_limits<double>::infinity())) fail("an albedo is negative or not finite");
+    o.lobes = {o.terms.data(), o.terms.size(), p, albedo};
+}
+
 // The compact sampler's sections, checked as the library checks its tables.
 void read_sampler(const Sections& s, Data& d) {
     const std::int32_t* shape = s.get<std::int32_t>(L::kSamplerShape, L::DType::I32, 3);
@@ -307,7 +338,7 @@ void parse(Data& d) {
         switch (o.kind) {
             case L::Kind::Table: return read_table(s, o);
             case L::Kind::Factored: return read_factored(s, o);
-            case L::Kind::Analytic: fail("analytic models are not read by this runtime yet");
+            case L::Kind::Analytic: return read_analytic(s, o);
             case L::Kind::PhiH: fail("a φh slice cannot be a stack");
         }
     };
@@ -327,7 +358,8 @@ void parse(Data& d) {
         if (objects != 1) fail("objects beyond the root of a material without φh slices");
         read_object(root, d.root);
     }
-    read_sampler(root, d);
+    // An analytic model samples its lobes; every other kind carries the compact sampler.
+    if (d.root.kind != L::Kind::Analytic) read_sampler(root, d);
 }
 
 std::shared_ptr<const Data> parsed(std::unique_ptr<Data> d, std::string* error) {
@@ -375,9 +407,8 @@ void eval_object(const Data& d, const Object& o, const Vec3& wi, const Vec3& wo,
             for (int c = 0; c < 3; ++c) f[c] = x[c] * (1.0 - pick.t) + y[c] * pick.t;
             return;
         }
-        case L::Kind::Analytic: break;
+        case L::Kind::Analytic: return k::lobe_mixture_eval(o.lobes, wi, wo, f);
     }
-    f[0] = f[1] = f[2] = 0.0;
 }
 
 Rgb64 eval64(const Data* d, Vec3 wi, Vec3 wo) {
@@ -389,14 +420,21 @@ Rgb64 eval64(const Data* d, Vec3 wi, Vec3 wo) {
 
 double pdf64(const Data* d, Vec3 wo, Vec3 wi) {
     if (!d || !prepare_direction(wo) || !prepare_direction(wi) || !(wi.z > 0.0 && wo.z > 0.0)) return 0.0;
+    if (d->root.kind == L::Kind::Analytic) return k::lobe_mixture_pdf(d->root.lobes, wo, wi);
     return k::compact_pdf(d->sampler, wo, wi);
 }
 
 Sample64 sample64(const Data* d, Vec3 wo, double u1, double u2) {
     if (!d || !prepare_direction(wo) || !(wo.z > 0.0 && u1 >= 0.0 && u1 < 1.0 && u2 >= 0.0 && u2 < 1.0)) return {};
-    const k::CompactDraw draw = k::compact_sample(d->sampler, wo, u1, u2);
-    if (!(draw.wi.z > 0.0 && draw.pdf > 0.0 && draw.pdf < std::numeric_limits<double>::infinity())) return {};
-    Sample64 s{draw.wi, draw.pdf, {}};
+    Sample64 s;
+    if (d->root.kind == L::Kind::Analytic) {
+        const k::LobeMixtureDraw draw = k::lobe_mixture_sample(d->root.lobes, wo, u1, u2);
+        s.wi = draw.wi, s.pdf = draw.pdf;
+    } else {
+        const k::CompactDraw draw = k::compact_sample(d->sampler, wo, u1, u2);
+        s.wi = draw.wi, s.pdf = draw.pdf;
+    }
+    if (!(s.wi.z > 0.0 && s.pdf > 0.0 && s.pdf < std::numeric_limits<double>::infinity())) return {};
     double f[3];
     eval_object(*d, d->root, s.wi, wo, f);
     for (int c = 0; c < 3; ++c) s.weight[c] = f[c] * s.wi.z / s.pdf;  // the library's arithmetic
@@ -422,6 +460,11 @@ Material Material::from_memory(const void* data, std::size_t size, bool copy, st
         }
         d->bytes = d->owned.data();
     } else {
+        // Sections are read in place as arrays of up to 8-byte elements.
+        if (reinterpret_cast<std::uintptr_t>(data) % 8 != 0) {
+            if (error) *error = "borrowed layout bytes must be 8-byte aligned (copy them instead)";
+            return {};
+        }
         d->bytes = static_cast<const unsigned char*>(data);
     }
     d->size = size;
@@ -469,6 +512,7 @@ Material Material::open(const std::string& path, std::string* error) {
 }
 
 std::string Material::describe() const { return d_ ? d_->describe : std::string(); }
+const void* Material::data() const { return d_ ? d_->bytes : nullptr; }
 std::size_t Material::nbytes() const { return d_ ? d_->size : 0; }
 std::size_t Material::sampler_nbytes() const { return d_ ? d_->sampler_bytes : 0; }
 

@@ -63,7 +63,7 @@ constexpr std::uint32_t kFactorU = tag("FACU");       // f32 or f16 [rows·m]
 constexpr std::uint32_t kFactorV = tag("FACV");       // f32 or f16 [columns·m]
 constexpr std::uint32_t kFactorColour = tag("FCOL");  // f32[3·rank], shared colour only
 // Analytic models.
-constexpr std::uint32_t kModel = tag("MODL");   // u8[n]: the model string, e.g. "lambert+ggx"
+constexpr std::uint32_t kModel = tag("MODL");   // u8[n]: the lobe families joined by '+', e.g. "lambert+ggx"
 constexpr std::uint32_t kParams = tag("PRMS");  // f64[k]
 constexpr std::uint32_t kAlbedo = tag("ALBD");  // f64[16·terms]: the lobe mixture's albedo table
 // φh stacks.

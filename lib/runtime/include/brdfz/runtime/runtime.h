@@ -67,7 +67,9 @@ public:
     explicit operator bool() const { return d_ != nullptr; }
     // What the material is ("svd ... dtype f16"), as the library described it when it was exported.
     std::string describe() const;
-    // Bytes of the layout (the file), and of the sampler's tables among them.
+    // The layout's bytes (the file), e.g. to upload them to a GPU, their size, and the size of the
+    // sampler's sections among them.
+    const void* data() const;
     std::size_t nbytes() const;
     std::size_t sampler_nbytes() const;
 

@@ -43,6 +43,7 @@ namespace brdfz::runtime::kernels {
 struct LobeFamily {
     std::string_view name;  // its term in a model string
     std::size_t params;     // how many parameters it reads
+    const ParamSpec* specs; // theirs, with the bounds inside which the lobe is valid
     void (*eval)(const Geometry<double>& g, const double* p, double out[3]);
     Vec3 (*sample)(const double* p, const Vec3& wo, double u1, double u2);
     double (*pdf)(const double* p, const Vec3& wo, const Vec3& w);
@@ -51,7 +52,8 @@ struct LobeFamily {
 
 template <typename... Families>
 constexpr std::array<LobeFamily, sizeof...(Families)> lobe_families_of(lobes::FamilyList<Families...>) {
-    return {LobeFamily{Families::name, Families::params.size(), &Families::template eval<double, double>,
+    return {LobeFamily{Families::name, Families::params.size(), Families::params.data(),
+                       &Families::template eval<double, double>,
                        &Families::sample, &Families::pdf, &lobes::folded_pdf<Families>}...};
 }
 
