@@ -131,7 +131,7 @@ void add_compress(CLI::App& app) {
             select.max_error = args->max_error;
             select.metric = parse_scene_metric(args->metric);
             select.candidates = args->candidates;
-            if (!args->scene.empty()) select.scene = build_scene(scene_json::read(args->scene));
+            if (!args->scene.empty()) select.scene = scene_json::load(args->scene);
         }
         TrialOptions options;
         options.compress = with_file_access(options.compress);

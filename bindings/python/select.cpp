@@ -101,7 +101,7 @@ void bind_select(py::module_& m) {
     m.def("read_scene", [](const Path& path) {
               return reading(path, [&] {
                   py::gil_scoped_release release;
-                  return build_scene(scene_json::read(path.string()));
+                  return scene_json::load(path.string());
               });
           },
           py::arg("path"), "a scene file (docs/scene-json.md), its samples drawn");
