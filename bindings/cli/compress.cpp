@@ -126,6 +126,7 @@ void add_compress(CLI::App& app) {
         if (!args->automatic) check_spec(args->repr);
         for (const std::string& c : args->candidates) check_spec(c);
         format_of(args->out, Access::Write);
+        check_output(args->out);
         SelectOptions select;
         if (args->automatic) {
             select.max_error = args->max_error;

@@ -147,6 +147,7 @@ void add_fit(CLI::App& app) {
         // Check the model string and the output's format before spending time on loading and fitting.
         Model::parse(args->model);
         const std::string out_format = format_of(args->out, Access::Write);
+        check_output(args->out);
         FitResult r = [&] {
             if (holds_measurements(args->in)) return fit(load_measurements(args->in).set, args->model, o);
             const Loaded in = load(args->in, args->load);

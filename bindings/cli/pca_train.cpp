@@ -77,6 +77,7 @@ void add_pca_train(CLI::App& app) {
     add_load_options(cmd, args->load);
     cmd->callback([args] {
         if (format_of(args->out, Access::Write) != "brdfz") throw ValueError(args->out + ": a basis is written as a .brdfz file");
+        check_output(args->out);
         const std::vector<std::string> files = training_files(args->in);
         if (files.size() < 2) throw ValueError("pca-train needs at least 2 materials, got " + std::to_string(files.size()));
         const auto start = std::chrono::steady_clock::now();
