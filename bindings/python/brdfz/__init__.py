@@ -118,16 +118,32 @@ def read_scene(source: Union[Path, Mapping, Scene]) -> Scene:
         return source
     if not isinstance(source, Mapping):
         return _core.read_scene(source)
-    doc = {"format": "brdfz-scene", "version": 1, **source}
+    doc = {"format": "brdfz-scene", "version": 1, **_json_values(source, "")}
     # One schema, one reader: the dict goes through the C++ scene file reader.
     with tempfile.TemporaryDirectory() as tmp:
         path = os.path.join(tmp, "scene.json")
         with open(path, "w") as f:
-            json.dump(doc, f)
+            json.dump(doc, f, allow_nan=False)
         try:
             return _core.read_scene(path)
         except ValueError as e:
             raise type(e)(str(e).replace(path, "scene dict")) from None
+
+
+def _json_values(value, where: str):
+    """A scene dict's values as JSON has them: numpy scalars and arrays as numbers and lists; a number
+    that is not finite, or a value JSON cannot hold, is a ValueError naming its member."""
+    if hasattr(value, "tolist"):  # numpy scalars and arrays
+        value = value.tolist()
+    if isinstance(value, Mapping):
+        return {str(k): _json_values(v, f"{where}.{k}" if where else str(k)) for k, v in value.items()}
+    if isinstance(value, (list, tuple)):
+        return [_json_values(v, f"{where}[{i}]") for i, v in enumerate(value)]
+    if isinstance(value, float) and not math.isfinite(value):
+        raise ValueError(f"scene dict: {where}: {value} is not a finite number")
+    if value is None or isinstance(value, (bool, int, float, str)):
+        return value
+    raise ValueError(f"scene dict: {where}: a value of type {type(value).__name__} is not JSON")
 
 
 def trial(brdf: Brdf, spec: str, *, measure_speed: bool = True, max_theta: float = 80.0, threads: int = 0,
