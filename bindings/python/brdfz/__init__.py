@@ -12,7 +12,11 @@ files), OSError (FileNotFoundError when the file read does not exist).
 
 Long operations (compress, fit, tabulate, save, convert) take ``progress``: True prints
 "label NN%" on stderr, a callable receives the fraction done (0..1] (from a worker thread, holding
-the GIL). They release the GIL while they work, as do Brdf.eval / eval_cos / pdf / sample.
+the GIL). They release the GIL while they work, as do Brdf.eval / eval_cos / pdf / sample. A
+progress callable that raises stops the operation at that call, and Ctrl-C (KeyboardInterrupt, or
+any signal handler's exception) stops compress, trial, fit, metrics, tabulate, save and convert
+within a few hundredths of a second; the exception is raised and no output file is written.
+``threads`` (0: one per hardware thread) is at most MAX_THREADS (1024); more is a ValueError.
 """
 from __future__ import annotations
 
@@ -24,7 +28,7 @@ import tempfile
 from typing import Callable, Mapping, Optional, Sequence, Tuple, Union
 
 from . import _core
-from ._core import __version__
+from ._core import MAX_THREADS, __version__
 from ._core import (
     Brdf,
     Candidate,
@@ -53,8 +57,8 @@ from ._core import (
 )
 
 __all__ = [
-    "Brdf", "Candidate", "ChannelMetrics", "Compressed", "FitReport", "FitResult", "FormatError", "Metrics",
-    "Scene", "Selection", "Trial", "UnsupportedError", "ValidationCheck", "ValidationReport", "albedo",
+    "Brdf", "Candidate", "ChannelMetrics", "Compressed", "FitReport", "FitResult", "FormatError", "MAX_THREADS",
+    "Metrics", "Scene", "Selection", "Trial", "UnsupportedError", "ValidationCheck", "ValidationReport", "albedo",
     "benchmark_specs", "compress", "compress_kinds", "convert", "default_candidates", "fit", "format_of", "formats",
     "load", "metric_samples", "metrics", "metrics_at", "read_scene", "reciprocity_error", "representations", "save",
     "simd", "tabulate", "trial", "validate",
