@@ -100,6 +100,33 @@ TEST_CASE("robustness: float32 table payloads: +Inf, negatives and all-NaN are r
     check_evaluates(*load(p.string()).brdf);
 }
 
+TEST_CASE("robustness: a container whose units, cosine or conventions say otherwise is refused, naming them",
+          "[robustness][container]") {
+    const test::TempDir dir;
+    const fs::path p = dir.path / "t.brdfz";
+    const std::vector<float> values = plausible(2 * 3 * 4);
+    test::write_float32_table(p.string(), 2, 3, 4, values);
+    REQUIRE(load_error(p) == "loaded");
+    struct Case {
+        std::function<void(test::Meaning&)> change;
+        std::string message;
+    };
+    const std::vector<Case> cases{
+        {[](test::Meaning& m) { m.units = "W/(m^2 sr)"; }, "attribute 'units' is \"W/(m^2 sr)\"; this brdfz reads only \"1/sr\""},
+        {[](test::Meaning& m) { m.cosine = "included"; }, "attribute 'cosine' is \"included\"; this brdfz reads only \"excluded\""},
+        {[](test::Meaning& m) { m.conventions = "normal +y"; }, "attribute 'conventions' is \"normal +y\""},
+    };
+    for (const Case& c : cases) {
+        test::Meaning meaning;
+        c.change(meaning);
+        test::write_float32_table(p.string(), 2, 3, 4, values, meaning);
+        INFO(c.message);
+        CHECK_THROWS_AS(load(p.string()), UnsupportedError);
+        CHECK_THROWS_WITH(load(p.string()), Catch::StartsWith(p.string() + ": " + c.message));
+        CHECK_THROWS_WITH(container::read_metadata(p.string()), Catch::Contains(c.message));
+    }
+}
+
 TEST_CASE("robustness: compact tables without a value are refused", "[robustness][container][compact]") {
     const test::TempDir dir;
     const fs::path p = dir.path / "c.brdfz";
