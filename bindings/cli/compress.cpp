@@ -116,7 +116,7 @@ void add_compress(CLI::App& app) {
                                                      "to richest of every kind)")
         ->needs(automatic);
     add_over_options(cmd, args->metrics);
-    cmd->add_option("--threads", args->threads, "0: one per hardware thread")->capture_default_str();
+    add_threads_option(cmd, args->threads);
     cmd->add_flag("--json", args->json, "print the report as JSON");
     add_load_options(cmd, args->load);
     cmd->callback([args] {

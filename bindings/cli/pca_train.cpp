@@ -72,7 +72,7 @@ void add_pca_train(CLI::App& app) {
     cmd->add_option("--max-invalid", args->train.max_invalid_fraction,
                     "drop a bin invalid in more than this fraction of the materials")
         ->capture_default_str();
-    cmd->add_option("--threads", args->train.threads, "0: one per hardware thread")->capture_default_str();
+    add_threads_option(cmd, args->train.threads);
     cmd->add_flag("--json", args->json, "print the report as JSON");
     add_load_options(cmd, args->load);
     cmd->callback([args] {
