@@ -46,7 +46,7 @@ void read_pairs(const std::string& path, const Block& block) {
     wo.reserve(kBlock);
     std::string line;
     bool first = true;
-    for (int lineno = 1; std::getline(in, line); ++lineno) {
+    for (std::size_t lineno = 1; std::getline(in, line); ++lineno) {
         if (lineno == 1 && line.starts_with("\xEF\xBB\xBF")) line.erase(0, 3);  // a UTF-8 byte order mark
         if (line.find_first_not_of(" \t\r") == std::string::npos) continue;
         double v[6];

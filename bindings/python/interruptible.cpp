@@ -15,11 +15,11 @@ struct Interruptible::State {
     std::thread::id caller = std::this_thread::get_id();
     std::chrono::steady_clock::time_point next_poll{};  // read and written on the caller's thread only
 
-    // In a handler of py::error_already_set: keeps the first exception and stops the work.
-    [[noreturn]] void fail() {
+    // Keeps the first exception and stops the work.
+    [[noreturn]] void fail(std::exception_ptr e) {
         {
             std::lock_guard lock(error_mutex);
-            if (!error) error = std::current_exception();
+            if (!error) error = std::move(e);
         }
         stopped = true;
         throw Stopped{};
@@ -39,7 +39,7 @@ std::function<void(double)> Interruptible::progress() {
         try {
             state->callable(fraction);
         } catch (py::error_already_set&) {
-            state->fail();
+            state->fail(std::current_exception());
         }
     };
 }
@@ -50,7 +50,7 @@ void Interruptible::call(const std::function<void()>& fn) {
     try {
         fn();
     } catch (py::error_already_set&) {
-        state_->fail();
+        state_->fail(std::current_exception());
     }
 }
 
@@ -64,13 +64,7 @@ StopCheck Interruptible::stop_check() {
         py::gil_scoped_acquire gil;
         // Runs the handlers of the signals that arrived (on Python's main thread; elsewhere it does
         // nothing): Ctrl-C's raises KeyboardInterrupt.
-        if (PyErr_CheckSignals() != 0) {
-            try {
-                throw py::error_already_set();
-            } catch (py::error_already_set&) {
-                state->fail();
-            }
-        }
+        if (PyErr_CheckSignals() != 0) state->fail(std::make_exception_ptr(py::error_already_set()));
     };
 }
 

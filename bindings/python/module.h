@@ -54,8 +54,9 @@ auto reading(const std::filesystem::path& path, Fn&& fn) {
 
 // Library work that Python can stop. run(fn) calls fn with the GIL released under a stop check
 // (brdfz/control.h, which the library polls between items of work): a signal whose handler raises
-// (Ctrl-C's KeyboardInterrupt) stops the work within kSignalPoll of its arrival, a progress callable
-// (progress()) or another callback (call()) that raises stops it at that call. The exception is raised
+// (Ctrl-C's KeyboardInterrupt) stops the work at the library's next poll on the calling thread (where
+// the handlers are run, at most every kSignalPoll), a progress callable (progress()) or another
+// callback (call()) that raises stops it at that call. The exception is raised
 // once the library has unwound; an operation stopped so writes no file (writers commit an output only
 // when it is complete). Python runs signal handlers on its main thread only: work called from another
 // thread stops for its callables' exceptions, not for signals.
