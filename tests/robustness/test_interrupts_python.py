@@ -60,9 +60,9 @@ def test_a_raising_progress_callable_stops_save_and_convert_and_nothing_is_writt
 
 def test_a_raising_progress_callable_stops_compress_at_once(brdfz, table):
     """One raise: no further candidates are built (auto), no further iterations run (a spec)."""
-    slow = "svd:rank=8,iterations=100000,res=90x90x180"
+    slow = "svd:rank=8,iterations=100000,res=90x90x180"  # several seconds
     t0 = time.monotonic()
-    brdfz.compress(table, "tabular:res=4x4x8")
+    brdfz.trial(table, "tabular:res=4x4x8")  # what the first candidate costs
     cheap = time.monotonic() - t0
     for call in (lambda p: brdfz.compress(table, auto=True, max_error=1e-12, progress=p,
                                           candidates=["tabular:res=4x4x8", slow, slow]),
@@ -72,8 +72,7 @@ def test_a_raising_progress_callable_stops_compress_at_once(brdfz, table):
         t0 = time.monotonic()
         with pytest.raises(ZeroDivisionError):
             call(raiser)
-        # The slow spec alone runs for several seconds.
-        assert time.monotonic() - t0 < cheap + 1.0 and raiser.calls == 1
+        assert time.monotonic() - t0 < 2 * cheap + 1.0 and raiser.calls == 1
 
 
 CHILD = textwrap.dedent("""
