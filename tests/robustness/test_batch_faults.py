@@ -18,10 +18,15 @@ import pytest
 
 from conftest import import_brdfz
 
-brdfz = import_brdfz()
-batch = pytest.importorskip("brdfz.batch")
-
 SPEC = "tabular:res=4x4x8"
+
+
+# Session-scoped and first in each test's arguments: without the module a test skips before any other
+# fixture is made.
+@pytest.fixture(scope="session")
+def batch():
+    import_brdfz()
+    return pytest.importorskip("brdfz.batch")
 
 
 def read_csv(path):
@@ -39,17 +44,9 @@ def command(*args):
     return [sys.executable, "-m", "brdfz.batch", *map(str, args)]
 
 
-@pytest.fixture(scope="module")
-def small_table(demo_table, tmp_path_factory):
-    """The demo's material on a 16x16x32 grid: a task on it takes a fraction of a second."""
-    path = tmp_path_factory.mktemp("small") / "coated.binary"
-    brdfz.save(brdfz.load(demo_table), path, res=(16, 16, 32))
-    return path
-
-
 @pytest.fixture
-def material(small_table, tmp_path):
-    """That table alone in a folder."""
+def material(batch, small_table, tmp_path):
+    """A small table (a task on it takes a fraction of a second) alone in a folder."""
     path = tmp_path / "in" / small_table.name
     path.parent.mkdir()
     shutil.copy(small_table, path)
@@ -57,7 +54,7 @@ def material(small_table, tmp_path):
 
 
 @pytest.mark.parametrize("name", ["...bsdf", "..binary", "catalogue.csv.binary", "renders.bsdf"])
-def test_a_material_name_that_is_not_a_folder_of_its_own_in_out_is_refused(material, tmp_path, capsys, name):
+def test_a_material_name_that_is_not_a_folder_of_its_own_in_out_is_refused(batch, material, tmp_path, capsys, name):
     folder = material.parent
     shutil.copy(material, folder / name)
     out = tmp_path / "o" / "inner"
@@ -69,7 +66,7 @@ def test_a_material_name_that_is_not_a_folder_of_its_own_in_out_is_refused(mater
     assert not (tmp_path / "o").exists()
 
 
-def test_every_output_follows_the_umask_and_a_replaced_one_keeps_its_mode(material, tmp_path):
+def test_every_output_follows_the_umask_and_a_replaced_one_keeps_its_mode(batch, material, tmp_path):
     pytest.importorskip("matplotlib")  # summary.md comes with the charts
     out = tmp_path / "o"
     umask = os.umask(0o027)
@@ -86,7 +83,7 @@ def test_every_output_follows_the_umask_and_a_replaced_one_keeps_its_mode(materi
     assert stat.S_IMODE((out / "catalogue.csv").stat().st_mode) == 0o600
 
 
-def test_a_rerun_rebuilds_an_output_changed_in_place(material, tmp_path):
+def test_a_rerun_rebuilds_an_output_changed_in_place(batch, material, tmp_path):
     out = tmp_path / "o"
     first = batch.run([material], [SPEC], out, workers=1, charts=False)
     output = out / first[0]["output"]
@@ -95,11 +92,11 @@ def test_a_rerun_rebuilds_an_output_changed_in_place(material, tmp_path):
     output.write_bytes(os.urandom(len(good)))
     again = batch.run([material], [SPEC], out, workers=1, charts=False)
     assert again[0]["status"] == "ok" and again[0]["started"] >= first[0]["started"]
-    assert brdfz.load(output).nbytes == first[0]["bytes"]
+    assert batch.brdfz.load(output).nbytes == first[0]["bytes"]
     assert json.loads(output.with_suffix(".json").read_text())["output_sha256"] == batch.file_sha256(output)
 
 
-def test_equivalent_spellings_of_a_spec_are_one_task(material, tmp_path):
+def test_equivalent_spellings_of_a_spec_are_one_task(batch, material, tmp_path):
     spellings = [SPEC, "tabular:res=04x4x008", "tabular:dtype=f32,res=4x4x8", "tabular:res=4x4x8,phih=1,dwarp=0.0",
                  " tabular:lookup=linear,res=4x4x8 "]
     assert {batch.normalise_spec(s) for s in spellings} == {"tabular:res=4x4x8"}
@@ -116,7 +113,7 @@ def test_equivalent_spellings_of_a_spec_are_one_task(material, tmp_path):
     assert again[0]["spec"] == spellings[1] and again[0]["started"] == rows[0]["started"]
 
 
-def test_a_scheduler_that_cannot_be_reached_leaves_nothing(material, tmp_path, capsys):
+def test_a_scheduler_that_cannot_be_reached_leaves_nothing(batch, material, tmp_path, capsys):
     dask = pytest.importorskip("dask", reason="Dask is not installed")
     out = tmp_path / "o"
     with dask.config.set({"distributed.comm.timeouts.connect": "1s"}):
@@ -126,7 +123,7 @@ def test_a_scheduler_that_cannot_be_reached_leaves_nothing(material, tmp_path, c
     assert not out.exists()
 
 
-def test_without_dask_more_than_one_worker_is_one_line(material, tmp_path, capsys, monkeypatch):
+def test_without_dask_more_than_one_worker_is_one_line(batch, material, tmp_path, capsys, monkeypatch):
     monkeypatch.setitem(sys.modules, "distributed", None)  # `import distributed` fails as if not installed
     out = tmp_path / "o"
     assert batch.main([str(material), "--specs", SPEC, "--out", str(out), "--workers", "2"]) == 1
@@ -135,7 +132,7 @@ def test_without_dask_more_than_one_worker_is_one_line(material, tmp_path, capsy
     assert not out.exists()
 
 
-def test_threads_beyond_the_limit_is_one_line(material, tmp_path, capsys):
+def test_threads_beyond_the_limit_is_one_line(batch, material, tmp_path, capsys):
     out = tmp_path / "o"
     assert batch.main([str(material), "--specs", SPEC, "--out", str(out), "--workers", "1", "--threads", "1000000000"]) == 1
     assert one_line(capsys.readouterr().err) == (
@@ -149,7 +146,7 @@ def limited(max_bytes):
     return setup
 
 
-def test_a_full_disk_names_the_catalogue_not_its_temporary(material, tmp_path):
+def test_a_full_disk_names_the_catalogue_not_its_temporary(batch, material, tmp_path):
     """Every file larger than 300 bytes fails to be written, the catalogue's header included."""
     out = tmp_path / "o"
     run = subprocess.run(command(material, "--specs", SPEC, "--out", out, "--workers", "1", "--no-charts"),
@@ -159,7 +156,7 @@ def test_a_full_disk_names_the_catalogue_not_its_temporary(material, tmp_path):
     assert not [p for p in out.rglob("*") if ".tmp" in p.name]
 
 
-def test_a_catalogue_that_cannot_be_written_is_named(tmp_path):
+def test_a_catalogue_that_cannot_be_written_is_named(batch, tmp_path):
     missing = tmp_path / "missing" / "catalogue.csv"
     with pytest.raises(FileNotFoundError) as e:
         batch.report.write_csv([], missing, batch.COLUMNS)
@@ -173,7 +170,7 @@ def test_a_catalogue_that_cannot_be_written_is_named(tmp_path):
 
 
 @pytest.mark.heavy  # a LocalCluster of 2 workers and a dozen tasks: about 10 s
-def test_ctrl_c_with_workers_busy_leaves_the_catalogue_and_the_records_in_agreement(demo_table, tmp_path):
+def test_ctrl_c_with_workers_busy_leaves_the_catalogue_and_the_records_in_agreement(batch, demo_table, tmp_path):
     pytest.importorskip("distributed", reason="Dask is not installed")
     names = []
     for k in range(4):  # full-size tables: each task runs for about a second

@@ -29,8 +29,8 @@ def lambert(tmp_path):
 @pytest.mark.parametrize("command", [["convert", "{in}", "{out}.binary"], ["validate", "{in}"],
                                      ["pca-train", "{in}", "{in}", "-o", "{out}.brdfz"]])
 @pytest.mark.parametrize("res", ["4294967298x4294967300x1", "8x8x4294967312", "8x-8x16", "8x8x16x", " 8x8x16"])
-def test_a_resolution_that_wraps_or_is_not_digits_is_refused(cli, demo_table, tmp_path, command, res):
-    args = [a.format(**{"in": demo_table, "out": tmp_path / "x"}) for a in command]
+def test_a_resolution_that_wraps_or_is_not_digits_is_refused(cli, small_table, tmp_path, command, res):
+    args = [a.format(**{"in": small_table, "out": tmp_path / "x"}) for a in command]
     proc = run(cli, *args, "--res", res, check=False)
     assert proc.returncode == 1, proc.stdout
     line = one_error_line(proc)
@@ -42,30 +42,30 @@ def test_a_resolution_that_wraps_or_is_not_digits_is_refused(cli, demo_table, tm
                                      ["fit", "{in}", "--model", "lambert", "-o", "{out}.json"],
                                      ["pca-train", "{in}", "{in}", "-o", "{out}.brdfz"]])
 @pytest.mark.parametrize("threads", ["1000000000", "99999999999999999999", "1025"])
-def test_threads_beyond_the_limit_are_one_line_before_any_work(cli, demo_table, tmp_path, command, threads):
-    args = [a.format(**{"in": demo_table, "out": tmp_path / "x"}) for a in command]
+def test_threads_beyond_the_limit_are_one_line_before_any_work(cli, small_table, tmp_path, command, threads):
+    args = [a.format(**{"in": small_table, "out": tmp_path / "x"}) for a in command]
     proc = run(cli, *args, "--threads", threads, check=False)
     assert proc.returncode == 1
     assert one_error_line(proc) == f"brdfz: --threads: {threads} is above the limit of 1024 threads (brdfz --help)"
     assert not any(tmp_path.iterdir())
 
 
-def test_fit_prints_no_solver_log_lines_with_more_threads_than_cores(cli, demo_table, tmp_path):
+def test_fit_prints_no_solver_log_lines_with_more_threads_than_cores(cli, small_table, tmp_path):
     """More threads than cores (within the limit): Ceres would log that it bounds them, through glog."""
-    proc = run(cli, "fit", demo_table, "--model", "lambert", "-o", tmp_path / "m.json", "--threads", "1024",
+    proc = run(cli, "fit", small_table, "--model", "lambert", "-o", tmp_path / "m.json", "--threads", "1024",
                "--starts", "2", "--samples", "2000")
     assert "InitGoogleLogging" not in proc.stderr and "num_threads" not in proc.stderr, proc.stderr
     assert proc.stderr == ""
 
 
 @pytest.mark.parametrize("seed", ["-1", "18446744073709551616", "99999999999999999999999"])
-def test_seeds_out_of_range_say_so(cli, demo_table, seed):
-    for args in (["sample", demo_table, "--wo", "0,0,1", "-n", "1"],
-                 ["diff", demo_table, demo_table, "--over", "directions", "--directions", "16"]):
+def test_seeds_out_of_range_say_so(cli, small_table, seed):
+    for args in (["sample", small_table, "--wo", "0,0,1", "-n", "1"],
+                 ["diff", small_table, small_table, "--over", "directions", "--directions", "16"]):
         proc = run(cli, *args, f"--seed={seed}", check=False)
         assert proc.returncode == 1 and proc.stdout == ""
         assert f"'{seed}' is outside [0, 18446744073709551615]" in one_error_line(proc)
-    proc = run(cli, "sample", demo_table, "--wo", "0,0,1", "-n", "1", "--seed=1e3", check=False)
+    proc = run(cli, "sample", small_table, "--wo", "0,0,1", "-n", "1", "--seed=1e3", check=False)
     assert "'1e3' is not an integer in [0, 18446744073709551615]" in one_error_line(proc)
 
 
@@ -76,9 +76,9 @@ def test_seeds_out_of_range_say_so(cli, demo_table, seed):
     ("tabular:res=4x4x8,phih=1200", "tabular: phih=1200 is outside [1, 253]"),
     ("nmf:rank=1,res=4x4x8,phih=85", "nmf: phih=85 is outside [1, 84]"),
 ])
-def test_spec_values_out_of_range_are_refused_before_any_build(cli, demo_table, tmp_path, spec, message):
+def test_spec_values_out_of_range_are_refused_before_any_build(cli, small_table, tmp_path, spec, message):
     out = tmp_path / "x.brdfz"
-    proc = run(cli, "compress", demo_table, "-o", out, "--repr", spec, check=False)
+    proc = run(cli, "compress", small_table, "-o", out, "--repr", spec, check=False)
     assert proc.returncode == 1
     assert one_error_line(proc) == f"brdfz: {message}"
     assert not out.exists()
