@@ -12,6 +12,7 @@
 #include "brdfz/fit/fit.h"
 #include "brdfz/formats/io.h"
 #include "brdfz/formats/merl.h"
+#include "brdfz/formats/scene_json.h"
 #include "brdfz/metrics.h"
 #include "brdfz/repr/analytic/model.h"
 #include "brdfz/repr/spec.h"
@@ -151,6 +152,15 @@ TEST_CASE("robustness: a file against itself is exactly 0; a reference with no r
     MeasurementSet negative;
     negative.samples.push_back({{0.0, 0.0, 1.0}, {0.0, 0.0, 1.0}, {-0.1, -0.2, -0.3}});
     CHECK_THROWS_WITH(compare(negative, material()), Catch::Contains("zero or negative at every sample"));
+}
+
+TEST_CASE("robustness: a scene value refused after parsing names the scene file", "[robustness][errors]") {
+    const test::TempDir dir;
+    const fs::path p = dir.path / "scene.json";
+    std::ofstream(p) << R"({"format": "brdfz-scene", "version": 1, "lights": [{"direction": [0, 0, 1], "intensity": -1}],
+                           "views": [{"axis": [0, 0, 1], "max_angle_deg": 30, "count": 4}]})";
+    CHECK_THROWS_AS(scene_json::load(p.string()), ValueError);
+    CHECK_THROWS_WITH(scene_json::load(p.string()), p.string() + ": scene: lights[0].intensity must be finite and >= 0");
 }
 
 TEST_CASE("robustness: messages are one printable line whatever bytes they quote", "[robustness][errors]") {
