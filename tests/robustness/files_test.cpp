@@ -140,7 +140,7 @@ TEST_CASE("robustness: without O_TMPFILE, the next write removes what a killed o
     CHECK(detail::remove_stale_temporaries(out.string()) == 0);
 }
 
-TEST_CASE("robustness: new files follow the umask; a replaced file keeps its mode", "[robustness][files]") {
+TEST_CASE("robustness: new files follow the umask, a replaced file keeps its mode", "[robustness][files]") {
     const test::TempDir dir;
     for (AtomicFile::Temporary kind : {AtomicFile::Temporary::Unnamed, AtomicFile::Temporary::Named}) {
         const fs::path p = dir.path / (kind == AtomicFile::Temporary::Named ? "named.binary" : "unnamed.binary");
@@ -175,7 +175,7 @@ TEST_CASE("robustness: new files follow the umask; a replaced file keeps its mod
     }
 }
 
-TEST_CASE("robustness: .brdfz bytes are reproducible with SOURCE_DATE_EPOCH; no HDF5 object times",
+TEST_CASE("robustness: .brdfz bytes are reproducible with SOURCE_DATE_EPOCH, no HDF5 object times",
           "[robustness][files][container]") {
     const test::TempDir dir;
     const TabularBrdf t = small_table();

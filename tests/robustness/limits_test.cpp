@@ -131,7 +131,7 @@ TEST_CASE("robustness: phih asks for at most the slices a .brdfz file holds, ref
     }
 }
 
-TEST_CASE("robustness: a file against itself is exactly 0; a reference with no reflectance is an error",
+TEST_CASE("robustness: a file against itself is exactly 0, a reference with no reflectance is an error",
           "[robustness][metrics]") {
     const test::TempDir dir;
     const fs::path p = dir.path / "m.binary";

@@ -143,7 +143,7 @@ TEST_CASE("robustness: compact tables without a value are refused", "[robustness
     CHECK_THAT(load_error(p), Catch::Contains("holds no value"));
 }
 
-TEST_CASE("robustness: factors that would overflow (3e38) are refused; large sane ones load", "[robustness][container][factored]") {
+TEST_CASE("robustness: factors that would overflow (3e38) are refused, large sane ones load", "[robustness][container][factored]") {
     const test::TempDir dir;
     const fs::path p = dir.path / "f.brdfz";
     std::vector<float> u(2 * 3, 0.5f), v(3 * 4 * 3, 0.5f);
@@ -251,7 +251,7 @@ TEST_CASE("robustness: PCA bases with values that are not finite, or negative me
     }
 }
 
-TEST_CASE("robustness: analytic parameters outside their bounds are refused; at the bounds they evaluate",
+TEST_CASE("robustness: analytic parameters outside their bounds are refused, at the bounds they evaluate",
           "[robustness][container][analytic]") {
     const test::TempDir dir;
     const fs::path p = dir.path / "a.brdfz";
@@ -377,7 +377,7 @@ TEST_CASE("robustness: RGL luminance with negative values loads, counted, and sa
     }
 }
 
-TEST_CASE("robustness: RGL rgb all NaN or all Inf is refused in .bsdf and .brdfz; partly, it is counted",
+TEST_CASE("robustness: RGL rgb all NaN or all Inf is refused in .bsdf and .brdfz, partly, it is counted",
           "[robustness][rgl]") {
     const test::TempDir dir;
     const fs::path bsdf = dir.path / "h.bsdf", brdfz = dir.path / "h.brdfz";
@@ -413,7 +413,7 @@ TEST_CASE("robustness: RGL rgb all NaN or all Inf is refused in .bsdf and .brdfz
     CHECK_THAT(load_error(bsdf), Catch::Contains("field 'vndf' holds 1 negative of 48 values"));
 }
 
-TEST_CASE("robustness: EXR tables: negative and infinite channels are invalid and counted; none valid is refused",
+TEST_CASE("robustness: EXR tables: negative and infinite channels are invalid and counted, none valid is refused",
           "[robustness][exr]") {
     const test::TempDir dir;
     const fs::path p = dir.path / "t.exr";

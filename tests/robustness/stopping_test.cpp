@@ -84,7 +84,7 @@ TEST_CASE("robustness: a stop check ends tabulation, metrics, factorisation, a f
     stopped_after(2, 1, [&] { select_representation(stored, so); });
 }
 
-TEST_CASE("robustness: a stopped save writes nothing; a check that never throws changes nothing",
+TEST_CASE("robustness: a stopped save writes nothing, a check that never throws changes nothing",
           "[robustness][stop]") {
     const test::TempDir dir;
     SaveOptions o;
