@@ -16,7 +16,7 @@ import time
 
 import pytest
 
-from conftest import import_brdfz
+from conftest import import_brdfz, run
 
 SPEC = "tabular:res=4x4x8"
 
@@ -149,10 +149,10 @@ def limited(max_bytes):
 def test_a_full_disk_names_the_catalogue_not_its_temporary(batch, material, tmp_path):
     """Every file larger than 300 bytes fails to be written, the catalogue's header included."""
     out = tmp_path / "o"
-    run = subprocess.run(command(material, "--specs", SPEC, "--out", out, "--workers", "1", "--no-charts"),
-                         capture_output=True, text=True, timeout=300, preexec_fn=limited(300))
-    assert run.returncode == 1
-    assert run.stderr.strip().splitlines()[-1] == f"batch: [Errno 27] File too large: '{out / 'catalogue.csv'}'"
+    proc = subprocess.run(command(material, "--specs", SPEC, "--out", out, "--workers", "1", "--no-charts"),
+                          capture_output=True, text=True, timeout=300, preexec_fn=limited(300))
+    assert proc.returncode == 1
+    assert proc.stderr.strip().splitlines()[-1] == f"batch: [Errno 27] File too large: '{out / 'catalogue.csv'}'"
     assert not [p for p in out.rglob("*") if ".tmp" in p.name]
 
 
@@ -170,12 +170,12 @@ def test_a_catalogue_that_cannot_be_written_is_named(batch, tmp_path):
 
 
 @pytest.mark.heavy  # a LocalCluster of 2 workers and a dozen tasks: about 10 s
-def test_ctrl_c_with_workers_busy_leaves_the_catalogue_and_the_records_in_agreement(batch, demo_table, tmp_path):
+def test_ctrl_c_with_workers_busy_leaves_the_catalogue_and_the_records_in_agreement(batch, cli, glossy, tmp_path):
     pytest.importorskip("distributed", reason="Dask is not installed")
-    names = []
-    for k in range(4):  # full-size tables: each task runs for about a second
-        names.append(tmp_path / f"m{k}.binary")
-        shutil.copy(demo_table, names[-1])
+    names = [tmp_path / f"m{k}.binary" for k in range(4)]
+    run(cli, "convert", glossy, names[0], "--res", "90x90x180")  # full size: each task runs for about a second
+    for name in names[1:]:
+        shutil.copy(names[0], name)
     out = tmp_path / "o"
     specs = ["tabular:res=45x45x90", "svd:rank=2,res=45x45x90", "tabular:res=32x32x64"]
     proc = subprocess.Popen(command(*names, "--specs", *specs, "--out", out, "--workers", "2", "--no-charts"),
