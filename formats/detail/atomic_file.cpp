@@ -78,11 +78,18 @@ std::string write_target(const std::string& path) {
         check_replaceable(path, path);
         return path;
     }
+    if (::stat(path.c_str(), &st) != 0)
+        throw IoError(path, "is a symbolic link to a missing file; only regular files are written");
     std::error_code ec;
     const std::filesystem::path target = std::filesystem::canonical(path, ec);
-    if (ec) throw IoError(path, "is a symbolic link to a missing file (" + ec.message() + "); only regular files are written");
-    check_replaceable(path, target.string());
-    return target.string();
+    if (!ec) {
+        check_replaceable(path, target.string());
+        return target.string();
+    }
+    // Links of /proc (/dev/stdout) may lead to what has no name: a pipe, a deleted file.
+    throw IoError(path, std::string("links to ") +
+                            (S_ISFIFO(st.st_mode) ? "a pipe" : S_ISREG(st.st_mode) ? "a file without a name" : kind_of(st.st_mode)) +
+                            "; only regular files are written");
 }
 
 }  // namespace

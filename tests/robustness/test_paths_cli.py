@@ -25,7 +25,7 @@ def make_device(path):
         pytest.skip("mknod is not permitted here (the FIFO and link cases run)")
 
 
-@pytest.mark.parametrize("kind", ["fifo", "device", "folder", "link to a fifo", "link to nothing"])
+@pytest.mark.parametrize("kind", ["fifo", "device", "folder", "link to a fifo", "link to a pipe", "link to nothing"])
 @pytest.mark.parametrize("ext", [".binary", ".brdfz"])
 def test_an_output_that_is_not_a_regular_file_is_refused_and_kept(cli, small_table, tmp_path, kind, ext):
     out = tmp_path / f"out{ext}"
@@ -38,13 +38,15 @@ def test_an_output_that_is_not_a_regular_file_is_refused_and_kept(cli, small_tab
     elif kind == "link to a fifo":
         os.mkfifo(tmp_path / "fifo")
         out.symlink_to("fifo")
+    elif kind == "link to a pipe":  # as /dev/stdout is, with the output piped
+        out.symlink_to("/proc/self/fd/1")
     else:
         out.symlink_to("missing" + ext)
     before = os.lstat(out)
     proc = run(cli, "convert", small_table, out, "--res", "8x8x16", check=False)
     assert proc.returncode == 1 and "wrote" not in proc.stdout
     what = {"fifo": "is a FIFO", "device": "is a device", "folder": "is a folder",
-            "link to a fifo": f"links to {tmp_path / 'fifo'}, which is a FIFO",
+            "link to a fifo": f"links to {tmp_path / 'fifo'}, which is a FIFO", "link to a pipe": "links to a pipe",
             "link to nothing": "is a symbolic link to a missing file"}[kind]
     line = one_error_line(proc)
     assert line.startswith(f"brdfz: {out}: {what}") and line.endswith("only regular files are written"), line
