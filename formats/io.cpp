@@ -49,6 +49,17 @@ const Format& named(const std::string& name, const std::string& path) {
 
 const Format& detected(const std::string& path) { return named(detect_format(path), path); }
 
+// Readers take regular files by name: a pipe (standard input) or a device cannot be sized and checked
+// before it is read, and opening a FIFO blocks until something writes to it.
+void check_regular(const std::string& path) {
+    std::error_code ec;
+    const std::filesystem::file_status st = std::filesystem::status(path, ec);
+    const bool missing = ec || st.type() == std::filesystem::file_type::not_found;
+    if ((missing && path == "-") ||
+        (!missing && st.type() != std::filesystem::file_type::regular && st.type() != std::filesystem::file_type::directory))
+        throw UnsupportedError(path, "standard input, pipes and devices are not read: give a file's name");
+}
+
 }  // namespace
 
 const std::vector<Format>& all_formats() {
@@ -80,12 +91,12 @@ std::string format_of(const std::string& path, Access access) {
 }
 
 std::string detect_format(const std::string& path) {
+    check_regular(path);
     if (const Format* f = by_extension(path); f && readable(*f)) return f->name;
     const std::string ext = std::filesystem::path(path).extension().string();
     const std::string expected = extension_list(readable);
     std::error_code ec;
     const std::uintmax_t size = std::filesystem::file_size(path, ec);
-    // Only regular files are opened: a FIFO would block the open.
     if (ec) throw FormatError(path, "unknown file extension '" + ext + "' (expected " + expected + ")");
     std::ifstream in(path, std::ios::binary);
     if (!in) throw FormatError(path, "unknown file extension '" + ext + "' (expected " + expected + ")");
@@ -106,6 +117,7 @@ std::string detect_format(const std::string& path) {
 Loaded load(const std::string& path, const LoadOptions& options) { return load_as(detect_format(path), path, options); }
 
 Loaded load_as(const std::string& format, const std::string& path, const LoadOptions& options) {
+    check_regular(path);
     const Format& f = named(format, path);
     if (f.read) return f.read(path, options);
     if (f.read_measurements)
@@ -135,10 +147,12 @@ LoadedMeasurements load_measurements(const std::string& path) {
 ValidityCounts save(const Brdf& brdf, const std::string& path, const SaveOptions& options) {
     const Format& f = named(options.format.empty() ? format_of(path, Access::Write) : options.format, path);
     if (!f.write) throw UnsupportedError(path, "writing " + f.name + " files is not supported");
+    check_output(path);
     return f.write(brdf, path, options);
 }
 
 ValidityCounts convert(const std::string& in, const std::string& out, const ConvertOptions& options) {
+    check_output(out);
     const Loaded loaded = load_as(options.from.empty() ? detect_format(in) : options.from, in, options.load);
     SaveOptions save_options = options.save;
     save_options.source = in;

@@ -116,7 +116,7 @@ void add_compress(CLI::App& app) {
                                                      "to richest of every kind)")
         ->needs(automatic);
     add_over_options(cmd, args->metrics);
-    cmd->add_option("--threads", args->threads, "0: one per hardware thread")->capture_default_str();
+    add_threads_option(cmd, args->threads);
     cmd->add_flag("--json", args->json, "print the report as JSON");
     add_load_options(cmd, args->load);
     cmd->callback([args] {
@@ -126,12 +126,13 @@ void add_compress(CLI::App& app) {
         if (!args->automatic) check_spec(args->repr);
         for (const std::string& c : args->candidates) check_spec(c);
         format_of(args->out, Access::Write);
+        check_output(args->out);
         SelectOptions select;
         if (args->automatic) {
             select.max_error = args->max_error;
             select.metric = parse_scene_metric(args->metric);
             select.candidates = args->candidates;
-            if (!args->scene.empty()) select.scene = build_scene(scene_json::read(args->scene));
+            if (!args->scene.empty()) select.scene = scene_json::load(args->scene);
         }
         TrialOptions options;
         options.compress = with_file_access(options.compress);

@@ -135,7 +135,7 @@ void add_fit(CLI::App& app) {
         ->capture_default_str();
     cmd->add_option("--samples", args->fit.sampling.max_samples, "grid bins sampled from a BRDF (0: all)")
         ->capture_default_str();
-    cmd->add_option("--threads", args->fit.threads, "0: one per hardware thread")->capture_default_str();
+    add_threads_option(cmd, args->fit.threads);
     cmd->add_option("--max-seconds", args->fit.max_seconds, "wall-clock bound of the fit")->capture_default_str();
     cmd->add_flag("--json", args->json, "print the report as JSON");
     add_load_options(cmd, args->load);
@@ -147,6 +147,7 @@ void add_fit(CLI::App& app) {
         // Check the model string and the output's format before spending time on loading and fitting.
         Model::parse(args->model);
         const std::string out_format = format_of(args->out, Access::Write);
+        check_output(args->out);
         FitResult r = [&] {
             if (holds_measurements(args->in)) return fit(load_measurements(args->in).set, args->model, o);
             const Loaded in = load(args->in, args->load);

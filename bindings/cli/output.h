@@ -16,6 +16,8 @@ namespace brdfz::cli {
 
 // Shortest text that reads back to the same double ("%.17g").
 std::string number(double v);
+// The same, appended to `out` (no string of its own: rows of many numbers).
+void append_number(std::string& out, double v);
 
 // The --json reports, one line each.
 using JsonWriter = json::Writer;
@@ -33,6 +35,8 @@ extern const char* const kOverHelp;
 
 // Parses exactly `count` comma-separated numbers; false on anything else.
 bool parse_numbers(const std::string& text, double* out, int count);
+// Unit direction from a user vector into `out`; false for zero or non-finite vectors.
+bool to_unit(const double* v, Vec3& out);
 // Unit direction from a user vector; ValueError naming `where` for zero or non-finite vectors.
 Vec3 unit_direction(const double* v, const std::string& where);
 // "x,y,z" -> unit direction; ValueError naming the option otherwise.
@@ -41,6 +45,9 @@ Vec3 parse_direction(const std::string& text, const std::string& option);
 // A check for unsigned integer options (seeds): plain decimal digits within uint64_t. CLI11 alone wraps
 // "-1" round to 2^64 - 1 and saturates values past the range.
 CLI::Validator unsigned_integer();
+
+// --threads, bounded by kMaxThreads (brdfz/control.h) when the command line is parsed.
+void add_threads_option(CLI::App* cmd, int& threads);
 
 // "90x90x180" -> GridSpec; ValueError otherwise.
 GridSpec parse_resolution(const std::string& text);

@@ -72,11 +72,12 @@ void add_pca_train(CLI::App& app) {
     cmd->add_option("--max-invalid", args->train.max_invalid_fraction,
                     "drop a bin invalid in more than this fraction of the materials")
         ->capture_default_str();
-    cmd->add_option("--threads", args->train.threads, "0: one per hardware thread")->capture_default_str();
+    add_threads_option(cmd, args->train.threads);
     cmd->add_flag("--json", args->json, "print the report as JSON");
     add_load_options(cmd, args->load);
     cmd->callback([args] {
         if (format_of(args->out, Access::Write) != "brdfz") throw ValueError(args->out + ": a basis is written as a .brdfz file");
+        check_output(args->out);
         const std::vector<std::string> files = training_files(args->in);
         if (files.size() < 2) throw ValueError("pca-train needs at least 2 materials, got " + std::to_string(files.size()));
         const auto start = std::chrono::steady_clock::now();

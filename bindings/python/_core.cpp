@@ -10,6 +10,8 @@ PYBIND11_MODULE(_core, m) {
     namespace py = pybind11;
     m.doc() = "brdfz: measured BRDFs, compactly stored (C++ core of the brdfz package)";
     m.attr("__version__") = BRDFZ_VERSION;
+    // The bound on every `threads` argument (brdfz/control.h).
+    m.attr("MAX_THREADS") = brdfz::kMaxThreads;
 
     py::register_exception<brdfz::FormatError>(m, "FormatError", PyExc_ValueError);
     py::register_exception<brdfz::UnsupportedError>(m, "UnsupportedError", PyExc_ValueError);

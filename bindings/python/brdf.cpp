@@ -5,6 +5,7 @@
 #include <pybind11/stl.h>
 
 #include <algorithm>
+#include <charconv>
 #include <cmath>
 #include <map>
 #include <optional>
@@ -103,9 +104,13 @@ void pairs(const Rows& rows, std::size_t begin, std::span<std::array<double, 2>>
         copy_rows(rows.data<double>(), begin, out);
     for (std::size_t k = 0; k < out.size(); ++k)
         for (double u : out[k])
-            if (!(u >= 0.0 && u < 1.0))
-                throw ValueError(std::string(name) + "[" + std::to_string(begin + k) + "]: " + std::to_string(u) +
+            if (!(u >= 0.0 && u < 1.0)) {
+                // The shortest text that reads back as u (to_string's six decimals print -1e-300 as -0.000000).
+                char text[32];
+                const auto end = std::to_chars(text, text + sizeof text, u).ptr;
+                throw ValueError(std::string(name) + "[" + std::to_string(begin + k) + "]: " + std::string(text, end) +
                                  " is outside [0, 1)");
+            }
 }
 
 Array new_rows(std::size_t n, py::ssize_t cols) {

@@ -3,6 +3,7 @@
 
 #include <pybind11/pybind11.h>
 
+#include <chrono>
 #include <filesystem>
 #include <functional>
 #include <memory>
@@ -10,6 +11,7 @@
 #include <string>
 
 #include "brdfz/brdf.h"
+#include "brdfz/control.h"
 #include "brdfz/errors.h"
 #include "brdfz/metrics.h"
 
@@ -50,19 +52,46 @@ auto reading(const std::filesystem::path& path, Fn&& fn) {
     }
 }
 
-// Bridges a Python progress callable (fraction done, 0..1] into the library's progress hook, which
-// runs on worker threads while the GIL is released. A Python exception raised by the callable is
-// kept and re-raised by rethrow() once the operation is over (the library has no cancellation).
-class Progress {
+// Library work that Python can stop. run(fn) calls fn with the GIL released under a stop check
+// (brdfz/control.h, which the library polls between items of work): a signal whose handler raises
+// (Ctrl-C's KeyboardInterrupt) stops the work at the library's next poll on the calling thread (where
+// the handlers are run, at most every kSignalPoll), a progress callable (progress()) or another
+// callback (call()) that raises stops it at that call. The exception is raised
+// once the library has unwound; an operation stopped so writes no file (writers commit an output only
+// when it is complete). Python runs signal handlers on its main thread only: work called from another
+// thread stops for its callables' exceptions, not for signals.
+class Interruptible {
 public:
-    explicit Progress(py::object callable);
-    // The hook to pass in the library's options; empty when there is no callable.
-    std::function<void(double)> hook();
-    // Re-raises the callable's first exception, if any.
-    void rethrow();
+    static constexpr std::chrono::milliseconds kSignalPoll{20};
+
+    explicit Interruptible(py::object progress = py::none());
+    // The library's progress hook (fraction done, 0..1], called from worker threads): calls the
+    // callable holding the GIL, one call at a time. Empty without a callable.
+    std::function<void(double)> progress();
+    // fn() holding the GIL, for a callback the library calls while run() works; a Python exception
+    // from it stops the work.
+    void call(const std::function<void()>& fn);
+
+    template <typename Fn>
+    auto run(Fn&& fn) -> decltype(fn()) {
+        const StopScope scope(stop_check());
+        try {
+            py::gil_scoped_release release;
+            return fn();
+        } catch (const Stopped&) {
+            raise();
+        }
+    }
 
 private:
+    // Thrown through the library to stop it; not a brdfz::Error (or std::exception), so that nothing
+    // on the way takes it for a failure of its own.
+    struct Stopped {};
     struct State;
+
+    StopCheck stop_check();
+    [[noreturn]] void raise();
+
     std::shared_ptr<State> state_;
 };
 

@@ -73,17 +73,11 @@ py::dict counts_dict(const ValidityCounts& c) {
     return d;
 }
 
-// save() with the GIL released and progress reported; the written bins' counts.
+// save() with the GIL released, progress reported and Ctrl-C heard; the written bins' counts.
 py::dict save_counts(const Brdf& brdf, const Path& path, SaveOptions o, py::object progress) {
-    Progress bar(std::move(progress));
-    o.progress = bar.hook();
-    ValidityCounts c;
-    {
-        py::gil_scoped_release release;
-        c = save(brdf, path.string(), o);
-    }
-    bar.rethrow();
-    return counts_dict(c);
+    Interruptible work(std::move(progress));
+    o.progress = work.progress();
+    return counts_dict(work.run([&] { return save(brdf, path.string(), o); }));
 }
 
 py::list rgb_list(const Rgb& v) { return py::cast(std::vector<double>(v.begin(), v.end())); }
@@ -220,14 +214,9 @@ void bind_operations(py::module_& m) {
               if (res) o.save.grid = grid_of(*res);
               o.save.format = dst_format;
               o.save.threads = threads;
-              Progress bar(std::move(progress));
-              o.save.progress = bar.hook();
-              const ValidityCounts c = reading(src, [&] {
-                  py::gil_scoped_release release;
-                  return convert(src.string(), dst.string(), o);
-              });
-              bar.rethrow();
-              return counts_dict(c);
+              Interruptible work(std::move(progress));
+              o.save.progress = work.progress();
+              return counts_dict(reading(src, [&] { return work.run([&] { return convert(src.string(), dst.string(), o); }); }));
           },
           py::arg("src"), py::arg("dst"), py::kw_only(), py::arg("res") = py::none(), py::arg("src_format") = "",
           py::arg("dst_format") = "", py::arg("lookup") = "linear", py::arg("bin_position") = "centre",
@@ -244,14 +233,9 @@ void bind_operations(py::module_& m) {
     m.def("compress", [](const BrdfPtr& brdf, const std::string& spec, int threads, py::object progress) {
               CompressOptions o = with_file_access({});
               o.threads = threads;
-              Progress bar(std::move(progress));
-              o.progress = bar.hook();
-              Compressed c;
-              {
-                  py::gil_scoped_release release;
-                  c = compress(*brdf, spec, o);
-              }
-              bar.rethrow();
+              Interruptible work(std::move(progress));
+              o.progress = work.progress();
+              Compressed c = work.run([&] { return compress(*brdf, spec, o); });
               return Built{BrdfPtr(std::move(c.brdf)), c.spec, c.build_seconds, c.notes};
           },
           py::arg("brdf").none(false), py::arg("spec"), py::kw_only(), py::arg("threads") = 0, py::arg("progress") = py::none(),
@@ -316,9 +300,10 @@ void bind_operations(py::module_& m) {
                         const std::string& over, std::size_t directions, std::uint64_t seed) {
               const MetricOptions o = metric_options(max_theta, threads, over, directions, seed);
               const Data ref = data_of(reference);
-              py::gil_scoped_release release;
-              if (const auto* set = std::get_if<MeasurementSet>(&ref)) return compare(*set, *approx, o);
-              return compare(*std::get<BrdfPtr>(ref), *approx, o);
+              return Interruptible().run([&] {
+                  if (const auto* set = std::get_if<MeasurementSet>(&ref)) return compare(*set, *approx, o);
+                  return compare(*std::get<BrdfPtr>(ref), *approx, o);
+              });
           },
           py::arg("reference"), py::arg("approx").none(false), py::kw_only(), py::arg("max_theta") = 80.0, py::arg("threads") = 0,
           py::arg("over") = "grid", py::arg("directions") = MetricOptions{}.directions, py::arg("seed") = MetricOptions{}.seed,
@@ -326,8 +311,7 @@ void bind_operations(py::module_& m) {
     m.def("reciprocity_error", [](const BrdfPtr& brdf, double max_theta, int threads, std::size_t directions,
                                   std::uint64_t seed) {
               const MetricOptions o = metric_options(max_theta, threads, "directions", directions, seed);
-              py::gil_scoped_release release;
-              return reciprocity_error(*brdf, o);
+              return Interruptible().run([&] { return reciprocity_error(*brdf, o); });
           },
           py::arg("brdf").none(false), py::kw_only(), py::arg("max_theta") = 80.0, py::arg("threads") = 0,
           py::arg("directions") = MetricOptions{}.directions, py::arg("seed") = MetricOptions{}.seed,
@@ -335,11 +319,7 @@ void bind_operations(py::module_& m) {
     m.def("metric_samples", [](const BrdfPtr& reference, double max_theta, int threads, const std::string& over,
                                std::size_t directions, std::uint64_t seed) {
               const MetricOptions o = metric_options(max_theta, threads, over, directions, seed);
-              MetricSamples s;
-              {
-                  py::gil_scoped_release release;
-                  s = metric_samples(*reference, o);
-              }
+              const MetricSamples s = Interruptible().run([&] { return metric_samples(*reference, o); });
               return py::make_tuple(to_rows(s.wi), to_rows(s.wo), to_rows(s.reference));
           },
           py::arg("reference").none(false), py::kw_only(), py::arg("max_theta") = 80.0, py::arg("threads") = 0,
@@ -408,18 +388,13 @@ void bind_operations(py::module_& m) {
               o.threads = threads;
               Model::parse(model);  // a bad model string fails before any loading
               const Data data = data_of(source);
-              Progress bar(std::move(progress));
-              o.progress = bar.hook();
-              std::optional<FitResult> r;
-              {
-                  py::gil_scoped_release release;
-                  if (const auto* set = std::get_if<MeasurementSet>(&data))
-                      r.emplace(fit(*set, model, o));
-                  else
-                      r.emplace(fit(*std::get<BrdfPtr>(data), model, o));
-              }
-              bar.rethrow();
-              return Fitted{std::make_shared<AnalyticBrdf>(std::move(r->model)), std::move(r->report)};
+              Interruptible work(std::move(progress));
+              o.progress = work.progress();
+              FitResult r = work.run([&] {
+                  if (const auto* set = std::get_if<MeasurementSet>(&data)) return fit(*set, model, o);
+                  return fit(*std::get<BrdfPtr>(data), model, o);
+              });
+              return Fitted{std::make_shared<AnalyticBrdf>(std::move(r.model)), std::move(r.report)};
           },
           py::arg("source"), py::arg("model"), py::kw_only(), py::arg("loss") = "log", py::arg("starts") = 8,
           py::arg("seed") = 1, py::arg("robust") = "none", py::arg("robust_scale") = 0.1, py::arg("max_theta") = 80.0,
@@ -435,15 +410,9 @@ void bind_operations(py::module_& m) {
               o.negative = parse_negative(negative);
               o.threads = threads;
               const Lookup l = parse_lookup(lookup);
-              Progress bar(std::move(progress));
-              o.progress = bar.hook();
-              BrdfPtr out;
-              {
-                  py::gil_scoped_release release;
-                  out = std::make_shared<TabularBrdf>(tabulate(*brdf, o).table, l);
-              }
-              bar.rethrow();
-              return out;
+              Interruptible work(std::move(progress));
+              o.progress = work.progress();
+              return work.run([&] { return BrdfPtr(std::make_shared<TabularBrdf>(tabulate(*brdf, o).table, l)); });
           },
           py::arg("brdf").none(false), py::arg("res") = std::make_tuple(90, 90, 180), py::kw_only(), py::arg("lookup") = "linear",
           py::arg("negative") = "clamp", py::arg("symmetry") = "reciprocal", py::arg("threads") = 0,
@@ -511,8 +480,7 @@ void bind_operations(py::module_& m) {
               o.rtol = rtol;
               o.atol = atol;
               o.albedo_tol = albedo_tol;
-              py::gil_scoped_release release;
-              return validate(*brdf, o);
+              return Interruptible().run([&] { return validate(*brdf, o); });
           },
           py::arg("brdf").none(false), py::kw_only(), py::arg("res") = std::make_tuple(90, 90, 180),
           py::arg("theta") = ValidateOptions{}.theta_deg, py::arg("rtol") = 0.05, py::arg("atol") = 1e-3,

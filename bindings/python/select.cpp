@@ -101,7 +101,7 @@ void bind_select(py::module_& m) {
     m.def("read_scene", [](const Path& path) {
               return reading(path, [&] {
                   py::gil_scoped_release release;
-                  return build_scene(scene_json::read(path.string()));
+                  return scene_json::load(path.string());
               });
           },
           py::arg("path"), "a scene file (docs/scene-json.md), its samples drawn");
@@ -109,16 +109,11 @@ void bind_select(py::module_& m) {
     m.def("trial", [](const BrdfPtr& brdf, const std::string& spec, bool measure_speed, double max_theta, int threads,
                       const std::string& over, std::size_t directions, std::uint64_t seed, py::object progress) {
               TrialOptions o = trial_options(measure_speed, metric_options(max_theta, threads, over, directions, seed));
-              Progress bar(std::move(progress));
-              o.compress.progress = bar.hook();
-              std::optional<Trial> t;
-              {
-                  py::gil_scoped_release release;
-                  t.emplace(trial(*brdf, spec, o));
-              }
-              bar.rethrow();
-              TrialResult r = summary_of(*t);
-              r.brdf = BrdfPtr(std::move(t->brdf));
+              Interruptible work(std::move(progress));
+              o.compress.progress = work.progress();
+              Trial t = work.run([&] { return trial(*brdf, spec, o); });
+              TrialResult r = summary_of(t);
+              r.brdf = BrdfPtr(std::move(t.brdf));
               return r;
           },
           py::arg("brdf").none(false), py::arg("spec"), py::kw_only(), py::arg("measure_speed") = true, py::arg("max_theta") = 80.0,
@@ -136,27 +131,16 @@ void bind_select(py::module_& m) {
               o.scene = scene;
               o.candidates = candidates;
               o.trial = trial_options(measure_speed, metric_options(80.0, threads, over, directions, seed));
-              // The callable runs on this thread with the GIL released: take it back for the call, and
-              // keep a Python exception to raise once the selection is over.
-              std::exception_ptr failure;
+              // The callable runs on this thread, with the GIL taken back for the call; its exception
+              // ends the selection there.
+              Interruptible work;
               std::size_t index = 0;
               const std::size_t total = candidates.empty() ? default_candidates().size() : candidates.size();
               if (!on_candidate.is_none())
                   o.on_candidate = [&](const Candidate& c) {
-                      py::gil_scoped_acquire gil;
-                      if (failure) return;
-                      try {
-                          on_candidate(summary_of(c), index++, total);
-                      } catch (py::error_already_set&) {
-                          failure = std::current_exception();
-                      }
+                      work.call([&] { on_candidate(summary_of(c), index++, total); });
                   };
-              Selection s;
-              {
-                  py::gil_scoped_release release;
-                  s = select_representation(*brdf, o);
-              }
-              if (failure) std::rethrow_exception(failure);
+              Selection s = work.run([&] { return select_representation(*brdf, o); });
               SelectionResult out;
               out.chosen = s.chosen;
               for (Candidate& c : s.tried) {

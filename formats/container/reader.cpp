@@ -1,4 +1,5 @@
 #include <algorithm>
+#include <tuple>
 
 #include "brdfz/errors.h"
 #include "storage.h"
@@ -60,6 +61,13 @@ void read_rest(const h5::ReadNode& root, Metadata& m) {
     m.units = root.str("units");
     m.cosine = root.str("cosine");
     m.conventions = root.str("conventions");
+    // Values in other units, with the cosine, or in another frame would be read as if they were not.
+    for (const auto& [name, value, expected] : {std::tuple{"units", &m.units, detail::kUnits},
+                                                std::tuple{"cosine", &m.cosine, detail::kCosine},
+                                                std::tuple{"conventions", &m.conventions, detail::kConventions}})
+        if (*value != expected)
+            throw UnsupportedError(root.file(), std::string("attribute '") + name + "' is \"" + *value +
+                                                    "\"; this brdfz reads only \"" + expected + "\"");
 
     const h5::ReadNode ach = root.group("achieved");
     Achieved& a = m.achieved;

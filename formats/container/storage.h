@@ -16,6 +16,13 @@
 
 namespace brdfz::container::detail {
 
+// What the root's units, cosine and conventions attributes say (formats/SPEC.md §2): the meaning of
+// every stored value. A reader refuses a file that says anything else.
+inline constexpr const char* kUnits = "1/sr";
+inline constexpr const char* kCosine = "excluded";
+inline constexpr const char* kConventions =
+    "normal +z; wi and wo unit vectors pointing away from the surface; values are f_r(wi, wo) in linear RGB";
+
 struct ReadContext {
     Lookup lookup = Lookup::Linear;
 };

@@ -138,10 +138,9 @@ Achieved write(const std::string& path, const Brdf& brdf, const WriteOptions& op
             root.attr("source_file", source.file);
             root.attr("source_format", source.format);
             root.attr("source_sha256", source.sha256);
-            root.attr("units", std::string("1/sr"));
-            root.attr("cosine", std::string("excluded"));
-            root.attr("conventions", std::string("normal +z; wi and wo unit vectors pointing away from the surface; "
-                                                 "values are f_r(wi, wo) in linear RGB"));
+            root.attr("units", std::string(detail::kUnits));
+            root.attr("cosine", std::string(detail::kCosine));
+            root.attr("conventions", std::string(detail::kConventions));
             h5::WriteNode rep = root.group("representation");
             rep.attr("type", std::string(module->type));
             rep.attr("spec", stored->describe());

@@ -14,6 +14,7 @@
 #include <random>
 
 #include "brdfz/errors.h"
+#include "brdfz/formats/io.h"
 
 namespace brdfz::detail {
 namespace {
@@ -46,6 +47,51 @@ std::string folder_of(const std::string& path) {
     throw IoError(path, what + ": " + std::strerror(err));
 }
 
+// What a file that is not a regular one is, for the refusal.
+std::string kind_of(mode_t mode) {
+    if (S_ISDIR(mode)) return "a folder";
+    if (S_ISCHR(mode) || S_ISBLK(mode)) return "a device";
+    if (S_ISFIFO(mode)) return "a FIFO";
+    if (S_ISSOCK(mode)) return "a socket";
+    return "something else";
+}
+
+// IoError naming `path` unless `target` is missing or a regular file: a write renames a new file onto
+// its name, which would replace a device, a FIFO or a folder with a regular file.
+void check_replaceable(const std::string& path, const std::string& target) {
+    struct stat st {};
+    if (::lstat(target.c_str(), &st) != 0) {
+        if (errno == ENOENT) return;
+        fail(path, "cannot write", errno);
+    }
+    if (!S_ISREG(st.st_mode))
+        throw IoError(path, (target == path ? "" : "links to " + target + ", which ") + "is " + kind_of(st.st_mode) +
+                                "; only regular files are written");
+}
+
+// Where the bytes of `path` go: a symbolic link to a regular file is written through (its target
+// replaced, the link kept), as a shell's redirection writes through it; a link to nothing or to
+// anything but a regular file is refused.
+std::string write_target(const std::string& path) {
+    struct stat st {};
+    if (::lstat(path.c_str(), &st) != 0 || !S_ISLNK(st.st_mode)) {
+        check_replaceable(path, path);
+        return path;
+    }
+    if (::stat(path.c_str(), &st) != 0)
+        throw IoError(path, "is a symbolic link to a missing file; only regular files are written");
+    std::error_code ec;
+    const std::filesystem::path target = std::filesystem::canonical(path, ec);
+    if (!ec) {
+        check_replaceable(path, target.string());
+        return target.string();
+    }
+    // Links of /proc (/dev/stdout) may lead to what has no name: a pipe, a deleted file.
+    throw IoError(path, std::string("links to ") +
+                            (S_ISFIFO(st.st_mode) ? "a pipe" : S_ISREG(st.st_mode) ? "a file without a name" : kind_of(st.st_mode)) +
+                            "; only regular files are written");
+}
+
 }  // namespace
 
 int remove_stale_temporaries(const std::string& path) {
@@ -72,8 +118,9 @@ int remove_stale_temporaries(const std::string& path) {
     return removed;
 }
 
-AtomicFile::AtomicFile(std::string path, Temporary kind) : path_(std::move(path)), dir_(folder_of(path_)) {
-    remove_stale_temporaries(path_);
+AtomicFile::AtomicFile(std::string path, Temporary kind)
+    : path_(std::move(path)), target_(write_target(path_)), dir_(folder_of(target_)) {
+    remove_stale_temporaries(target_);
     if (kind == Temporary::Unnamed) {
         fd_ = ::open(dir_.c_str(), O_TMPFILE | O_RDWR | O_CLOEXEC, 0666);
         // Libraries reopen it, and commit() links it, through /proc's name of the descriptor.
@@ -96,7 +143,7 @@ AtomicFile::AtomicFile(std::string path, Temporary kind) : path_(std::move(path)
 
 void AtomicFile::open_named() {
     for (int attempt = 0; attempt < 100; ++attempt) {
-        const std::string name = path_ + kTmpTag + random_suffix();
+        const std::string name = target_ + kTmpTag + random_suffix();
         const int fd = ::open(name.c_str(), O_RDWR | O_CREAT | O_EXCL | O_CLOEXEC, 0666);
         if (fd < 0) {
             if (errno == EEXIST) continue;
@@ -143,28 +190,30 @@ void AtomicFile::commit() {
         if (!flushed) fail(path_, "cannot complete write", err);
     }
     if (::fsync(fd_) != 0) fail(path_, "cannot complete write", errno);
+    // Again: what is at the name now is what the rename replaces.
+    check_replaceable(path_, target_);
     struct stat old {};
-    if (::stat(path_.c_str(), &old) == 0 && S_ISREG(old.st_mode) && ::fchmod(fd_, old.st_mode & 07777) != 0)
+    if (::lstat(target_.c_str(), &old) == 0 && ::fchmod(fd_, old.st_mode & 07777) != 0)
         fail(path_, "cannot keep the replaced file's mode", errno);
     if (unnamed()) {
         // Linked straight in when NAME is new; over an existing NAME, linked beside it and renamed.
-        if (::linkat(AT_FDCWD, open_path_.c_str(), AT_FDCWD, path_.c_str(), AT_SYMLINK_FOLLOW) != 0) {
+        if (::linkat(AT_FDCWD, open_path_.c_str(), AT_FDCWD, target_.c_str(), AT_SYMLINK_FOLLOW) != 0) {
             if (errno != EEXIST) fail(path_, "cannot complete write", errno);
             std::string name;
             int linked = -1;
             for (int attempt = 0; attempt < 100 && linked != 0; ++attempt) {
-                name = path_ + kTmpTag + random_suffix();
+                name = target_ + kTmpTag + random_suffix();
                 linked = ::linkat(AT_FDCWD, open_path_.c_str(), AT_FDCWD, name.c_str(), AT_SYMLINK_FOLLOW);
                 if (linked != 0 && errno != EEXIST) fail(path_, "cannot complete write", errno);
             }
             if (linked != 0) throw IoError(path_, "cannot complete write: no free temporary name");
-            if (std::rename(name.c_str(), path_.c_str()) != 0) {
+            if (std::rename(name.c_str(), target_.c_str()) != 0) {
                 const int err = errno;
                 ::unlink(name.c_str());
                 fail(path_, "cannot complete write", err);
             }
         }
-    } else if (std::rename(tmp_path_.c_str(), path_.c_str()) != 0) {
+    } else if (std::rename(tmp_path_.c_str(), target_.c_str()) != 0) {
         fail(path_, "cannot complete write", errno);
     }
     committed_ = true;
@@ -177,3 +226,9 @@ void AtomicFile::commit() {
 }
 
 }  // namespace brdfz::detail
+
+namespace brdfz {
+
+void check_output(const std::string& path) { detail::write_target(path); }
+
+}  // namespace brdfz

@@ -7,6 +7,10 @@
 // library that opens the output by name (OpenEXR) writes to open_path(), a name of the same file, and
 // must have closed it before commit().
 // Modes: a new file gets 0666 less the umask, as open(2) gives; a replaced one keeps its mode.
+// Only regular files are replaced: a NAME that is a device, a FIFO, a socket or a folder is refused
+// (IoError, as brdfz::check_output says) before anything is written and again at commit(); a symbolic
+// link to a regular file is written through (the link stays, its target gets the bytes), one to nothing
+// or to anything else is refused.
 #pragma once
 
 #include <cstddef>
@@ -27,6 +31,8 @@ public:
     AtomicFile& operator=(const AtomicFile&) = delete;
 
     const std::string& path() const { return path_; }
+    // Where the bytes go: path(), or the regular file a symbolic link at path() leads to.
+    const std::string& target() const { return target_; }
     // Where a library that opens files by name writes the bytes: /proc/self/fd/N of the unnamed file,
     // or the temporary's name (HDF5 cannot take the first: it resolves the link's target by name).
     const std::string& open_path() const { return open_path_; }
@@ -41,7 +47,7 @@ public:
 private:
     void open_named();
 
-    std::string path_, dir_, open_path_, tmp_path_;
+    std::string path_, target_, dir_, open_path_, tmp_path_;
     int fd_ = -1;
     std::FILE* stream_ = nullptr;  // write()'s buffer over fd_, opened on first use
     bool committed_ = false;

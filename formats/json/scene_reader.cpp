@@ -124,4 +124,13 @@ SceneDescription read(const std::string& path) {
     return d;
 }
 
+Scene load(const std::string& path) {
+    const SceneDescription d = read(path);
+    try {
+        return build_scene(d);
+    } catch (const ValueError& e) {
+        throw ValueError(path + ": " + e.what());
+    }
+}
+
 }  // namespace brdfz::scene_json

@@ -164,7 +164,7 @@ void direction_pairs(std::uint64_t first, std::uint64_t seed, double theta_i_max
 }
 
 Metrics compare(const Brdf& reference, const Brdf& approx, const MetricOptions& options) {
-    const int workers = detail::resolve_threads(options.threads);
+    const int workers = resolve_threads(options.threads);
     if (options.over == Over::Directions) {
         // Named copies: clang before 16 cannot capture structured bindings in the lambda below.
         const std::pair<double, double> cutoffs = direction_cutoffs(reference, options);
@@ -231,7 +231,7 @@ MetricSamples metric_samples(const Brdf& reference, const MetricOptions& options
     // The kept bins of each θh slice, concatenated in slice order.
     std::vector<MetricSamples> slices(static_cast<std::size_t>(metric_grid(reference, options).n_theta_h));
     visit_grid(
-        reference, options, detail::resolve_threads(options.threads), [](int, int, auto, auto) {},
+        reference, options, resolve_threads(options.threads), [](int, int, auto, auto) {},
         [&](int, int ih, std::size_t, const Vec3& wi, const Vec3& wo, const Rgb& ref) {
             MetricSamples& s = slices[static_cast<std::size_t>(ih)];
             s.wi.push_back(wi), s.wo.push_back(wo), s.reference.push_back(ref);
@@ -322,6 +322,7 @@ double eval_rate(const Brdf& brdf, std::size_t pairs, int reps) {
     brdf.eval(wi, wo, out);
     std::vector<double> seconds;
     for (int r = 0; r < reps; ++r) {
+        poll_stop();
         const auto start = std::chrono::steady_clock::now();
         brdf.eval(wi, wo, out);
         seconds.push_back(std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());

@@ -3,6 +3,7 @@
 #include <cmath>
 #include <cstdio>
 
+#include "brdfz/control.h"
 #include "brdfz/errors.h"
 
 namespace brdfz {
@@ -98,8 +99,12 @@ Selection select_representation(const Brdf& source, const SelectOptions& options
         options.scene ? options.scene
                       : options.metric == SceneMetric::Image ? std::optional<Scene>(build_scene(default_scene())) : std::nullopt;
     for (const std::string& spec : candidates) check_spec(spec);
+    // A thread count beyond the bound is the caller's mistake, not every candidate's failure.
+    resolve_threads(options.trial.compress.threads);
+    resolve_threads(options.trial.metrics.threads);
     Selection out;
     for (const std::string& spec : candidates) {
+        poll_stop();
         Candidate c;
         try {
             c.trial = trial(source, spec, options.trial);

@@ -19,7 +19,7 @@ namespace {
 Tabulated tabulate_points(const Brdf& brdf, const TabulateOptions& options) {
     const GridSpec& g = options.grid;
     Tabulated result{Table(g), {}};
-    const int workers = detail::resolve_threads(options.threads);
+    const int workers = resolve_threads(options.threads);
     std::vector<ValidityCounts> counts(workers);
     std::vector<std::size_t> extrapolated(workers, 0);
     std::vector<std::vector<Rgb>> scratch(workers);

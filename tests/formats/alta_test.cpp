@@ -389,7 +389,7 @@ TEST_CASE("ALTA shared data: the CEA gray tape is retro-reflective", "[alta][dat
     }
 }
 
-TEST_CASE("load_measurements: ALTA source info; metrics of a BRDF at its own values", "[alta][io][metrics]") {
+TEST_CASE("load_measurements: ALTA source info, metrics of a BRDF at its own values", "[alta][io][metrics]") {
     test::TempDir dir;
     const CoatedDiffuse brdf(CoatedDiffuseParams{{0.4, 0.4, 0.4}, 0.2, 1.5});
     // A monochrome BRDF (grey base, colourless coat) tabulated at ALTA's projected coordinates.

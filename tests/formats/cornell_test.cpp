@@ -122,7 +122,7 @@ TEST_CASE("Spectral weights reject unusable wavelengths", "[cornell]") {
     CHECK_THROWS_AS(cornell::rgb_weights(std::vector<double>{600.0, 605.0, 610.0}), ValueError);
 }
 
-TEST_CASE("Cornell reader: flat spectrum gives grey; directions land where the angles say", "[cornell]") {
+TEST_CASE("Cornell reader: flat spectrum gives grey, directions land where the angles say", "[cornell]") {
     test::TempDir dir;
     const double t30 = kPi / 6, t45 = kPi / 4;
     const fs::path p = write(dir, "grey.brdf", cornell_text(decades(), {flat(t30, 0.0, t45, kPi / 2, 0.25),

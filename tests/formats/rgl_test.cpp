@@ -854,8 +854,8 @@ TEST_CASE("rgl: shared files' grazing values are bounded in tables and left out 
     }
 }
 
-TEST_CASE("rgl: least-squares tables beat point samples on the shared files; paper_white within 2 % at 12 KB",
-          "[rgl][tabulate]") {
+TEST_CASE("rgl: least-squares tables beat point samples on the shared files, paper_white within 2 % at 12 KB",
+          "[rgl][tabulate][heavy]") {
     const auto files = shared_rgl_files();
     if (files.empty()) {
         WARN("skipped: ../shared/data/rgl missing");

@@ -18,13 +18,20 @@
 #include "brdfz/formats/rgl.h"
 #include "container/checksum.h"
 #include "container/h5.h"
+#include "container/storage.h"
 
 namespace brdfz::test {
+
+// What the root's units, cosine and conventions attributes say: the library's own by default.
+struct Meaning {
+    std::string units = container::detail::kUnits, cosine = container::detail::kCosine,
+                conventions = container::detail::kConventions;
+};
 
 // Root attributes of a current container listing every known feature, an /achieved group, and a
 // /representation group of `type` that fill(WriteNode&) completes.
 template <typename Fill>
-void write_envelope(const std::string& path, const std::string& type, Fill fill) {
+void write_envelope(const std::string& path, const std::string& type, Fill fill, const Meaning& meaning = {}) {
     container::h5::Writer w(path);
     {
         container::h5::WriteNode root = w.root();
@@ -39,9 +46,11 @@ void write_envelope(const std::string& path, const std::string& type, Fill fill)
         root.attr("min_reader_version", std::uint64_t{1});
         root.attr("features", std::span<const std::string>(names));
         root.attr("feature_versions", std::span<const std::uint64_t>(since));
-        for (const char* a : {"library_version", "created", "source_file", "source_format", "source_sha256", "units",
-                              "cosine", "conventions"})
+        for (const char* a : {"library_version", "created", "source_file", "source_format", "source_sha256"})
             root.attr(a, std::string("x"));
+        root.attr("units", meaning.units);
+        root.attr("cosine", meaning.cosine);
+        root.attr("conventions", meaning.conventions);
         container::h5::WriteNode ach = root.group("achieved");
         ach.attr("lossless", std::uint64_t{1});
         ach.attr("nbytes", std::uint64_t{8});
@@ -65,13 +74,16 @@ inline void grid_attrs(container::h5::WriteNode& rep, std::uint64_t nh, std::uin
 
 // A float32 table of nh x nd x np bins holding `values` (3 per bin).
 inline void write_float32_table(const std::string& path, std::uint64_t nh, std::uint64_t nd, std::uint64_t np,
-                                const std::vector<float>& values) {
-    write_envelope(path, "tabular", [&](container::h5::WriteNode& rep) {
-        grid_attrs(rep, nh, nd, np);
-        rep.attr("dtype", std::string("float32"));
-        rep.attr("invalid", std::string("nan"));
-        rep.dataset("values", container::h5::DType::F32, {nh, nd, np, 3}, values.data());
-    });
+                                const std::vector<float>& values, const Meaning& meaning = {}) {
+    write_envelope(
+        path, "tabular",
+        [&](container::h5::WriteNode& rep) {
+            grid_attrs(rep, nh, nd, np);
+            rep.attr("dtype", std::string("float32"));
+            rep.attr("invalid", std::string("nan"));
+            rep.dataset("values", container::h5::DType::F32, {nh, nd, np, 3}, values.data());
+        },
+        meaning);
 }
 
 // SVD factors (log space, layout h_dp, separate colour, float32) of rank 1 on nh x nd x np:

@@ -20,7 +20,9 @@
 #include "brdfz/formats/container.h"
 #include "brdfz/formats/io.h"
 #include "brdfz/formats/merl.h"
+#include "brdfz/formats/pca_basis.h"
 #include "brdfz/repr/analytic/model.h"
+#include "brdfz/repr/pca.h"
 #include "brdfz/repr/tabular.h"
 #include "brdfz/tabulate.h"
 #include "container/h5.h"
@@ -138,7 +140,7 @@ TEST_CASE("robustness: without O_TMPFILE, the next write removes what a killed o
     CHECK(detail::remove_stale_temporaries(out.string()) == 0);
 }
 
-TEST_CASE("robustness: new files follow the umask; a replaced file keeps its mode", "[robustness][files]") {
+TEST_CASE("robustness: new files follow the umask, a replaced file keeps its mode", "[robustness][files]") {
     const test::TempDir dir;
     for (AtomicFile::Temporary kind : {AtomicFile::Temporary::Unnamed, AtomicFile::Temporary::Named}) {
         const fs::path p = dir.path / (kind == AtomicFile::Temporary::Named ? "named.binary" : "unnamed.binary");
@@ -173,7 +175,7 @@ TEST_CASE("robustness: new files follow the umask; a replaced file keeps its mod
     }
 }
 
-TEST_CASE("robustness: .brdfz bytes are reproducible with SOURCE_DATE_EPOCH; no HDF5 object times",
+TEST_CASE("robustness: .brdfz bytes are reproducible with SOURCE_DATE_EPOCH, no HDF5 object times",
           "[robustness][files][container]") {
     const test::TempDir dir;
     const TabularBrdf t = small_table();
@@ -204,4 +206,43 @@ TEST_CASE("robustness: .brdfz bytes are reproducible with SOURCE_DATE_EPOCH; no 
         CHECK(info.mtime == 0);
     }
     H5Fclose(f);
+}
+
+TEST_CASE("robustness: a PCA material whose basis file has gone is saved with the basis embedded",
+          "[robustness][files][pca]") {
+    const test::TempDir dir;
+    std::vector<Table> tables;
+    for (double alpha : {0.1, 0.2, 0.4}) {
+        TabulateOptions o;
+        o.grid = GridSpec{4, 4, 8};
+        tables.push_back(tabulate(AnalyticBrdf("lambert+ggx", {0.3, 0.4, 0.5, 0.5, 0.5, 0.5, alpha, 0.04}), o).table);
+    }
+    const std::vector<const Table*> ptrs{&tables[0], &tables[1], &tables[2]};
+    PcaTrainOptions o;
+    o.k_max = 2;
+    const fs::path basis_file = dir.path / "basis.brdfz", material = dir.path / "m.brdfz";
+    const auto basis = container::write_pca_basis(basis_file.string(), train_pca_basis(ptrs, o));
+    const PcaBrdf referenced(basis, basis->project(tables[1], 2), Lookup::Linear, PcaBrdf::BasisStorage::Referenced);
+    const Vec3 wi = normalize(Vec3{0.3, 0.1, 0.9}), wo = normalize(Vec3{-0.2, 0.4, 0.8});
+
+    // While the basis file holds it, the material refers to it (and is small).
+    container::write(material.string(), referenced);
+    CHECK(container::read_metadata(material.string()).datasets.size() == 1);  // the coefficients only
+    const auto small = fs::file_size(material);
+
+    // Deleted, or replaced by another basis: the material carries its basis and reads back as itself.
+    for (const bool replace : {false, true}) {
+        INFO((replace ? "replaced" : "deleted"));
+        fs::remove(basis_file);
+        if (replace) {
+            PcaTrainOptions fewer = o;
+            fewer.k_max = 1;
+            container::write_pca_basis(basis_file.string(), train_pca_basis(ptrs, fewer));
+        }
+        container::write(material.string(), referenced);
+        CHECK(fs::file_size(material) > small);
+        const auto back = load(material.string()).brdf;
+        CHECK(dynamic_cast<const PcaBrdf&>(*back).basis_storage() == PcaBrdf::BasisStorage::Embedded);
+        CHECK(back->eval(wi, wo) == referenced.eval(wi, wo));
+    }
 }

@@ -12,6 +12,7 @@
 #include "brdfz/fit/fit.h"
 #include "brdfz/formats/io.h"
 #include "brdfz/formats/merl.h"
+#include "brdfz/formats/scene_json.h"
 #include "brdfz/metrics.h"
 #include "brdfz/repr/analytic/model.h"
 #include "brdfz/repr/spec.h"
@@ -105,7 +106,32 @@ TEST_CASE("robustness: fit starts are capped as the spec parser caps them", "[ro
     CHECK_THROWS_WITH(compress(table, "analytic:lambert,starts=1001"), Catch::Contains("outside [1, 1000]"));
 }
 
-TEST_CASE("robustness: a file against itself is exactly 0; a reference with no reflectance is an error",
+TEST_CASE("robustness: a whole number beyond a key's range is out of range, not 'not an integer'",
+          "[robustness][spec]") {
+    CHECK_THROWS_WITH(compress(material(), "svd:iterations=4000000000"), "svd: iterations=4000000000 is outside [1, 100000]");
+    CHECK_THROWS_WITH(compress(material(), "analytic:lambert,seed=99999999999"),
+                      "analytic: seed=99999999999 is outside [0, 1073741824]");
+    CHECK_THROWS_WITH(compress(material(), "analytic:lambert,seed=-99999999999"), Catch::Contains("is outside [0, "));
+    CHECK_THROWS_WITH(compress(material(), "svd:rank=4x"), "svd: rank='4x' is not an integer");
+}
+
+TEST_CASE("robustness: phih asks for at most the slices a .brdfz file holds, refused before any work",
+          "[robustness][spec][limits]") {
+    const test::TempDir dir;
+    CHECK_THROWS_WITH(compress(material(), "tabular:res=2x2x4,phih=254"), "tabular: phih=254 is outside [1, 253]");
+    CHECK_THROWS_WITH(compress(material(), "svd:rank=1,res=2x2x4,phih=85"), "svd: phih=85 is outside [1, 84]");
+    CHECK_THROWS_WITH(compress(material(), "nmf:rank=1,res=2x2x4,phih=4096"), "nmf: phih=4096 is outside [1, 84]");
+    // The largest of each is stored and read back (colour=shared: the most datasets per slice).
+    for (const auto& [spec, slices] : {std::pair{"tabular:res=2x2x4,phih=253", 253u},
+                                        std::pair{"svd:rank=1,res=2x2x4,phih=84,colour=shared", 84u}}) {
+        INFO(spec);
+        const fs::path p = dir.path / "phih.brdfz";
+        save(*compress(material(), spec).brdf, p.string());
+        CHECK(load(p.string()).info.dims.front() == slices);
+    }
+}
+
+TEST_CASE("robustness: a file against itself is exactly 0, a reference with no reflectance is an error",
           "[robustness][metrics]") {
     const test::TempDir dir;
     const fs::path p = dir.path / "m.binary";
@@ -126,6 +152,15 @@ TEST_CASE("robustness: a file against itself is exactly 0; a reference with no r
     MeasurementSet negative;
     negative.samples.push_back({{0.0, 0.0, 1.0}, {0.0, 0.0, 1.0}, {-0.1, -0.2, -0.3}});
     CHECK_THROWS_WITH(compare(negative, material()), Catch::Contains("zero or negative at every sample"));
+}
+
+TEST_CASE("robustness: a scene value refused after parsing names the scene file", "[robustness][errors]") {
+    const test::TempDir dir;
+    const fs::path p = dir.path / "scene.json";
+    std::ofstream(p) << R"({"format": "brdfz-scene", "version": 1, "lights": [{"direction": [0, 0, 1], "intensity": -1}],
+                           "views": [{"axis": [0, 0, 1], "max_angle_deg": 30, "count": 4}]})";
+    CHECK_THROWS_AS(scene_json::load(p.string()), ValueError);
+    CHECK_THROWS_WITH(scene_json::load(p.string()), p.string() + ": scene: lights[0].intensity must be finite and >= 0");
 }
 
 TEST_CASE("robustness: messages are one printable line whatever bytes they quote", "[robustness][errors]") {

@@ -100,6 +100,33 @@ TEST_CASE("robustness: float32 table payloads: +Inf, negatives and all-NaN are r
     check_evaluates(*load(p.string()).brdf);
 }
 
+TEST_CASE("robustness: a container whose units, cosine or conventions say otherwise is refused, naming them",
+          "[robustness][container]") {
+    const test::TempDir dir;
+    const fs::path p = dir.path / "t.brdfz";
+    const std::vector<float> values = plausible(2 * 3 * 4);
+    test::write_float32_table(p.string(), 2, 3, 4, values);
+    REQUIRE(load_error(p) == "loaded");
+    struct Case {
+        std::function<void(test::Meaning&)> change;
+        std::string message;
+    };
+    const std::vector<Case> cases{
+        {[](test::Meaning& m) { m.units = "W/(m^2 sr)"; }, "attribute 'units' is \"W/(m^2 sr)\"; this brdfz reads only \"1/sr\""},
+        {[](test::Meaning& m) { m.cosine = "included"; }, "attribute 'cosine' is \"included\"; this brdfz reads only \"excluded\""},
+        {[](test::Meaning& m) { m.conventions = "normal +y"; }, "attribute 'conventions' is \"normal +y\""},
+    };
+    for (const Case& c : cases) {
+        test::Meaning meaning;
+        c.change(meaning);
+        test::write_float32_table(p.string(), 2, 3, 4, values, meaning);
+        INFO(c.message);
+        CHECK_THROWS_AS(load(p.string()), UnsupportedError);
+        CHECK_THROWS_WITH(load(p.string()), Catch::StartsWith(p.string() + ": " + c.message));
+        CHECK_THROWS_WITH(container::read_metadata(p.string()), Catch::Contains(c.message));
+    }
+}
+
 TEST_CASE("robustness: compact tables without a value are refused", "[robustness][container][compact]") {
     const test::TempDir dir;
     const fs::path p = dir.path / "c.brdfz";
@@ -116,7 +143,7 @@ TEST_CASE("robustness: compact tables without a value are refused", "[robustness
     CHECK_THAT(load_error(p), Catch::Contains("holds no value"));
 }
 
-TEST_CASE("robustness: factors that would overflow (3e38) are refused; large sane ones load", "[robustness][container][factored]") {
+TEST_CASE("robustness: factors that would overflow (3e38) are refused, large sane ones load", "[robustness][container][factored]") {
     const test::TempDir dir;
     const fs::path p = dir.path / "f.brdfz";
     std::vector<float> u(2 * 3, 0.5f), v(3 * 4 * 3, 0.5f);
@@ -224,7 +251,7 @@ TEST_CASE("robustness: PCA bases with values that are not finite, or negative me
     }
 }
 
-TEST_CASE("robustness: analytic parameters outside their bounds are refused; at the bounds they evaluate",
+TEST_CASE("robustness: analytic parameters outside their bounds are refused, at the bounds they evaluate",
           "[robustness][container][analytic]") {
     const test::TempDir dir;
     const fs::path p = dir.path / "a.brdfz";
@@ -350,7 +377,7 @@ TEST_CASE("robustness: RGL luminance with negative values loads, counted, and sa
     }
 }
 
-TEST_CASE("robustness: RGL rgb all NaN or all Inf is refused in .bsdf and .brdfz; partly, it is counted",
+TEST_CASE("robustness: RGL rgb all NaN or all Inf is refused in .bsdf and .brdfz, partly, it is counted",
           "[robustness][rgl]") {
     const test::TempDir dir;
     const fs::path bsdf = dir.path / "h.bsdf", brdfz = dir.path / "h.brdfz";
@@ -386,7 +413,7 @@ TEST_CASE("robustness: RGL rgb all NaN or all Inf is refused in .bsdf and .brdfz
     CHECK_THAT(load_error(bsdf), Catch::Contains("field 'vndf' holds 1 negative of 48 values"));
 }
 
-TEST_CASE("robustness: EXR tables: negative and infinite channels are invalid and counted; none valid is refused",
+TEST_CASE("robustness: EXR tables: negative and infinite channels are invalid and counted, none valid is refused",
           "[robustness][exr]") {
     const test::TempDir dir;
     const fs::path p = dir.path / "t.exr";

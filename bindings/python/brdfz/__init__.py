@@ -12,7 +12,11 @@ files), OSError (FileNotFoundError when the file read does not exist).
 
 Long operations (compress, fit, tabulate, save, convert) take ``progress``: True prints
 "label NN%" on stderr, a callable receives the fraction done (0..1] (from a worker thread, holding
-the GIL). They release the GIL while they work, as do Brdf.eval / eval_cos / pdf / sample.
+the GIL). They release the GIL while they work, as do Brdf.eval / eval_cos / pdf / sample. A
+progress callable that raises stops the operation at that call, and Ctrl-C (KeyboardInterrupt, or
+any signal handler's exception) stops compress, trial, fit, metrics, tabulate, save and convert
+within a few hundredths of a second; the exception is raised and no output file is written.
+``threads`` (0: one per hardware thread) is at most MAX_THREADS (1024); more is a ValueError.
 """
 from __future__ import annotations
 
@@ -24,7 +28,7 @@ import tempfile
 from typing import Callable, Mapping, Optional, Sequence, Tuple, Union
 
 from . import _core
-from ._core import __version__
+from ._core import MAX_THREADS, __version__
 from ._core import (
     Brdf,
     Candidate,
@@ -53,8 +57,8 @@ from ._core import (
 )
 
 __all__ = [
-    "Brdf", "Candidate", "ChannelMetrics", "Compressed", "FitReport", "FitResult", "FormatError", "Metrics",
-    "Scene", "Selection", "Trial", "UnsupportedError", "ValidationCheck", "ValidationReport", "albedo",
+    "Brdf", "Candidate", "ChannelMetrics", "Compressed", "FitReport", "FitResult", "FormatError", "MAX_THREADS",
+    "Metrics", "Scene", "Selection", "Trial", "UnsupportedError", "ValidationCheck", "ValidationReport", "albedo",
     "benchmark_specs", "compress", "compress_kinds", "convert", "default_candidates", "export", "fit", "format_of",
     "formats",
     "load", "metric_samples", "metrics", "metrics_at", "read_scene", "reciprocity_error", "representations", "save",
@@ -131,16 +135,32 @@ def read_scene(source: Union[Path, Mapping, Scene]) -> Scene:
         return source
     if not isinstance(source, Mapping):
         return _core.read_scene(source)
-    doc = {"format": "brdfz-scene", "version": 1, **source}
+    doc = {"format": "brdfz-scene", "version": 1, **_json_values(source, "")}
     # One schema, one reader: the dict goes through the C++ scene file reader.
     with tempfile.TemporaryDirectory() as tmp:
         path = os.path.join(tmp, "scene.json")
         with open(path, "w") as f:
-            json.dump(doc, f)
+            json.dump(doc, f, allow_nan=False)
         try:
             return _core.read_scene(path)
         except ValueError as e:
             raise type(e)(str(e).replace(path, "scene dict")) from None
+
+
+def _json_values(value, where: str):
+    """A scene dict's values as JSON has them: numpy scalars and arrays as numbers and lists; a number
+    that is not finite, or a value JSON cannot hold, is a ValueError naming its member."""
+    if hasattr(value, "tolist"):  # numpy scalars and arrays
+        value = value.tolist()
+    if isinstance(value, Mapping):
+        return {str(k): _json_values(v, f"{where}.{k}" if where else str(k)) for k, v in value.items()}
+    if isinstance(value, (list, tuple)):
+        return [_json_values(v, f"{where}[{i}]") for i, v in enumerate(value)]
+    if isinstance(value, float) and not math.isfinite(value):
+        raise ValueError(f"scene dict: {where}: {value} is not a finite number")
+    if value is None or isinstance(value, (bool, int, float, str)):
+        return value
+    raise ValueError(f"scene dict: {where}: a value of type {type(value).__name__} is not JSON")
 
 
 def trial(brdf: Brdf, spec: str, *, measure_speed: bool = True, max_theta: float = 80.0, threads: int = 0,

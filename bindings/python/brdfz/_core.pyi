@@ -7,7 +7,7 @@ import numpy
 import numpy.typing
 import os
 import typing
-__all__: list[str] = ['Brdf', 'Candidate', 'ChannelMetrics', 'Compressed', 'FitReport', 'FitResult', 'FormatError', 'Metrics', 'Scene', 'Selection', 'Trial', 'UnsupportedError', 'ValidationCheck', 'ValidationReport', 'albedo', 'benchmark_specs', 'compress', 'compress_kinds', 'convert', 'default_candidates', 'fit', 'format_of', 'formats', 'load', 'metric_samples', 'metrics', 'metrics_at', 'read_scene', 'reciprocity_error', 'representations', 'save', 'select_representation', 'simd', 'tabulate', 'trial', 'validate']
+__all__: list[str] = ['Brdf', 'Candidate', 'ChannelMetrics', 'Compressed', 'FitReport', 'FitResult', 'FormatError', 'MAX_THREADS', 'Metrics', 'Scene', 'Selection', 'Trial', 'UnsupportedError', 'ValidationCheck', 'ValidationReport', 'albedo', 'benchmark_specs', 'compress', 'compress_kinds', 'convert', 'default_candidates', 'fit', 'format_of', 'formats', 'load', 'metric_samples', 'metrics', 'metrics_at', 'read_scene', 'reciprocity_error', 'representations', 'save', 'select_representation', 'simd', 'tabulate', 'trial', 'validate']
 class FormatError(ValueError):
     pass
 class UnsupportedError(ValueError):
@@ -471,4 +471,5 @@ def validate(brdf: Brdf, *, res: tuple[typing.SupportsInt | typing.SupportsIndex
     """
     non-negativity (a table's values, else f on the res grid), reciprocity (rtol, atol in 1/sr) and energy (reflectance <= 1 + albedo_tol at the elevations theta, degrees), as `brdfz validate`
     """
+MAX_THREADS: int = 1024
 __version__: str = '0.1.0'

@@ -14,11 +14,15 @@ error; it is rewritten atomically as tasks finish, so an interrupted batch leave
 what finished. At the end: the charts of python -m brdfz.bench over the whole catalogue (per-material
 Pareto fronts; the smallest setting within each --budgets cos_rmse_rel) and DIR/summary.md.
 
-A rerun skips the tasks whose output and record exist and whose input file hash, spec, brdfz version
-and --over are unchanged, reusing their rows (--force rebuilds). A corrupt material fails its own
-tasks only. A task whose worker dies is run again on another (Dask's scheduler, up to its
-distributed.scheduler.allowed-failures); a task that raises something other than a bad-input error
-(MemoryError, a missing module on a worker) is retried --retries times.
+A rerun skips the tasks whose record exists, whose output is still the file the task wrote (its
+SHA-256) and whose input file hash, spec, brdfz version and --over are unchanged, reusing their rows
+(--force rebuilds). Specs are compared as normalise_spec() writes them, so spellings of one setting
+are one task. Ctrl-C stops this machine's workers before the catalogue is written, so that it lists
+every task with a record; a cluster that cannot be reached, or --workers N without Dask, is an error
+before anything is written. A corrupt material fails its own tasks only. A task whose worker dies is
+run again on another (Dask's scheduler, up to its distributed.scheduler.allowed-failures); a task that
+raises something other than a bad-input error (MemoryError, a missing module on a worker) is retried
+--retries times.
 
 Workers: --workers N starts a Dask LocalCluster of N single-threaded worker processes (default: one per
 CPU), each declaring its share of the memory as the resource MEMORY; each task declares its estimated
@@ -31,10 +35,12 @@ from __future__ import annotations
 
 import argparse
 import datetime
+import functools
 import glob
 import hashlib
 import inspect
 import json
+import math
 import os
 import pathlib
 import signal
@@ -82,19 +88,74 @@ def material_files(names: Sequence[PathLike]) -> List[pathlib.Path]:
     return out
 
 
+# What a batch writes at the top of its output folder, beside the materials' folders.
+_OWN_NAMES = {"catalogue.csv", "catalogue.parquet", "summary.md", "renders"}
+
+
 def material_names(files: Sequence[pathlib.Path]) -> Dict[str, pathlib.Path]:
-    """name (the file's stem) -> file; two files with one name are an error, as their outputs would clash."""
+    """name (the file's stem) -> file; two files with one name are an error, as their outputs would clash,
+    and so is a name that is not a folder of its own inside the output folder ("..", "catalogue.csv")."""
     out: Dict[str, pathlib.Path] = {}
     for f in files:
+        if f.stem in ("", ".", "..") or f.stem in _OWN_NAMES:
+            raise ValueError(f"{f}: the material name {f.stem!r} cannot be its folder in the output folder; "
+                             "rename the file")
         if f.stem in out and out[f.stem].resolve() != f.resolve():
             raise ValueError(f"two materials named {f.stem}: {out[f.stem]} and {f}")
         out[f.stem] = f
     return out
 
 
+@functools.lru_cache(maxsize=None)
+def _defaults() -> Dict[str, Dict[str, str]]:
+    """kind -> {key: default} for the keys whose default is a plain value (not "(the source's ...)")."""
+    return {k["kind"]: {key["name"]: key["default"] for key in k["keys"]
+                        if key["default"] and not any(c in key["default"] for c in " ()")}
+            for k in brdfz.representations()}
+
+
+def _value(text: str) -> str:
+    """A spec value as one spelling: sizes without leading zeros ("08x8x16" is "8x8x16"), numbers as
+    numbers ("0.50" is "0.5", "0.0" is "0"); other text (words, file names) as it is."""
+    parts = text.split("x")
+    if all(p.isdigit() for p in parts):
+        return "x".join(str(int(p)) for p in parts)
+    if not all(c in "0123456789+-.eE" for c in text):
+        return text
+    try:
+        number = float(text)
+    except ValueError:
+        return text
+    if not math.isfinite(number):
+        return text
+    return str(int(number)) if number.is_integer() else repr(number)
+
+
+def normalise_spec(spec: str) -> str:
+    """One text for specs that build the same thing: options in key order, values in one spelling
+    (_value), options that give their kind's default left out ("tabular:phih=1,res=08x8x16" and
+    "tabular:res=8x8x16"). A spec that does not parse is returned as it is, for the build to refuse."""
+    kind, colon, rest = spec.strip().partition(":")
+    if not colon:
+        return kind
+    positional, options = [], {}
+    for part in rest.split(","):
+        key, eq, value = part.partition("=")
+        if not eq:
+            positional.append(part)
+        elif key in options:
+            return spec
+        else:
+            options[key] = _value(value)
+    defaults = _defaults().get(kind, {})
+    kept = [f"{k}={v}" for k, v in sorted(options.items()) if k not in defaults or _value(defaults[k]) != v]
+    return kind + (":" + ",".join(positional + kept) if positional or kept else "")
+
+
 def spec_hash(spec: str) -> str:
-    """The output name of a spec: 16 hex digits of its SHA-256."""
-    return hashlib.sha256(spec.encode()).hexdigest()[:16]
+    """The output name of a spec: 16 hex digits of the SHA-256 of its normalise_spec() text, so that
+    equivalent spellings name one output."""
+    return hashlib.sha256(normalise_spec(spec).encode()).hexdigest()[:16]
 
 
 def file_sha256(path: PathLike) -> str:
@@ -208,20 +269,20 @@ def build_task(material: str, path: str, spec: str, out_dir: str, overs: Sequenc
             "ratio": row["input_bytes"] / trial.bytes, "file_bytes": output.stat().st_size,
             "load_seconds": t1 - t0, "measure_seconds": (t2 - t1 - trial.build_seconds) + (t3 - t2),
             "write_seconds": t4 - t3, "cpu_seconds": time.process_time() - cpu}
-    _write_json(record, {"fingerprint": fingerprint, "row": row})
+    _write_json(record, {"fingerprint": fingerprint, "row": row, "output_sha256": file_sha256(output)})
     return row
 
 
 def reusable(out_dir: PathLike, material: str, spec: str, fingerprint: Dict[str, Any]) -> Optional[Row]:
-    """The recorded row of a finished task whose output is still there and whose fingerprint (input
-    hash, spec, brdfz version, over) matches; None when it must run."""
+    """The recorded row of a finished task whose fingerprint (input hash, spec, brdfz version, over)
+    matches and whose output is still the file it wrote (its SHA-256); None when it must run."""
     output, record = _paths(out_dir, material, spec)
     try:
         doc = json.loads(record.read_text())
         row = doc["row"]
         if doc["fingerprint"] != fingerprint or row["status"] != "ok":
             return None
-        return row if output.stat().st_size == row["file_bytes"] else None
+        return row if file_sha256(output) == doc["output_sha256"] else None
     except (OSError, ValueError, KeyError, TypeError):
         return None
 
@@ -268,6 +329,8 @@ class Engine:
             raise ValueError("give workers or scheduler, not both")
         if workers is not None and workers < 1:
             raise ValueError(f"workers must be at least 1, not {workers}")
+        if threads is not None and threads > brdfz.MAX_THREADS:
+            raise ValueError(f"threads = {threads} is above the limit of {brdfz.MAX_THREADS} (0: one per hardware thread)")
         if workers is None and scheduler is None:
             workers = (os.cpu_count() or 1) if dask_available() else 1
         self.workers, self.scheduler = workers, scheduler
@@ -323,6 +386,12 @@ class Engine:
             print("batch: the workers declare no MEMORY resource, so tasks are not placed by memory "
                   "(start them with --resources MEMORY=BYTES)", file=sys.stderr)
 
+    def stop_local(self) -> None:
+        """Ends the tasks still running on a LocalCluster this engine started, with its workers (the
+        next map() starts another); those on a cluster behind `scheduler` run on, cancelled or not."""
+        if self.cluster is not None:
+            self.close()
+
     def close(self) -> None:
         # The client first, releasing its results, then the workers, then the scheduler: a worker
         # removed while it holds a result, or a scheduler closed under running workers, logs a warning.
@@ -351,9 +420,9 @@ class Engine:
                 bar.step(job.label)
                 yield job, result, error
             return
+        self.start()
         from distributed import as_completed
 
-        self.start()
         futures = {}
         for job in jobs:
             extra = {}
@@ -460,14 +529,17 @@ def run(materials: Sequence[PathLike], specs: Sequence[str], out: PathLike, *, w
     unless charts=False; render_size > 0 adds sphere renders of each material's Pareto-optimal
     settings."""
     overs = _overs(over)
-    specs = list(dict.fromkeys(s.strip() for s in specs))
+    # Equivalent spellings of a setting are one task, under the first spelling given.
+    unique: Dict[str, str] = {}
+    for s in specs:
+        unique.setdefault(normalise_spec(s), s.strip())
+    specs = list(unique.values())
     if not specs or any(not s for s in specs):
         raise ValueError("give at least one spec, none empty")
     named = material_names(material_files(materials))
     if not named:
         raise ValueError("no materials: give BRDF files or folders holding them")
     out = pathlib.Path(out)
-    out.mkdir(parents=True, exist_ok=True)
     cols = columns(overs)
     catalogue = Catalogue(out, cols, [(m, s) for m in named for s in specs])
     fingerprints = {}
@@ -477,18 +549,23 @@ def run(materials: Sequence[PathLike], specs: Sequence[str], out: PathLike, *, w
     for name, path in named.items():
         digest = file_sha256(path)
         for spec in specs:
-            fp = {"input_sha256": digest, "spec": spec, "brdfz_version": brdfz.__version__, "over": list(overs)}
+            fp = {"input_sha256": digest, "spec": normalise_spec(spec), "brdfz_version": brdfz.__version__,
+                  "over": list(overs)}
             fingerprints[(name, spec)] = fp
             row = None if force else reusable(out, name, spec, fp)
             if row is not None:
-                catalogue.add(row)
+                catalogue.add(row | {"spec": spec})
             else:
                 jobs.append(Job(build_task, (name, str(path), spec, str(out), overs, engine.task_threads(), fp),
                                 f"{name} {spec}", estimate_memory(path.stat().st_size, spec), f"{name}/{spec_hash(spec)}"))
     reused = len(catalogue.by_key)
-    print(f"batch: {len(jobs)} tasks to run, {reused} finished before", file=sys.stderr)
     started = time.monotonic()
     try:
+        if jobs:
+            # Before anything is written: a cluster that cannot be reached, or no Dask, leaves nothing.
+            engine.start()
+        out.mkdir(parents=True, exist_ok=True)
+        print(f"batch: {len(jobs)} tasks to run, {reused} finished before", file=sys.stderr)
         try:
             for job, row, error in engine.map(jobs, "batch"):
                 if error:
@@ -496,13 +573,18 @@ def run(materials: Sequence[PathLike], specs: Sequence[str], out: PathLike, *, w
                     row = failed_row(name, pathlib.Path(path), spec, overs, error, fingerprints[(name, spec)])
                 catalogue.add(row)
                 catalogue.write()
+        except BaseException:
+            # Cut short (Ctrl-C): this machine's workers are stopped first, so that no task writes an
+            # output and its record after the catalogue below has looked for them.
+            engine.stop_local()
+            raise
         finally:
             # Cut short: tasks that finished on a worker before their result arrived have their record.
             for name, _, spec in (job.args[:3] for job in jobs):
                 if (name, spec) not in catalogue.by_key:
                     row = reusable(out, name, spec, fingerprints[(name, spec)])
                     if row is not None:
-                        catalogue.add(row)
+                        catalogue.add(row | {"spec": spec})
             catalogue.write(force=True)
         rows = catalogue.rows()
         renders = render_all(engine, out, rows, named, render_size) if render_size > 0 else []

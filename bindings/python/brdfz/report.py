@@ -9,12 +9,14 @@ from __future__ import annotations
 
 import csv
 import datetime
+import errno
 import math
 import os
 import pathlib
 import platform
+import secrets
+import stat
 import sys
-import tempfile
 from typing import Any, Dict, Iterable, List, Optional, Sequence
 
 import numpy as np
@@ -129,16 +131,46 @@ def fmt(v: Any) -> str:
 
 def atomic_write(path: pathlib.Path, write) -> None:
     """write(file object) into a temporary file beside `path`, then rename it over `path`: readers see
-    the old file or the new one, never part of one."""
+    the old file or the new one, never part of one. As the library's writers (formats/detail/atomic_file.h):
+    a new file gets 0666 less the umask, a replaced one keeps its mode, a symbolic link to a regular
+    file is written through, and anything else that is not a regular file is refused. Errors name
+    `path`, not the temporary."""
     path = pathlib.Path(path)
-    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
     try:
-        with os.fdopen(fd, "w", newline="") as f:
-            write(f)
-        os.replace(tmp, path)
-    except BaseException:
-        os.unlink(tmp)
-        raise
+        target = _write_target(path)
+        while True:
+            tmp = target.with_name(f".{target.name}.{os.getpid()}.{secrets.token_hex(4)}.tmp")
+            try:
+                # Created by open(2), so the umask applies (mkstemp's files are 0600 whatever it is).
+                fd = os.open(tmp, os.O_WRONLY | os.O_CREAT | os.O_EXCL | os.O_CLOEXEC, 0o666)
+                break
+            except FileExistsError:
+                continue
+        try:
+            with os.fdopen(fd, "w", newline="") as f:
+                write(f)
+                if target.exists():
+                    os.chmod(f.fileno(), stat.S_IMODE(target.stat().st_mode))
+            os.replace(tmp, target)
+        except BaseException:
+            tmp.unlink(missing_ok=True)
+            raise
+    except OSError as e:
+        raise OSError(e.errno, e.strerror, str(path)) from None
+
+
+def _write_target(path: pathlib.Path) -> pathlib.Path:
+    """Where atomic_write puts the bytes of `path`: itself, or the regular file a link leads to."""
+    target = pathlib.Path(os.path.realpath(path)) if path.is_symlink() else path
+    try:
+        mode = target.lstat().st_mode
+    except FileNotFoundError:
+        if target is path:
+            return path
+        raise OSError(errno.ENOENT, "is a symbolic link to a missing file; only regular files are written") from None
+    if not stat.S_ISREG(mode):
+        raise OSError(errno.EINVAL, "is not a regular file; only regular files are written")
+    return target
 
 
 def write_csv(rows: Sequence[Row], path: pathlib.Path, columns: Sequence[str]) -> None:

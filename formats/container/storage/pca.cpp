@@ -31,11 +31,25 @@ constexpr const char* kTransform = "log-cosine-median";
 
 const char* position_name(BinPosition p) { return p == BinPosition::Centre ? "centre" : "start"; }
 
+// Whether a material is written with a reference to its basis file: when it was built or read so,
+// and that file still holds its basis. A basis whose file has gone (deleted, or replaced by another
+// basis) is embedded instead, so that what is written reads back.
+bool stays_referenced(const PcaBrdf& p) {
+    if (p.basis_storage() == PcaBrdf::BasisStorage::Embedded) return false;
+    const PcaBasis::Origin& origin = p.basis().origin();
+    if (origin.path.empty()) return true;  // write() refuses it, saying why
+    try {
+        return read_pca_basis(origin.path)->origin().sha256 == origin.sha256;
+    } catch (const Error&) {
+        return false;
+    }
+}
+
 std::vector<Feature> needs(const Brdf& brdf) {
     const auto* p = dynamic_cast<const PcaBrdf*>(&brdf);
     if (!p) return {};
     std::vector<Feature> out{kPca};
-    if (p->basis_storage() != PcaBrdf::BasisStorage::Embedded) out.push_back(kPcaExternal);
+    if (stays_referenced(*p)) out.push_back(kPcaExternal);
     if (p->basis().grid().full_circle()) out.push_back(kFullPhiD);
     return out;
 }
@@ -48,7 +62,7 @@ std::vector<std::uint64_t> grid_shape(const GridSpec& g) {
 void write(h5::WriteNode& rep, const Brdf& brdf) {
     const auto& p = dynamic_cast<const PcaBrdf&>(brdf);
     const PcaBasis& basis = p.basis();
-    const bool embedded = p.basis_storage() == PcaBrdf::BasisStorage::Embedded;
+    const bool embedded = !stays_referenced(p);
     if (!embedded && basis.origin().path.empty())
         throw ValueError(rep.file() + ": the PCA basis was not read from a file, so it cannot be referenced; "
                                       "save it first (write_pca_basis) or embed it");

@@ -14,6 +14,8 @@ namespace brdfz::container::detail {
 namespace {
 
 const Feature kPhiH{"phi-h", 4};
+// phih= specs ask for at most the slices the header's extents hold (repr/phi_h.h).
+static_assert(PhiHBrdf::kMaxStoredDatasets == h5::kMaxExtents);
 
 // The module storing a slice exactly (never a stack itself).
 const StorageModule* slice_module(const Brdf& slice) {

@@ -4,6 +4,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <exception>
 #include <limits>
 #include <mutex>
 #include <numbers>
@@ -150,20 +151,32 @@ struct SolveResult {
     ceres::Solver::Summary summary;
 };
 
-class ProgressCallback final : public ceres::IterationCallback {
+// After each solver iteration: progress (when given) and the caller's stop check (control.h). What
+// either throws must not unwind through Ceres: it ends the solve, and solve() rethrows it.
+class IterationHook final : public ceres::IterationCallback {
 public:
-    explicit ProgressCallback(std::function<void(int)> on_iteration) : on_iteration_(std::move(on_iteration)) {}
+    explicit IterationHook(std::function<void(int)> on_iteration = nullptr) : on_iteration_(std::move(on_iteration)) {}
     ceres::CallbackReturnType operator()(const ceres::IterationSummary& s) override {
-        on_iteration_(s.iteration);
-        return ceres::SOLVER_CONTINUE;
+        try {
+            if (on_iteration_) on_iteration_(s.iteration);
+            poll_stop();
+            return ceres::SOLVER_CONTINUE;
+        } catch (...) {
+            error_ = std::current_exception();
+            return ceres::SOLVER_ABORT;
+        }
+    }
+    void rethrow() const {
+        if (error_) std::rethrow_exception(error_);
     }
 
 private:
     std::function<void(int)> on_iteration_;
+    std::exception_ptr error_;
 };
 
 SolveResult solve(const Space& space, const Samples& samples, std::vector<double> u, int threads, int max_iterations,
-                  double seconds, ceres::IterationCallback* callback) {
+                  double seconds, IterationHook& hook) {
     ceres::Problem problem;  // owns the cost functions
     std::vector<double*> blocks;
     for (const Term& t : space.setup.terms) blocks.push_back(u.data() + t.offset);
@@ -188,9 +201,10 @@ SolveResult solve(const Space& space, const Samples& samples, std::vector<double
     // costs a Jacobian per trial step and, for these problems, does not pay for itself.
     o.max_num_line_search_step_size_iterations = 0;
     o.logging_type = ceres::SILENT;
-    if (callback) o.callbacks.push_back(callback);
+    o.callbacks.push_back(&hook);
     SolveResult r;
     ceres::Solve(o, &problem, &r.summary);
+    hook.rethrow();
     r.u = std::move(u);
     return r;
 }
@@ -325,7 +339,10 @@ FitResult fit_samples(const MeasurementSet& data, const std::string& model_text,
     std::vector<SolveResult> results(options.starts);
     detail::parallel_for(
         options.starts, options.threads,
-        [&](int, int k) { results[k] = solve(space, coarse, starts[k], 1, options.start_iterations, remaining(), nullptr); },
+        [&](int, int k) {
+            IterationHook hook;
+            results[k] = solve(space, coarse, starts[k], 1, options.start_iterations, remaining(), hook);
+        },
         [&](int done, int n) { progress(0.6 * done / n); });
     int best = -1;
     for (int k = 0; k < options.starts; ++k) {
@@ -346,9 +363,12 @@ FitResult fit_samples(const MeasurementSet& data, const std::string& model_text,
     SolveResult final_result = std::move(results[best]);
     rep.iterations = static_cast<int>(final_result.summary.iterations.size());
     {
-        ProgressCallback callback([&](int iteration) { progress(0.6 + 0.4 * iteration / options.max_iterations); });
-        SolveResult refined = solve(space, all.samples, final_result.u, detail::resolve_threads(options.threads),
-                                    options.max_iterations, remaining(), &callback);
+        IterationHook hook([&](int iteration) { progress(0.6 + 0.4 * iteration / options.max_iterations); });
+        // Ceres takes at most the hardware's threads, and says so on stderr (through glog) when given
+        // more: the library prints nothing.
+        SolveResult refined = solve(space, all.samples, final_result.u,
+                                    std::min(resolve_threads(options.threads), resolve_threads(0)),
+                                    options.max_iterations, remaining(), hook);
         rep.total_iterations += static_cast<int>(refined.summary.iterations.size());
         rep.iterations += static_cast<int>(refined.summary.iterations.size());
         if (usable(refined.summary)) final_result = std::move(refined);

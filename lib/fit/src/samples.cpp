@@ -59,7 +59,7 @@ GridSamples sample_brdf(const Brdf& brdf, const SampleOptions& options) {
             for (int c = 0; c < 3; ++c) f[k][c] = table->at(bins[k], c);  // NaN marks invalid
     } else {
         // Sources can be slow to evaluate (RGL): split the batch over threads.
-        const std::size_t workers = std::min<std::size_t>(detail::resolve_threads(options.threads), wi.size() / 1024 + 1);
+        const std::size_t workers = std::min<std::size_t>(resolve_threads(options.threads), wi.size() / 1024 + 1);
         const std::size_t per = (wi.size() + workers - 1) / workers;
         detail::parallel_for(static_cast<int>(workers), static_cast<int>(workers), [&](int, int w) {
             const std::size_t begin = std::min(wi.size(), w * per), n = std::min(wi.size(), begin + per) - begin;

@@ -10,17 +10,14 @@
 #include <thread>
 #include <vector>
 
+#include "brdfz/control.h"
+
 namespace brdfz::detail {
 
-// threads <= 0: one per hardware thread.
-inline int resolve_threads(int threads) {
-    if (threads > 0) return threads;
-    return static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
-}
-
-// fn(worker, i) for i in [0, n) on up to `threads` workers (worker < threads), each taking the next
-// unclaimed i. progress(done, n) is called under a lock after each item. The first exception thrown by
-// fn stops the loop and is rethrown.
+// fn(worker, i) for i in [0, n) on up to `threads` workers (worker < threads; resolve_threads,
+// control.h), each taking the next unclaimed i. After each item the caller's stop check runs (on every
+// worker: they inherit it) and then progress(done, n), under a lock. The first exception thrown by fn,
+// the check or progress stops the loop and is rethrown.
 template <typename Fn>
 void parallel_for(int n, int threads, Fn&& fn, const std::function<void(int, int)>& progress = nullptr) {
     const int workers = std::max(1, std::min(resolve_threads(threads), n));
@@ -29,10 +26,13 @@ void parallel_for(int n, int threads, Fn&& fn, const std::function<void(int, int
     std::exception_ptr error;
     std::mutex mutex;
     int done = 0;
+    const StopCheck* stop = current_stop();
     auto work = [&](int worker) {
+        const InheritedStop inherited(stop);
         for (int i; !failed && (i = next++) < n;) {
             try {
                 fn(worker, i);
+                poll_stop();
                 std::lock_guard lock(mutex);
                 ++done;
                 if (progress) progress(done, n);

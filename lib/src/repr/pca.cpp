@@ -124,7 +124,7 @@ std::vector<float> PcaBasis::project(const Table& table, int k) const {
     const ConstMapXf basis(components_.data(), static_cast<Eigen::Index>(dims()), k_max());
     // Normal equations over the table's valid bins: (BᵀB) c = Bᵀ(y − mean), restricted to those rows.
     const int slices = slice_count(grid_.bins());
-    const int workers = std::min(detail::resolve_threads(0), slices);
+    const int workers = std::min(resolve_threads(0), slices);
     std::vector<Eigen::MatrixXd> gram(workers, Eigen::MatrixXd::Zero(k, k));
     std::vector<Eigen::VectorXd> rhs(workers, Eigen::VectorXd::Zero(k));
     std::vector<std::size_t> used(workers, 0);
@@ -223,7 +223,7 @@ PcaBasis train_pca_basis(std::span<const Table* const> tables, const PcaTrainOpt
     const std::vector<float> weight = bin_weights(grid);
     const float eps = static_cast<float>(options.epsilon);
     const int slices = slice_count(bins);
-    const int workers = std::min(detail::resolve_threads(options.threads), slices);
+    const int workers = std::min(resolve_threads(options.threads), slices);
     const auto nan = std::numeric_limits<float>::quiet_NaN();
 
     std::mutex progress_mutex;

@@ -97,9 +97,11 @@ int ReprSpec::get_int(const std::string& key, int fallback, int min_value, int m
     if (!value) return fallback;
     int parsed = 0;
     const auto [end, ec] = std::from_chars(value->data(), value->data() + value->size(), parsed);
-    if (ec != std::errc() || end != value->data() + value->size())
+    // A whole number beyond int's range is out of range, not "not an integer".
+    const bool too_large = ec == std::errc::result_out_of_range && end == value->data() + value->size();
+    if (!too_large && (ec != std::errc() || end != value->data() + value->size()))
         throw SpecError(kind_ + ": " + key + "='" + *value + "' is not an integer");
-    if (parsed < min_value || parsed > max_value)
+    if (too_large || parsed < min_value || parsed > max_value)
         throw SpecError(kind_ + ": " + key + "=" + *value + " is outside [" + std::to_string(min_value) + ", " +
                          std::to_string(max_value) + "]");
     return parsed;

@@ -198,7 +198,7 @@ TEST_CASE("factored fit=lsq: every layout, colour mode and space gives finite, n
     check_lsq_outputs(false);
 }
 
-TEST_CASE("factored fit=lsq: deterministic, whatever the thread count; progress reaches 1", "[factored][lsq]") {
+TEST_CASE("factored fit=lsq: deterministic, whatever the thread count, progress reaches 1", "[factored][lsq]") {
     CoatedDiffuseParams p;
     const CoatedDiffuse source(p);
     const GridSpec g{8, 8, 10, BinPosition::Centre, 0.8};

@@ -237,7 +237,7 @@ TEST_CASE("PCA: sampling is the reconstructed table's, one call or a batch", "[p
     CHECK(drawn > count / 2);
 }
 
-TEST_CASE("PCA: nbytes counts the per-material part; the basis its own", "[pca]") {
+TEST_CASE("PCA: nbytes counts the per-material part, the basis its own", "[pca]") {
     const std::vector<Table> tables = family();
     const auto basis = trained(tables, 5);
     const PcaBrdf pca(basis, basis->project(tables[0], 5));
@@ -245,7 +245,7 @@ TEST_CASE("PCA: nbytes counts the per-material part; the basis its own", "[pca]"
     CHECK(basis->nbytes() == (2 + 5) * kGrid.bins() * 3 * 4 + 5 * 8);
 }
 
-TEST_CASE("PCA container: basis file and materials round-trip; hash and files checked", "[pca][container]") {
+TEST_CASE("PCA container: basis file and materials round-trip, hash and files checked", "[pca][container]") {
     test::TempDir dir;
     const std::vector<Table> tables = family();
     const auto basis = trained(tables, 5);

@@ -90,7 +90,7 @@ TEST_CASE("phih: slices are interpolated linearly in φh, periodic or mirrored",
     CHECK_THROWS_AS(PhiHBrdf(std::move(one), PhiHSymmetry::None), ValueError);
 }
 
-TEST_CASE("phih: phih=1 is today's table bit for bit; bad options are errors", "[phih]") {
+TEST_CASE("phih: phih=1 is today's table bit for bit, bad options are errors", "[phih]") {
     const AnalyticBrdf source = brushed();
     const Compressed a = compress(source, "tabular:res=16x8x16,symmetry=none");
     const Compressed b = compress(source, "tabular:res=16x8x16,phih=1,symmetry=none");

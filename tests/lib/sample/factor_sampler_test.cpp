@@ -175,7 +175,7 @@ TEST_CASE("factor sampler: 10^7 random (wo, u)", "[sample][factored][heavy]") {
     CHECK(r.failed < 100);
 }
 
-TEST_CASE("factored: every space builds a factor sampler; sample() keeps the half-vector sampler", "[sample][factored]") {
+TEST_CASE("factored: every space builds a factor sampler, sample() keeps the half-vector sampler", "[sample][factored]") {
     const Table t = coated({16, 16, 32}, 0.1);
     for (FactorSpace space : {FactorSpace::Linear, FactorSpace::Cos, FactorSpace::Log, FactorSpace::Cbrt}) {
         const Factored f = factor(t, options(FactorMethod::Nmf, 2, space, FactorLayout::HxDP, FactorColour::Shared, 10));

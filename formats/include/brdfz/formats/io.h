@@ -97,6 +97,11 @@ bool holds_measurements(const std::string& path);
 // Cornell .brdf or ALTA .dat; UnsupportedError for formats that hold a BRDF (use load).
 LoadedMeasurements load_measurements(const std::string& path);
 
+// Outputs are regular files: IoError naming `path` when it is something else (a device, a FIFO, a
+// socket, a folder) or a symbolic link to one or to nothing; a link to a regular file is written
+// through. save() and convert() check it before their work, as a caller of a long one can.
+void check_output(const std::string& path);
+
 // Writes atomically; returns the counts of what was written: table bins, or a stored representation's
 // entries (parameters, the factors' grid bins, an RGL file's rgb values).
 ValidityCounts save(const Brdf& brdf, const std::string& path, const SaveOptions& options = {});

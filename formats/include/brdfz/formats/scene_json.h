@@ -17,4 +17,8 @@ inline constexpr std::size_t kMaxFileBytes = 16 << 20;  // explicit pair lists c
 // build_scene (ValueError naming the member).
 SceneDescription read(const std::string& path);
 
+// read() and build_scene(): the scene's samples, or read()'s errors, or build_scene's ValueError with
+// the file's name before it.
+Scene load(const std::string& path);
+
 }  // namespace brdfz::scene_json

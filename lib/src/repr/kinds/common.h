@@ -24,8 +24,10 @@ inline const SpecKey kWeightKey{"weight", "bins",
 
 // The φh axis (repr/phi_h.h) of the kinds that take one: phih=N and a symmetry= that may be bilateral.
 inline const SpecKey kPhiHKey{"phih", "1",
-                              "φh slices, 1-4096: 1 isotropic (no φh axis); N >= 2 one table per half-vector azimuth, "
-                              "interpolated linearly (anisotropic data)"};
+                              "φh slices, at most " + std::to_string(PhiHBrdf::kMaxTableSlices) + " (tabular) or " +
+                                  std::to_string(PhiHBrdf::kMaxFactoredSlices) +
+                                  " (svd, nmf), what a .brdfz file holds: 1 isotropic (no φh axis); N >= 2 one table "
+                                  "per half-vector azimuth, interpolated linearly (anisotropic data)"};
 inline const SpecKey kPhiHSymmetryKey{
     "symmetry", "reciprocal",
     "reciprocal|none|bilateral: φd over [0, π) (a pair and its exchange sharing a bin) or [0, 2π); bilateral, the "

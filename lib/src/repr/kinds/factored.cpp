@@ -40,7 +40,7 @@ Compressed build_factored(FactorMethod method, const Brdf& source, const ReprSpe
     fo.dtype = parse_factor_dtype(spec.get_choice("dtype", "f32", {"f32", "f16"}));
     const SamplerKind sampler = sampler_option(spec);
     const Table* table = source.stored_table();
-    const int phih = spec.get_int("phih", 1, 1, GridSpec::kMaxAxis);
+    const int phih = spec.get_int("phih", 1, 1, PhiHBrdf::kMaxFactoredSlices);
     const std::string symmetry_text =
         phi_h_symmetry_option(spec, table ? table->grid().symmetry : Symmetry::Reciprocal);
     const Symmetry symmetry = phih > 1 ? Symmetry::None : parse_symmetry(symmetry_text);

@@ -57,7 +57,7 @@ Compressed build_tabular(const Brdf& source, const ReprSpec& spec, const Compres
     const int ss = supersample_option(spec, filter);
     const TabulateOptions::FitWeight weight = weight_option(spec, filter == TabulateOptions::Filter::LeastSquares);
     const double warp = theta_d_warp_option(spec);
-    const int phih = spec.get_int("phih", 1, 1, GridSpec::kMaxAxis);
+    const int phih = spec.get_int("phih", 1, 1, PhiHBrdf::kMaxTableSlices);
     const std::string symmetry = phi_h_symmetry_option(spec);
     const SamplerKind sampler = sampler_option(spec);
     spec.finish();
