@@ -37,11 +37,12 @@ Symmetry slice_symmetry(PhiHSymmetry s);
 class PhiHBrdf final : public Brdf {
 public:
     // The most slices a spec's phih= asks for: what one .brdfz container stores. Its header lists at
-    // most kMaxStoredDatasets datasets (formats/SPEC.md §1); a table slice is one, a factored slice
-    // two (u, v), three with colour=shared.
+    // most kMaxStoredDatasets datasets (formats/SPEC.md §1): the stack's compact sampler takes four, a
+    // table slice one, a factored slice two (u, v), three with colour=shared.
     static constexpr int kMaxStoredDatasets = 253;
-    static constexpr int kMaxTableSlices = kMaxStoredDatasets;
-    static constexpr int kMaxFactoredSlices = kMaxStoredDatasets / 3;
+    static constexpr int kSamplerDatasets = 4;
+    static constexpr int kMaxTableSlices = kMaxStoredDatasets - kSamplerDatasets;
+    static constexpr int kMaxFactoredSlices = (kMaxStoredDatasets - kSamplerDatasets) / 3;
 
     // ValueError unless there are 2..GridSpec::kMaxAxis slices, all non-null with the same channels.
     // sampler: Compact builds the stack's own sampler now; Fine samples the slices' own samplers; None
