@@ -1,6 +1,7 @@
-"""Analytic models (repr/analytic/*.h) and their lobe-mixture sampler (lib/src/sample/lobes.cpp) in
-Dr.Jit, in Float64 as the C++ double instantiation: every family's eval, its sampler and density, the
-albedo-proportional mixture on the C++ mixture's own albedo table (Brdf.sampler_parts()).
+"""Analytic models (the lobe families, brdfz/runtime/kernels/lobes/*.h) and their mixture sampler
+(kernels/lobe_mixture.h) in Dr.Jit, in Float64 as the C++ double instantiation: every family's eval,
+its sampler and density, the albedo-proportional mixture on the C++ mixture's own albedo table
+(Brdf.sampler_parts()).
 
 Parameters arrive as a list of Float64 values (width 1), so that gradients reach them. The
 Beckmann sampler's slope inversions are the C++ Newton iterations (dr.while_loop), with
@@ -295,7 +296,7 @@ class GgxSampler(GgxAnisoSampler):
 
 
 def invert_cdf(evaluate, target, lo, hi, x, label):
-    """repr/analytic/sampling.h invert_cdf: Newton steps inside a shrinking bracket, bisection when a step leaves it."""
+    """kernels/lobes/sampling.h invert_cdf: Newton steps inside a shrinking bracket, bisection when a step leaves it."""
     active = dr.full(dr.mask_t(x), True, dr.width(x))
     it = dr.zeros(dr.int32_array_t(x), dr.width(x))
 
