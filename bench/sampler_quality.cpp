@@ -4,7 +4,7 @@
 // part of the data and reporting on the other:
 //   sampler_quality [--spec SPEC]... [--slices K] [--rows R] [--cols C] [--uniform B] [--points P]
 //                   [--share S] [--draws N] FILES...
-// Prints one CSV row per (file, spec, view): file,spec,theta_o,repr_bytes,compact_bytes,fine_bytes,
+// Prints one CSV row per (file, spec (quoted), view): file,spec,theta_o,repr_bytes,compact_bytes,fine_bytes,
 // compact,fine.
 #include <cstdio>
 #include <cstdlib>
@@ -100,7 +100,7 @@ int main(int argc, char** argv) {
                 const double c = sampler_second_moment(with_compact, theta, draws);
                 double f = 0.0;
                 if (half) f = sampler_second_moment(SampledWith<HalfVectorSampler>(b, *half), theta, draws);
-                std::printf("%s,%s,%g,%zu,%zu,%zu,%.4f,%.4f\n", name.c_str(), spec.c_str(), deg, b.nbytes(),
+                std::printf("%s,\"%s\",%g,%zu,%zu,%zu,%.4f,%.4f\n", name.c_str(), spec.c_str(), deg, b.nbytes(),
                             compact.nbytes(), half ? half->nbytes() : 0, c, f);
                 std::fflush(stdout);
             }

@@ -120,11 +120,19 @@ struct Chi2Result {
 // How chi2_test draws: one sample() call per draw, or the batch sample() over spans of draws.
 enum class Draws { OneAtATime, Batch };
 
+// Quadrature points a side per χ² cell. The compact sampler's density is piecewise constant on cells
+// whose edges cross the χ² cells' (rows on its own θh edges, columns scaled by the azimuth the horizon
+// leaves): on 16×16 points that quadrature's error alone failed the test at 3·10^6 draws, so its
+// samplers (every gridded kind's default) take 32. Samplers whose density is smooth across the cells
+// (the analytic lobes, RGL files' warps, the factor and half-vector samplers) take 16, a quarter of the
+// pdf calls.
+inline constexpr int kCompactPoints = 32, kSmoothPoints = 16;
+
 // Histogram of `samples` sampled wi against expected counts from the pdf on a cells×cells grid in
 // half-vector coordinates; cells with expected count < 5 are pooled. The expected counts' quadrature
-// (cells·32 points a side, finer where the horizon crosses) also gives the pdf's integral.
+// (cells·points a side, twice that where the horizon crosses) also gives the pdf's integral.
 inline Chi2Result chi2_test(const Brdf& b, const Vec3& wo, std::size_t samples, int cells = 32,
-                            std::uint64_t seed = 1, Draws draws = Draws::OneAtATime) {
+                            std::uint64_t seed = 1, Draws draws = Draws::OneAtATime, int points = kCompactPoints) {
     std::vector<double> observed(cells * cells, 0.0), expected(cells * cells, 0.0);
     std::mt19937_64 rng(seed);
     std::uniform_real_distribution<double> u(0.0, 1.0);
@@ -155,11 +163,9 @@ inline Chi2Result chi2_test(const Brdf& b, const Vec3& wo, std::size_t samples, 
     } else {
         for (std::size_t k = 0; k < samples; ++k) count(b.sample(wo, u(rng), u(rng)));
     }
-    // Expected counts by a midpoint rule on 32×32 points per cell: the compact sampler's density is
-    // piecewise constant on cells whose edges cross these (rows on its own θh edges, columns scaled by
-    // the azimuth the horizon leaves), and on 16×16 points that quadrature's error alone failed the test
-    // at 3·10^6 draws. Cells the horizon crosses (wi.z = 0, where the pdf may drop to 0) take 64×64; the
-    // crossing is found on the cell's outline, which the horizon curve must cut to enter the cell.
+    // Expected counts by a midpoint rule on points×points per cell (kCompactPoints, kSmoothPoints).
+    // Cells the horizon crosses (wi.z = 0, where the pdf may drop to 0) take twice the points a side;
+    // the crossing is found on the cell's outline, which the horizon curve must cut to enter the cell.
     PdfRule rule(wo);
     const auto cell_integral = [&](int i, int j, int sub) {
         for (int a = 0; a < sub; ++a)
@@ -183,7 +189,7 @@ inline Chi2Result chi2_test(const Brdf& b, const Vec3& wo, std::size_t samples, 
     double integral = 0;
     for (int j = 0; j < cells; ++j)
         for (int i = 0; i < cells; ++i) {
-            const double mass = cell_integral(i, j, horizon_crosses(i, j) ? 64 : 32) / (double(cells) * cells);
+            const double mass = cell_integral(i, j, horizon_crosses(i, j) ? 2 * points : points) / (double(cells) * cells);
             integral += mass;
             expected[j * cells + i] = mass * samples;
         }
@@ -213,21 +219,21 @@ inline constexpr double kViewsLevel = 0.01 / std::size(kThetaODeg);
 
 // How check_sampler's χ² draws (one call at a time or through the batch sampler, whose draws
 // check_batch_bits shows are one call's bits) and on how many cells a side: the expected counts'
-// quadrature takes cells·32 points a side, so 16 cells cost a quarter of 32's (for few draws).
+// quadrature takes cells·points a side, so 16 cells cost a quarter of 32's (for few draws).
 struct Chi2Setting {
     Draws draws = Draws::OneAtATime;
     int cells = 32;
+    int points = kCompactPoints;
 };
 
 // At each of kThetaODeg: χ² of `samples` draws against the pdf (fails below p_min: callers Bonferroni-
-// correct it for the number of tests they run), ∫ pdf dωi = 1 ± 1% (on the χ² test's quadrature: 1024
-// points a side at 32 cells, 2048 where the horizon crosses), and the sample → pdf round trip with the
-// weight f·cosθi/pdf.
+// correct it for the number of tests they run), ∫ pdf dωi = 1 ± 1% (on the χ² test's quadrature),
+// and the sample → pdf round trip with the weight f·cosθi/pdf.
 inline void check_sampler(const Brdf& b, std::size_t samples, double p_min = kViewsLevel, Chi2Setting chi2 = {}) {
     for (double deg : kThetaODeg) {
         INFO("theta_o = " << deg);
         const Vec3 wo = spherical_direction(deg * M_PI / 180, 0.4);
-        const Chi2Result r = chi2_test(b, wo, samples, chi2.cells, 1, chi2.draws);
+        const Chi2Result r = chi2_test(b, wo, samples, chi2.cells, 1, chi2.draws, chi2.points);
         CHECK(r.p_value > p_min);
         CHECK(r.integral == Approx(1.0).margin(0.01));
         std::mt19937_64 rng(7);

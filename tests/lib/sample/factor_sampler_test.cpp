@@ -17,6 +17,9 @@
 using namespace brdfz;
 using test::check_sampler;
 
+// The factor sampler's density is smooth across the χ² cells (test::kSmoothPoints).
+constexpr test::Chi2Setting kFactorChi2{test::Draws::OneAtATime, 32, test::kSmoothPoints};
+
 namespace {
 
 Table coated(const GridSpec& g, double alpha) {
@@ -93,7 +96,7 @@ Sampled by_factors(const Factored& f) { return Sampled(f.brdf->factor_sampler(),
 TEST_CASE("factor sampler: chi-square, normalisation, round trip on a synthetic factorisation", "[sample][factored][heavy]") {
     const Factored f = factor(coated({45, 45, 90}, 0.08), options(FactorMethod::Nmf, 3, FactorSpace::Linear,
                                                                   FactorLayout::HxDP, FactorColour::Separate));
-    check_sampler(by_factors(f), 200000);
+    check_sampler(by_factors(f), 200000, test::kViewsLevel, kFactorChi2);
 }
 
 TEST_CASE("factor sampler: chi-square, normalisation, round trip over layouts, colours and spaces",
@@ -107,12 +110,12 @@ TEST_CASE("factor sampler: chi-square, normalisation, round trip over layouts, c
     for (const FactorOptions& o : cases) {
         const Factored f = factor(t, o);
         INFO(label(f.brdf->factors()));
-        check_sampler(by_factors(f), 1000000);
+        check_sampler(by_factors(f), 1000000, test::kViewsLevel, kFactorChi2);
         // Lawrence's term mixture as the θh density.
         FactorSamplerOptions mixture;
         mixture.density = FactorDensity::Mixture;
         const FactorSampler s(f.brdf->factors(), mixture);
-        check_sampler(Sampled(s, f.brdf.get()), 1000000);
+        check_sampler(Sampled(s, f.brdf.get()), 1000000, test::kViewsLevel, kFactorChi2);
     }
 }
 
@@ -152,10 +155,10 @@ TEST_CASE("factor sampler: draws come from the factors' theta_h distribution", "
         CHECK(outside > 0.01 * n);  // the cosine share is really there
     }
     // And the density stays exact for factors with hard edges, with either θh density.
-    check_sampler(Sampled(s), 150000);
+    check_sampler(Sampled(s), 150000, test::kViewsLevel, kFactorChi2);
     o.density = FactorDensity::Mixture;
     const FactorSampler mixture(f, o);
-    check_sampler(Sampled(mixture), 100000);
+    check_sampler(Sampled(mixture), 100000, test::kViewsLevel, kFactorChi2);
 }
 
 TEST_CASE("factor sampler: random (wo, u) give finite, non-negative pdfs and weights, and no lost draws",
@@ -226,7 +229,7 @@ void check_merl(const std::filesystem::path& path, std::size_t samples) {
     REQUIRE(source);
     const Factored f = factor(source->table(), options(FactorMethod::Nmf, 2, FactorSpace::Linear, FactorLayout::HxDP,
                                                        FactorColour::Shared, 10));
-    check_sampler(by_factors(f), samples);
+    check_sampler(by_factors(f), samples, test::kViewsLevel, kFactorChi2);
     const RandomDraws r = random_draws(by_factors(f), 200000, 9);
     CHECK(r.bad == 0);
     CHECK(r.failed < 10);

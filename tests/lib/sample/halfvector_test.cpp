@@ -30,6 +30,9 @@ using test::random_views;
 
 namespace {
 
+// The half-vector sampler's density is smooth across the χ² cells (test::kSmoothPoints).
+constexpr test::Chi2Setting kFineChi2{test::Draws::OneAtATime, 32, test::kSmoothPoints};
+
 // A table sampled by the half-vector sampler, which these tests are about.
 TabularBrdf tabulated(double alpha) {
     CoatedDiffuseParams p;
@@ -40,13 +43,13 @@ TabularBrdf tabulated(double alpha) {
 }  // namespace
 
 TEST_CASE("tabular sampler: chi-square, normalisation, round trip (glossy and near-specular)", "[sample][tabular][heavy]") {
-    SECTION("glossy") { check_sampler(tabulated(0.12), 1000000); }
-    SECTION("near-specular") { check_sampler(tabulated(0.02), 1000000); }
+    SECTION("glossy") { check_sampler(tabulated(0.12), 1000000, test::kViewsLevel, kFineChi2); }
+    SECTION("near-specular") { check_sampler(tabulated(0.02), 1000000, test::kViewsLevel, kFineChi2); }
 }
 
 // The sanitizers' share of the test above: the glossy table, 2·10^5 draws.
 TEST_CASE("tabular sampler: chi-square, normalisation, round trip (glossy, fewer draws)", "[sample][tabular][light]") {
-    check_sampler(tabulated(0.12), 200000);
+    check_sampler(tabulated(0.12), 200000, test::kViewsLevel, kFineChi2);
 }
 
 namespace {

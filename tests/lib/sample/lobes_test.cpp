@@ -149,11 +149,11 @@ void check_samplers(std::size_t samples, test::Chi2Setting chi2) {
 
 TEST_CASE("analytic samplers: chi-square, normalisation, round trip at 0/30/60/80/87 deg, batch = one call",
           "[sample][analytic][chi2][heavy]") {
-    check_samplers(200000, {test::Draws::Batch});
+    check_samplers(200000, {test::Draws::Batch, 32, test::kSmoothPoints});
 }
 
 TEST_CASE("analytic samplers: the same checks with fewer draws", "[sample][analytic][chi2][light]") {
-    check_samplers(20000, {test::Draws::Batch, 16});
+    check_samplers(20000, {test::Draws::Batch, 16, test::kSmoothPoints});
 }
 
 namespace {
