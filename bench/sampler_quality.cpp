@@ -5,7 +5,7 @@
 //   sampler_quality [--spec SPEC]... [--slices K] [--rows R] [--cols C] [--uniform B] [--points P]
 //                   [--share S] [--draws N] FILES...
 // Prints one CSV row per (file, spec (quoted), view): file,spec,theta_o,repr_bytes,compact_bytes,fine_bytes,
-// compact,fine.
+// compact,fine,own (own: the representation's own sampler, e.g. an analytic model's lobe mixture).
 #include <cstdio>
 #include <cstdlib>
 #include <memory>
@@ -82,7 +82,7 @@ int main(int argc, char** argv) {
     if (files.empty() || draws < 2) usage(argv[0]);
     if (specs.empty()) specs.push_back("");  // the file itself
     options.threads = 0;
-    std::printf("file,spec,theta_o,repr_bytes,compact_bytes,fine_bytes,compact,fine\n");
+    std::printf("file,spec,theta_o,repr_bytes,compact_bytes,fine_bytes,compact,fine,own\n");
     const CompressOptions compress_options = with_file_access({});
     for (const std::string& file : files) {
         const Loaded source = load(file);
@@ -100,8 +100,9 @@ int main(int argc, char** argv) {
                 const double c = sampler_second_moment(with_compact, theta, draws);
                 double f = 0.0;
                 if (half) f = sampler_second_moment(SampledWith<HalfVectorSampler>(b, *half), theta, draws);
-                std::printf("%s,\"%s\",%g,%zu,%zu,%zu,%.4f,%.4f\n", name.c_str(), spec.c_str(), deg, b.nbytes(),
-                            compact.nbytes(), half ? half->nbytes() : 0, c, f);
+                const double own = sampler_second_moment(b, theta, draws);
+                std::printf("%s,\"%s\",%g,%zu,%zu,%zu,%.4f,%.4f,%.4f\n", name.c_str(), spec.c_str(), deg, b.nbytes(),
+                            compact.nbytes(), half ? half->nbytes() : 0, c, f, own);
                 std::fflush(stdout);
             }
         }
