@@ -22,8 +22,8 @@
 
 namespace brdfz {
 
-// The defaults were chosen on seven of the shared RGL files (bench/README.md names the split) for the
-// largest E[w²]/E[w]² over four views, within 16 KiB: 14,748 bytes.
+// The defaults keep E[w²]/E[w]² low over four views within 16 KiB (14,748 bytes); bench/README.md
+// says on which files they were chosen and on which they are judged.
 struct CompactSamplerOptions {
     int slices = 12;              // view elevations, uniform in cosθo over [0°, kMaxThetaODeg], ≥ 2
     int rows = 32;                // s rows, ≥ 1
