@@ -225,8 +225,8 @@ void bind_brdf(py::module_& m) {
              "the representation's stored arrays and parameters as a dict ('kind': tabular, compact, factored, pca "
              "or analytic), read-only; None for kinds without parts (RGL files, scattered measurements)")
         .def("sampler_parts", &sampler_parts,
-             "the tables of the sampler sample() and pdf() use ('kind': halfvector or lobes), built on first "
-             "use; None for kinds without them")
+             "the tables of the sampler sample() and pdf() use ('kind': compact, halfvector or lobes), built with "
+             "the representation; None for kinds without them")
         .def("__repr__", [](const Brdf& b) { return "<brdfz.Brdf " + b.describe() + ">"; });
 }
 

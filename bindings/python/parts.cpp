@@ -164,6 +164,7 @@ std::optional<py::dict> sampler_parts(const BrdfPtr& brdf) {
     if (const auto* p = dynamic_cast<const PcaBrdf*>(brdf.get())) return grid_sampler_parts(p->table().sampler());
     if (const auto* h = dynamic_cast<const PhiHBrdf*>(brdf.get())) return grid_sampler_parts(h->sampler());
     if (const auto* a = dynamic_cast<const AnalyticBrdf*>(brdf.get())) {
+        if (const CompactSampler* c = a->compact_sampler()) return compact_parts(*c);
         const std::vector<double>& albedo = a->sampler().albedo_table();
         const py::ssize_t terms = static_cast<py::ssize_t>(a->model().terms().size());
         py::array_t<double> table({static_cast<py::ssize_t>(LobeMixture::kAlbedoNodes), terms});

@@ -36,6 +36,7 @@ const KindCase kKinds[] = {
     {"nmf:rank=2,res=16x16x32,iterations=20", true},
     {"pca:basis=BASIS,k=2", true},
     {"analytic:lambert+ggx,starts=1", true},
+    {"analytic:lambert+ggx,starts=1,sampler=lobes", true},
     {"tabular:res=16x16x32,phih=4,symmetry=none", false},
     {"tabular:res=16x16x32,phih=4,symmetry=reciprocal,dtype=f16", true},
     {"tabular:res=16x16x32,phih=3,symmetry=bilateral,dtype=u8log", false},

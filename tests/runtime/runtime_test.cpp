@@ -176,6 +176,8 @@ TEST_CASE("runtime: analytic models agree with the library", "[runtime][analytic
         INFO(text);
         const Model model = Model::parse(text);
         check_agreement(AnalyticBrdf(model, model.defaults()), 20000);
+        // The kind's default sampler, exported with the model.
+        check_agreement(*AnalyticBrdf::with_compact_sampler(model, model.defaults()), 20000);
     }
 }
 
@@ -220,7 +222,7 @@ TEST_CASE("runtime: the shared RGL files' compact representations agree with the
           "svd:rank=4,space=log,colour=shared,layout=hd_p,res=20x14x32,fit=lsq,symmetry=none,dtype=f16",
           "tabular:res=90x90x180,symmetry=bilateral,dtype=f16", "tabular:res=32x32x64,symmetry=none,dtype=u8log",
           "tabular:res=45x45x90,symmetry=none", "bivariate:res=64x64", "nmf:rank=3,res=32x32x32,iterations=40",
-          "tabular:res=24x24x32,phih=2,symmetry=none,dtype=f16"}) {
+          "tabular:res=24x24x32,phih=2,symmetry=none,dtype=f16", "analytic:lambert+ggx,starts=1"}) {
         INFO(spec);
         check_agreement(*compress(*source.brdf, spec).brdf, 100000);
     }

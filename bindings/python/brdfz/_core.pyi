@@ -44,7 +44,7 @@ class Brdf:
         """
     def sampler_parts(self) -> dict | None:
         """
-        the tables of the sampler sample() and pdf() use ('kind': halfvector or lobes), built on first use; None for kinds without them
+        the tables of the sampler sample() and pdf() use ('kind': compact, halfvector or lobes), built with the representation; None for kinds without them
         """
     @property
     def channels(self) -> int:

@@ -1,11 +1,15 @@
 // Analytic storage: a model string (brdfz/repr/analytic/model.h, e.g. "lambert+ggx") and its
 // parameters as a float64 dataset "params" [k], with the parameter names as attribute "param_names"
 // so the file describes itself. Reading parses the model, checks that its parameter names are the
-// stored ones (a changed parameterisation is refused, not misread) and validates the values.
+// stored ones (a changed parameterisation is refused, not misread) and validates the values. A model
+// sampled by a compact sampler stores its tables in a group "sampler" (container/sampler.h); without
+// the group the model samples by its lobe mixture, as files written before the group existed do.
 #include <algorithm>
+#include <optional>
 
 #include "brdfz/errors.h"
 #include "brdfz/repr/analytic/model.h"
+#include "container/sampler.h"
 #include "container/storage.h"
 
 namespace brdfz::container::detail {
@@ -26,6 +30,7 @@ void write(h5::WriteNode& rep, const Brdf& brdf) {
     rep.attr("model", m.text());
     rep.attr("param_names", std::span<const std::string>(names));
     rep.dataset("params", h5::DType::F64, {m.size()}, a.params().data());
+    if (const CompactSampler* c = a.compact_sampler()) write_sampler(rep, SamplerKind::Compact, c);
 }
 
 std::unique_ptr<Brdf> read(const h5::ReadNode& rep, const ReadContext&) {
@@ -49,7 +54,13 @@ std::unique_ptr<Brdf> read(const h5::ReadNode& rep, const ReadContext&) {
         throw FormatError(rep.file(), params.path() + ": expected float64 [" + std::to_string(model.size()) + "]");
     std::vector<double> values(model.size());
     params.read(values.data());
+    std::optional<CompactSampler> compact;
+    if (rep.has("sampler")) {
+        compact = read_sampler(rep).compact;
+        if (!compact) throw FormatError(rep.file(), rep.path() + "/sampler: an analytic model's sampler is compact or absent");
+    }
     try {
+        if (compact) return std::make_unique<AnalyticBrdf>(std::move(model), std::move(values), std::move(*compact));
         return std::make_unique<AnalyticBrdf>(std::move(model), std::move(values));
     } catch (const ValueError& e) {
         throw FormatError(rep.file(), rep.path() + ": " + e.what());

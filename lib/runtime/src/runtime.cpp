@@ -358,8 +358,8 @@ void parse(Data& d) {
         if (objects != 1) fail("objects beyond the root of a material without φh slices");
         read_object(root, d.root);
     }
-    // An analytic model samples its lobes; every other kind carries the compact sampler.
-    if (d.root.kind != L::Kind::Analytic) read_sampler(root, d);
+    // Every kind but an analytic model carries the compact sampler; a model without one samples its lobes.
+    if (d.root.kind != L::Kind::Analytic || root.find(L::kSamplerShape)) read_sampler(root, d);
 }
 
 std::shared_ptr<const Data> parsed(std::unique_ptr<Data> d, std::string* error) {
@@ -420,14 +420,14 @@ Rgb64 eval64(const Data* d, Vec3 wi, Vec3 wo) {
 
 double pdf64(const Data* d, Vec3 wo, Vec3 wi) {
     if (!d || !prepare_direction(wo) || !prepare_direction(wi) || !(wi.z > 0.0 && wo.z > 0.0)) return 0.0;
-    if (d->root.kind == L::Kind::Analytic) return k::lobe_mixture_pdf(d->root.lobes, wo, wi);
+    if (!d->has_sampler) return k::lobe_mixture_pdf(d->root.lobes, wo, wi);
     return k::compact_pdf(d->sampler, wo, wi);
 }
 
 Sample64 sample64(const Data* d, Vec3 wo, double u1, double u2) {
     if (!d || !prepare_direction(wo) || !(wo.z > 0.0 && u1 >= 0.0 && u1 < 1.0 && u2 >= 0.0 && u2 < 1.0)) return {};
     Sample64 s;
-    if (d->root.kind == L::Kind::Analytic) {
+    if (!d->has_sampler) {
         const k::LobeMixtureDraw draw = k::lobe_mixture_sample(d->root.lobes, wo, u1, u2);
         s.wi = draw.wi, s.pdf = draw.pdf;
     } else {

@@ -100,6 +100,18 @@ AnalyticBrdf::AnalyticBrdf(Model model, std::vector<double> params) : model_(std
     sampler_ = std::make_shared<const LobeMixture>(model_, params_);
 }
 
+AnalyticBrdf::AnalyticBrdf(Model model, std::vector<double> params, CompactSampler compact)
+    : AnalyticBrdf(std::move(model), std::move(params)) {
+    compact_ = std::make_shared<const CompactSampler>(std::move(compact));
+}
+
+std::unique_ptr<AnalyticBrdf> AnalyticBrdf::with_compact_sampler(Model model, std::vector<double> params,
+                                                                 const CompactSamplerOptions& options) {
+    auto out = std::make_unique<AnalyticBrdf>(std::move(model), std::move(params));
+    out->compact_ = std::make_shared<const CompactSampler>(*out, options);
+    return out;
+}
+
 std::string AnalyticBrdf::describe() const {
     std::string out = "analytic " + model_.text() + ", " + std::to_string(params_.size()) + " float64 parameters:";
     for (std::size_t i = 0; i < params_.size(); ++i) {
@@ -152,12 +164,15 @@ void AnalyticBrdf::eval_batch(const Vec3* wi, const Vec3* wo, Rgb* out, std::siz
 BrdfSample AnalyticBrdf::sample_above(const Vec3& wo, double u1, double u2) const {
     // Non-finite directions have no sample (their eval is 0).
     if (!std::isfinite(wo.x + wo.y + wo.z)) return {};
+    if (compact_) return compact_->sample(wo, u1, u2);
     return sampler().sample(wo, u1, u2);
 }
 
 // The mixture's block kernel on the draws sample() makes (the others fail), then the batch eval for the
-// weights: each sample is sample()'s, bit for bit.
+// weights: each sample is sample()'s, bit for bit. A compact sampler's draws take Brdf's path (blocks of
+// draws, then the eval kernel for their weights).
 void AnalyticBrdf::sample_batch(const Vec3* wo, const std::array<double, 2>* u, BrdfSample* out, std::size_t n) const {
+    if (compact_) return Brdf::sample_batch(wo, u, out, n);
     constexpr std::size_t kBlock = 64;
     const LobeMixture& mixture = sampler();
     Vec3 views[kBlock], wi[kBlock], wos[kBlock];
@@ -189,6 +204,7 @@ void AnalyticBrdf::sample_batch(const Vec3* wo, const std::array<double, 2>* u, 
 
 double AnalyticBrdf::pdf_above(const Vec3& wo, const Vec3& wi) const {
     if (!finite_pair(wi, wo)) return 0.0;
+    if (compact_) return compact_->pdf(wo, wi);
     return sampler().pdf(wo, wi);
 }
 

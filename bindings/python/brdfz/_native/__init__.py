@@ -46,7 +46,11 @@ class Model:
         if kind == "analytic":
             self.analytic = AnalyticModel(parts["terms"], len(parts["params"]))
             self._diff["params"] = F64()(np.asarray(parts["params"], dtype=np.float64))
-            self.albedo = F64()(np.asarray(brdf.sampler_parts()["albedo"], dtype=np.float64).reshape(-1))
+            sampler = brdf.sampler_parts()
+            # A compact sampler's tables, or the lobe mixture's albedo table.
+            self.sampler = CompactSampler(sampler) if sampler["kind"] == "compact" else None
+            if self.sampler is None:
+                self.albedo = F64()(np.asarray(sampler["albedo"], dtype=np.float64).reshape(-1))
             return
         self.grid = Grid(parts["grid"])
         sampler = brdf.sampler_parts()
@@ -122,7 +126,7 @@ class Model:
     def pdf(self, wo, wi):
         """Density of sample(wo, ·) at wi per unit solid angle; 0 below the horizon."""
         above = (wi[2] > 0.0) & (wo[2] > 0.0)
-        if self.kind == "analytic":
+        if self.kind == "analytic" and self.sampler is None:
             p = self.analytic.pdf([dr.detach(x) for x in self._lobe_params()], self.albedo, wo, wi)
         else:
             p = self.sampler.pdf(wo, wi, above)
@@ -131,7 +135,7 @@ class Model:
     def sample(self, wo, u1, u2, active=True):
         """Brdf::sample's draw: (wi, pdf, ok); failed draws (not ok) have wi 0 and pdf 0."""
         can = active & (wo[2] > 0.0) & (u1 >= 0.0) & (u1 < 1.0) & (u2 >= 0.0) & (u2 < 1.0)
-        if self.kind == "analytic":
+        if self.kind == "analytic" and self.sampler is None:
             wi, pdf, ok = self.analytic.sample([dr.detach(x) for x in self._lobe_params()], self.albedo, wo, u1, u2)
         else:
             wi, pdf, ok = self.sampler.sample(wo, u1, u2, can)

@@ -15,6 +15,7 @@
 
 #include "brdfz/brdf.h"
 #include "brdfz/repr/analytic/lobe.h"
+#include "brdfz/sample/compact.h"
 #include "brdfz/sample/lobes.h"
 
 namespace brdfz {
@@ -53,16 +54,28 @@ private:
 // Comma-separated names of every lobe family, for help and error messages.
 std::string lobe_family_names();
 
+// Sampled by its lobe mixture (sample/lobes.h: no data beyond the parameters) or, as the kind
+// `analytic` does by default (sampler=compact), by the compact sampler of the gridded kinds
+// (sample/compact.h: 14.7 KB of CDFs built from eval), whose weights vary less where the lobes' own
+// samplers follow f·cosθi loosely (rough lobes at grazing views, a Fresnel term, coloured lobes).
 class AnalyticBrdf final : public Brdf {
 public:
-    // Validates the parameters (Model::validate).
+    // Validates the parameters (Model::validate). Samples by the lobe mixture.
     AnalyticBrdf(Model model, std::vector<double> params);
     AnalyticBrdf(std::string_view model, std::vector<double> params) : AnalyticBrdf(Model::parse(model), std::move(params)) {}
+    // Samples by `compact`: built from this model (CompactSampler(brdf)) or stored with it.
+    AnalyticBrdf(Model model, std::vector<double> params, CompactSampler compact);
+    // This model sampled by a compact sampler built from its eval now.
+    static std::unique_ptr<AnalyticBrdf> with_compact_sampler(Model model, std::vector<double> params,
+                                                              const CompactSamplerOptions& options = {});
 
     const Model& model() const { return model_; }
     std::span<const double> params() const { return params_; }
-    // The lobe-mixture importance sampler (sample/lobes.h), built with the model (copies share it).
+    // The lobe mixture (sample/lobes.h), built with the model (copies share it): its eval, and its
+    // sampler unless a compact one is attached.
     const LobeMixture& sampler() const { return *sampler_; }
+    // The compact sampler, or null when the lobe mixture samples.
+    const CompactSampler* compact_sampler() const { return compact_.get(); }
 
     int channels() const override { return 3; }
     std::size_t nbytes() const override { return params_.size() * sizeof(double); }
@@ -75,6 +88,7 @@ private:
     Model model_;
     std::vector<double> params_;
     std::shared_ptr<const LobeMixture> sampler_;
+    std::shared_ptr<const CompactSampler> compact_;
 };
 
 }  // namespace brdfz
