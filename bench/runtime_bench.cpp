@@ -27,6 +27,7 @@
 #include "brdfz/formats/container.h"
 #include "brdfz/formats/io.h"
 #include "brdfz/formats/runtime_layout.h"
+#include "brdfz/repr/analytic/model.h"
 #include "brdfz/repr/factored.h"
 #include "brdfz/repr/pca.h"
 #include "brdfz/repr/phi_h.h"
@@ -67,12 +68,14 @@ int thread_count() {
     return n;
 }
 
-const GridSampler* grid_sampler(const Brdf& b) {
-    if (const auto* t = dynamic_cast<const LookupTableBrdf*>(&b)) return &t->sampler();
-    if (const auto* f = dynamic_cast<const FactoredBrdf*>(&b)) return &f->sampler();
-    if (const auto* p = dynamic_cast<const PcaBrdf*>(&b)) return &p->table().sampler();
-    if (const auto* h = dynamic_cast<const PhiHBrdf*>(&b)) return &h->sampler();
-    return nullptr;
+// Bytes of the tables the representation samples from (an analytic model's lobe mixture: none).
+std::size_t sampler_bytes(const Brdf& b) {
+    if (const auto* t = dynamic_cast<const LookupTableBrdf*>(&b)) return t->sampler().nbytes();
+    if (const auto* f = dynamic_cast<const FactoredBrdf*>(&b)) return f->sampler().nbytes();
+    if (const auto* p = dynamic_cast<const PcaBrdf*>(&b)) return p->table().sampler().nbytes();
+    if (const auto* h = dynamic_cast<const PhiHBrdf*>(&b)) return h->sampler().nbytes();
+    if (const auto* a = dynamic_cast<const AnalyticBrdf*>(&b)) return a->compact_sampler() ? a->compact_sampler()->nbytes() : 0;
+    return 0;
 }
 
 struct Inputs {
@@ -137,7 +140,6 @@ int main(int argc, char** argv) {
             const std::string stored = (dir.path() / "m.brdfz").string(), flat = (dir.path() / "m.brdfzrt").string();
             container::write(stored, *c.brdf);
             runtime_layout::write(flat, *c.brdf);
-            const GridSampler* own = grid_sampler(*c.brdf);
             // Load until ready to sample, and the first sample: a fresh material each rep.
             std::vector<double> load_s, open_s, first_s;
             std::size_t first_alloc = 0, memory = 0;
@@ -187,7 +189,7 @@ int main(int argc, char** argv) {
             }
             const std::string name = file.substr(file.find_last_of('/') + 1);
             std::printf("%s,\"%s\",%zu,%zu,%ju,%ju,%.3f,%.3f,%.1f,%zu,%d,%zu,%.1f,%.2f,%.1f,%.2f,%.1f,%.2f,%.1f,%.2f,%.1f,%.2f\n",
-                        name.c_str(), spec.c_str(), b.nbytes(), own ? own->nbytes() : 0,
+                        name.c_str(), spec.c_str(), b.nbytes(), sampler_bytes(*c.brdf),
                         static_cast<std::uintmax_t>(std::filesystem::file_size(stored)),
                         static_cast<std::uintmax_t>(std::filesystem::file_size(flat)), 1e3 * bench::median(load_s),
                         1e3 * bench::median(open_s), 1e6 * bench::median(first_s), first_alloc, first_threads, memory,

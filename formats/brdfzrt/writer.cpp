@@ -193,9 +193,12 @@ std::vector<unsigned char> encode(const Brdf& brdf, const std::string& describe)
         }
         b.add(L::kModel, 0, L::DType::U8, terms.data(), terms.size());
         b.add(L::kParams, 0, L::DType::F64, a->params().data(), a->params().size());
-        const std::vector<double>& albedo = a->sampler().albedo_table();
-        b.add(L::kAlbedo, 0, L::DType::F64, albedo.data(), albedo.size());
-        if (const CompactSampler* c = a->compact_sampler()) add_sampler(b, *c);
+        if (const CompactSampler* c = a->compact_sampler()) {
+            add_sampler(b, *c);
+        } else {
+            const std::vector<double>& albedo = a->sampler().albedo_table();
+            b.add(L::kAlbedo, 0, L::DType::F64, albedo.data(), albedo.size());
+        }
         return b.finish(L::Kind::Analytic);
     }
     if (const auto* stack = dynamic_cast<const PhiHBrdf*>(&brdf)) {

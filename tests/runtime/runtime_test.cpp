@@ -23,6 +23,7 @@
 #include "brdfz/repr/analytic/coated_diffuse.h"
 #include "brdfz/repr/analytic/model.h"
 #include "brdfz/repr/pca.h"
+#include "brdfz/runtime/crc32c.h"
 #include "brdfz/runtime/runtime.h"
 #include "brdfz/tabulate.h"
 #include "detail/simd.h"
@@ -179,6 +180,43 @@ TEST_CASE("runtime: analytic models agree with the library", "[runtime][analytic
         // The kind's default sampler, exported with the model.
         check_agreement(*AnalyticBrdf::with_compact_sampler(model, model.defaults()), 20000);
     }
+}
+
+// An analytic model carries the compact sampler's sections, or the lobe mixture's albedo table: one of
+// the two, and a layout with neither is refused.
+TEST_CASE("runtime: an analytic model's sampler is its compact sampler or its lobe mixture", "[runtime][analytic]") {
+    const Model model = Model::parse("lambert+ggx");
+    const auto compact = AnalyticBrdf::with_compact_sampler(model, model.defaults());
+    const AnalyticBrdf lobes(model, model.defaults());
+    const auto tags = [](const std::vector<unsigned char>& bytes) {
+        std::vector<std::string> out;
+        std::uint32_t n;
+        std::memcpy(&n, bytes.data() + 24, 4);
+        for (std::uint32_t i = 0; i < n; ++i) out.emplace_back(reinterpret_cast<const char*>(bytes.data() + 64 + 32 * i), 4);
+        return out;
+    };
+    const std::vector<unsigned char> with_compact = runtime_layout::encode(*compact), with_lobes = runtime_layout::encode(lobes);
+    const auto has = [&](const std::vector<unsigned char>& b, const char* tag) {
+        const auto t = tags(b);
+        return std::find(t.begin(), t.end(), tag) != t.end();
+    };
+    CHECK(has(with_compact, "SAMP"));
+    CHECK(!has(with_compact, "ALBD"));
+    CHECK(has(with_lobes, "ALBD"));
+    CHECK(!has(with_lobes, "SAMP"));
+    rt::Material m = rt::Material::from_memory(with_compact.data(), with_compact.size(), true);
+    REQUIRE(m);
+    CHECK(m.sampler_nbytes() == compact->compact_sampler()->nbytes() + 28);
+    // The albedo table renamed away (checksum recomputed): read as a model with no sampler at all.
+    std::vector<unsigned char> bad = with_lobes;
+    const auto t = tags(bad);
+    const std::size_t at = std::find(t.begin(), t.end(), "ALBD") - t.begin();
+    std::memcpy(bad.data() + 64 + 32 * at, "ALBX", 4);
+    const std::uint32_t crc = rt::crc32c(bad.data() + 64, bad.size() - 64);
+    std::memcpy(bad.data() + 28, &crc, 4);
+    std::string error;
+    CHECK(!rt::Material::from_memory(bad.data(), bad.size(), true, &error));
+    CHECK_THAT(error, Catch::Contains("ALBD") && Catch::Contains("missing"));
 }
 
 TEST_CASE("runtime: PCA materials and fine-sampled ones are exported with their compact sampler", "[runtime]") {

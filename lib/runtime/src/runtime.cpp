@@ -269,9 +269,13 @@ void read_analytic(const Sections& s, Object& o) {
             if (!(p[t.offset + i] >= f.specs[i].lo && p[t.offset + i] <= f.specs[i].hi))
                 fail("parameter " + std::string(f.name) + "." + std::string(f.specs[i].name) + " outside its bounds");
     }
-    const double* albedo = s.get<double>(L::kAlbedo, L::DType::F64, k::kAlbedoNodes * o.terms.size());
-    for (std::size_t i = 0; i < k::kAlbedoNodes * o.terms.size(); ++i)
-        if (!(albedo[i] >= 0.0 && albedo[i] < std::numeric_limits<double>::infinity())) fail("an albedo is negative or not finite");
+    // The lobe mixture's table, for a model without a compact sampler (parse checks that it has one).
+    const double* albedo = nullptr;
+    if (s.find(L::kAlbedo)) {
+        albedo = s.get<double>(L::kAlbedo, L::DType::F64, k::kAlbedoNodes * o.terms.size());
+        for (std::size_t i = 0; i < k::kAlbedoNodes * o.terms.size(); ++i)
+            if (!(albedo[i] >= 0.0 && albedo[i] < std::numeric_limits<double>::infinity())) fail("an albedo is negative or not finite");
+    }
     o.lobes = {o.terms.data(), o.terms.size(), p, albedo};
 }
 
@@ -360,6 +364,7 @@ void parse(Data& d) {
     }
     // Every kind but an analytic model carries the compact sampler; a model without one samples its lobes.
     if (d.root.kind != L::Kind::Analytic || root.find(L::kSamplerShape)) read_sampler(root, d);
+    if (!d.has_sampler && !d.root.lobes.albedo) fail(root.where(L::kAlbedo) + " is missing: an analytic model without a sampler needs it");
 }
 
 std::shared_ptr<const Data> parsed(std::unique_ptr<Data> d, std::string* error) {

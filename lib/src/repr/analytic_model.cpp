@@ -101,7 +101,9 @@ AnalyticBrdf::AnalyticBrdf(Model model, std::vector<double> params) : model_(std
 }
 
 AnalyticBrdf::AnalyticBrdf(Model model, std::vector<double> params, CompactSampler compact)
-    : AnalyticBrdf(std::move(model), std::move(params)) {
+    : model_(std::move(model)), params_(std::move(params)) {
+    model_.validate(params_);
+    sampler_ = std::make_shared<const LobeMixture>(model_, params_, false);
     compact_ = std::make_shared<const CompactSampler>(std::move(compact));
 }
 
@@ -109,6 +111,7 @@ std::unique_ptr<AnalyticBrdf> AnalyticBrdf::with_compact_sampler(Model model, st
                                                                  const CompactSamplerOptions& options) {
     auto out = std::make_unique<AnalyticBrdf>(std::move(model), std::move(params));
     out->compact_ = std::make_shared<const CompactSampler>(*out, options);
+    out->sampler_ = std::make_shared<const LobeMixture>(out->model_, out->params_, false);  // its table unused
     return out;
 }
 

@@ -47,9 +47,13 @@ int family_id(const LobeType& type) { return static_cast<int>(&type - lobe_types
 
 const LobeSampler& lobe_sampler(const LobeType& type) { return kSamplers[family_id(type)]; }
 
-LobeMixture::LobeMixture(const Model& model, std::span<const double> params)
+LobeMixture::LobeMixture(const Model& model, std::span<const double> params, bool albedo)
     : params_(params.begin(), params.end()) {
     for (const Model::Term& t : model.terms()) terms_.push_back({family_id(*t.type), t.offset});
+    if (!albedo) {
+        albedo_.assign(kAlbedoNodes * terms_.size(), 0.0);
+        return;
+    }
     // Albedo of each lobe at each node, estimated with its own sampler over a fixed stratified set of
     // (u1, u2), with wo's azimuth varied too (anisotropic lobes): deterministic and cheap.
     const std::size_t n = terms_.size();

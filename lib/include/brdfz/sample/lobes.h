@@ -56,8 +56,10 @@ public:
     static constexpr int kAlbedoNodes = runtime::kernels::kAlbedoNodes;  // cosθo nodes of the albedo table
     static constexpr int kAlbedoSamples = 256;  // sampled directions per node and lobe
 
-    // Params must fit the model (as AnalyticBrdf validates them).
-    LobeMixture(const Model& model, std::span<const double> params);
+    // Params must fit the model (as AnalyticBrdf validates them). Without `albedo` the table is left 0,
+    // so the mixture samples cosθi/π: for a model that another sampler samples (AnalyticBrdf with a
+    // compact sampler), whose loading then skips the estimate.
+    LobeMixture(const Model& model, std::span<const double> params, bool albedo = true);
 
     // For wo above the horizon and u in [0, 1)²: wi and its pdf (pdf 0 for a failed draw); the runtime's
     // lobe_mixture_sample.

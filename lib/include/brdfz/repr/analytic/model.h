@@ -72,7 +72,7 @@ public:
     const Model& model() const { return model_; }
     std::span<const double> params() const { return params_; }
     // The lobe mixture (sample/lobes.h), built with the model (copies share it): its eval, and its
-    // sampler unless a compact one is attached.
+    // sampler unless a compact one is attached (then without its albedo table: LobeMixture).
     const LobeMixture& sampler() const { return *sampler_; }
     // The compact sampler, or null when the lobe mixture samples.
     const CompactSampler* compact_sampler() const { return compact_.get(); }
