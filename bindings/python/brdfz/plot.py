@@ -100,6 +100,12 @@ def _error_norm(kind: str, top: float):
     return Normalize(-top, top)
 
 
+def _error_scale(ax, kind: str) -> None:
+    """Relative error curves on a symmetric log axis beyond ±1 %, for the reason of _error_norm."""
+    if kind == "relative":
+        ax.set_yscale("symlog", linthresh=0.01)
+
+
 def _error_label(kind: str) -> str:
     return "B − A (1/sr)" if kind == "signed" else "(B − A) / A"
 
@@ -178,9 +184,11 @@ def polar(brdfs: Materials, theta_i: Sequence[float] = (0, 30, 60), *, plane: fl
                 label = f"θi = {t:g}°" + (" (beyond measured: masked)" if masked[k, 0] else "")
                 ax.plot(angles, e[k], color=colours[k], label=label)
             ax.axhline(0, color="grey", lw=0.8)
-            ax.set(title=f"{name} against {ref_name}", xlabel=f"θo in the {in_plane} (°, + away from the light)",
-                   ylabel=_error_label(error), xlim=(-90, 90))
-            ax.legend(fontsize="small")
+            ax.set(xlabel=f"θo in the {in_plane} (°, + away from the light)", ylabel=_error_label(error),
+                   xlim=(-90, 90))
+            ax.set_title(f"{name}\nagainst {ref_name}", fontsize="small")
+            _error_scale(ax, error)
+            ax.legend(fontsize="x-small")
         fig.tight_layout()
         return fig
 
@@ -222,7 +230,7 @@ def _image_panels(items, grids, extent, labels, error, ref_mask, log, title, cha
     wi, wo = grids
     values = [_channel(b.eval(wi, wo), channel) for _, b in items]
     if error:
-        shown = [(f"{n} against {items[0][0]}", error_of(values[0], v, error, ref_mask))
+        shown = [(f"{n}\nagainst {items[0][0]}", error_of(values[0], v, error, ref_mask))
                  for (n, _), v in zip(items[1:], values[1:])]
         finite = np.concatenate([np.abs(e[np.isfinite(e)]) for _, e in shown] + [np.zeros(1)])
         # One scale for every panel, so that representations compare; the 99.5th percentile keeps a
@@ -321,6 +329,7 @@ def albedo(brdfs: Materials, theta: Optional[Sequence[float]] = None, *, channel
             ax.plot(theta, error_of(values[0], v, error, masked), label=name)
         ax.axhline(0, color="grey", lw=0.8)
         ax.set(ylabel=f"albedo {_error_label(error).replace(' (1/sr)', '')}", title=f"albedo against {items[0][0]}")
+        _error_scale(ax, error)
     else:
         for (name, _), v in zip(items, values):
             ax.plot(theta, v, label=name)
@@ -351,7 +360,7 @@ def sphere(brdfs: Materials, *, size: int = 128, samples: int = 64, light: Seque
     if error:
         ref = images[0].mean(axis=2)
         mask = sun_elevation(size, light) > items[0][1].measured_theta_max
-        shown = [(f"{n} against {items[0][0]}", error_of(ref, im.mean(axis=2), error, mask | (ref == 0)))
+        shown = [(f"{n}\nagainst {items[0][0]}", error_of(ref, im.mean(axis=2), error, mask | (ref == 0)))
                  for (n, _), im in zip(items[1:], images[1:])]
         finite = np.concatenate([np.abs(e[np.isfinite(e)]) for _, e in shown] + [np.zeros(1)])
         top = float(np.percentile(finite, 99.5)) or 1.0
