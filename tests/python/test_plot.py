@@ -180,6 +180,7 @@ def test_polar_with_measurements_over_it(lambert):
     m = brdfz.load_measurements(cornell)
     ti = float(np.round(np.degrees(np.arccos(m.wi[len(m.wi) // 2, 2]))))
     fig = plot.polar(lambert, theta_i=[ti], measurements=m, tolerance=6)
+    assert fig.axes[0].get_title().startswith("analytic lambert") and len(fig.axes[0].get_title().split("\n")[0]) <= 40
     dots = fig.axes[0].collections[0]
     plotted = dots.get_offsets()
     assert len(plotted) > 3

@@ -51,7 +51,12 @@ def _materials(brdfs: Materials) -> List[Tuple[str, brdfz.Brdf]]:
     for name, b in items:
         if not isinstance(b, brdfz.Brdf):
             raise TypeError(f"material {name or 0}: expected a brdfz.Brdf, got {type(b).__name__}")
-    return [(name or b.describe(), b) for name, b in items]
+    return [(name or _short(b.describe()), b) for name, b in items]
+
+
+def _short(text: str, width: int = 40) -> str:
+    """A default label: describe() cut to a panel's width (an analytic model lists every parameter)."""
+    return text if len(text) <= width else text[:width - 1] + "…"
 
 
 def _check(error: Optional[str], channel: str, count: int) -> None:
