@@ -160,6 +160,8 @@ def test_polar_any_plane_and_log(glossy, lambert):
             assert np.allclose(line.get_ydata(), b.eval(wi, below_normal(s, 90))[:, 1], rtol=1e-12)
     assert np.allclose(fig.axes[1].lines[0].get_ydata()[1:-1], RHO[1] / math.pi)
     assert not any(l.get_label() == "light" for l in fig.axes[0].lines)  # the light is not in that plane
+    # The log radius spans the values drawn.
+    assert plot.polar(lambert, log=True).axes[0].get_ylim()[1] == pytest.approx(1.5 * RHO.mean() / math.pi)
 
 
 def test_polar_error_masked_beyond_the_measured_elevation(rgl):

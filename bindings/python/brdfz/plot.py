@@ -38,19 +38,20 @@ def _plt():
 
 
 def _materials(brdfs: Materials) -> List[Tuple[str, brdfz.Brdf]]:
+    """(label, Brdf) pairs: a mapping's keys, else each one's describe()."""
     if isinstance(brdfs, brdfz.Brdf):
         items = [("", brdfs)]
     elif isinstance(brdfs, Mapping):
         items = [(str(k), v) for k, v in brdfs.items()]
     elif isinstance(brdfs, Sequence) and not isinstance(brdfs, str):
-        items = [(f"#{k}", v) for k, v in enumerate(brdfs)]
+        items = [("", v) for v in brdfs]
     else:
         raise TypeError(f"expected a brdfz.Brdf, a sequence or a mapping of them, got {type(brdfs).__name__}")
     if not items:
         raise ValueError("no materials to draw")
-    for name, b in items:
+    for k, (name, b) in enumerate(items):
         if not isinstance(b, brdfz.Brdf):
-            raise TypeError(f"material {name or 0}: expected a brdfz.Brdf, got {type(b).__name__}")
+            raise TypeError(f"material {name or k}: expected a brdfz.Brdf, got {type(b).__name__}")
     return [(name or _short(b.describe()), b) for name, b in items]
 
 
@@ -73,6 +74,12 @@ def _degrees(values, name: str, low: float, high: float) -> np.ndarray:
     if a.ndim != 1 or a.size == 0 or not np.isfinite(a).all() or (a < low).any() or (a > high).any():
         raise ValueError(f"{name}: expected finite angles in [{low:g}, {high:g}] degrees, got {values!r}")
     return a
+
+
+def _positive(values: Sequence[np.ndarray]) -> np.ndarray:
+    """The positive values of arrays, for a logarithmic scale's range; [1] when there is none."""
+    positive = np.concatenate([v[v > 0] for v in values])
+    return positive if positive.size else np.ones(1)
 
 
 def _channel(f: np.ndarray, channel: str) -> np.ndarray:
@@ -160,9 +167,10 @@ def polar(brdfs: Materials, theta_i: Sequence[float] = (0, 30, 60), *, plane: fl
     """f_r in a plane of outgoing directions at each incidence `theta_i` (degrees), one polar panel per
     material: the plane at azimuth `plane` from the incidence plane (0: the incidence plane, the light
     drawn as a star on the left and the mirror direction on the right; 90: the perpendicular plane),
-    θo signed from the normal, `samples` of them over ±89.5°. log=True: a logarithmic radius. `measurements` (load_measurements())
-    within `tolerance` degrees of each incidence and of the plane are drawn as dots over every panel.
-    With `error`, Cartesian panels of each material's error against the first along the same θo."""
+    θo signed from the normal, `samples` of them over ±89.5°. log=True: a logarithmic radius.
+    `measurements` (load_measurements()) within `tolerance` degrees of each incidence and of the plane
+    are drawn as dots over every panel. With `error`, Cartesian panels of each material's error
+    against the first along the same θo."""
     items = _materials(brdfs)
     _check(error, channel, len(items))
     theta_i = _degrees(theta_i, "theta_i", 0, 89.9)
@@ -206,7 +214,7 @@ def polar(brdfs: Materials, theta_i: Sequence[float] = (0, 30, 60), *, plane: fl
         for k, t in enumerate(theta_i):
             ax.plot(np.radians(angles), v[k], color=colours[k], label=f"θi = {t:g}°")
         if log:
-            positive = np.concatenate([x[x > 0] for x in values] + [np.ones(1)])
+            positive = _positive(values)
             ax.set_rscale("log")
             ax.set_rlim(max(positive.min(), positive.max() * 1e-4), positive.max() * 1.5)
         if measurements is not None:
@@ -244,7 +252,7 @@ def _image_panels(items, grids, extent, labels, error, ref_mask, log, title, cha
         norm, cmap, label = _error_norm(error, top), "RdBu_r", _error_label(error)
     else:
         shown = [(n, v) for (n, _), v in zip(items, values)]
-        positive = np.concatenate([v[v > 0] for v in values] + [np.ones(1)])
+        positive = _positive(values)
         # The 99.5th percentile: values next to grazing angles (an RGL file's, divided by a vanishing
         # cosine) would otherwise leave the rest of the image black.
         top = float(np.percentile(positive, 99.5))
