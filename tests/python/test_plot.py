@@ -244,12 +244,13 @@ def test_albedo_curves_and_their_error(lambert, glossy, tmp_path):
 # --------------------------------------------------------------------------------------------- sphere
 
 def test_sphere_environment_integral_has_its_known_answer(lambert):
-    # A Lambertian under a uniform environment of radiance 1 reflects ρ everywhere (its sampler draws
-    # cosθ/π, so every weight is ρ).
-    image = report.render_sphere(lambert, 24, 16, irradiance=0.0, environment=lambda d: np.ones_like(d))
+    # A Lambertian under a uniform environment of radiance 1 reflects ρ everywhere: the mean of its
+    # sampler's weights (exactly ρ for a cosine-weighted sampler, within its spread for another).
+    image = report.render_sphere(lambert, 24, 256, irradiance=0.0, environment=lambda d: np.ones_like(d))
     u = (np.arange(24) + 0.5) / 24 * 2 - 1
     r2 = u[None, :] ** 2 + u[:, None] ** 2
-    assert np.allclose(image[r2 < 0.9], RHO, rtol=1e-9)
+    assert np.allclose(image[r2 < 0.9], RHO, rtol=0.02)
+    assert np.allclose(image[r2 < 0.9].mean(axis=0), RHO, rtol=0.005)
     assert (image[r2 >= 1] == 0).all()
 
 
