@@ -182,6 +182,29 @@ void bind_operations(py::module_& m) {
           py::arg("path"), py::kw_only(), py::arg("lookup") = "linear", py::arg("bin_position") = "centre",
           py::arg("format") = "", "a BRDF file (.binary, .bsdf, .brdfz, .exr, .json; format overrides the extension)");
 
+    m.def("load_measurements", [](const Path& path) {
+              const MeasurementSet set = reading(path, [&] {
+                  py::gil_scoped_release release;
+                  return load_measurements(path.string()).set;
+              });
+              std::vector<Vec3> wi, wo;
+              std::vector<Rgb> f;
+              for (const Measurement& s : set.samples) {
+                  wi.push_back(s.wi);
+                  wo.push_back(s.wo);
+                  f.push_back(s.f);
+              }
+              py::dict d;
+              d["wi"] = to_rows(wi);
+              d["wo"] = to_rows(wo);
+              d["f"] = to_rows(f);
+              d["channels"] = set.channels;
+              d["source"] = set.source;
+              return d;
+          },
+          py::arg("path"),
+          "scattered measurements (Cornell .brdf, ALTA .dat): {'wi', 'wo' (N, 3) unit directions, 'f' (N, 3) f_r, "
+          "'channels', 'source'}; UnsupportedError for a file holding a BRDF (load it)");
     m.def("save", [](const BrdfPtr& brdf, const Path& path, const Resolution& res, const std::string& format,
                      int threads, py::object progress, const std::string& build_spec, const std::optional<Path>& source,
                      const py::object& source_metrics) {

@@ -25,7 +25,9 @@ import math
 import os
 import sys
 import tempfile
-from typing import Callable, Mapping, Optional, Sequence, Tuple, Union
+from typing import Callable, Mapping, NamedTuple, Optional, Sequence, Tuple, Union
+
+import numpy as np
 
 from . import _core
 from ._core import MAX_THREADS, __version__
@@ -48,26 +50,45 @@ from ._core import (
     benchmark_specs,
     compress_kinds,
     default_candidates,
+    directions,
     format_of,
     formats,
+    from_half_diff,
     load,
     representations,
     simd,
+    to_half_diff,
     validate,
 )
 
 __all__ = [
     "Brdf", "Candidate", "ChannelMetrics", "Compressed", "FitReport", "FitResult", "FormatError", "MAX_THREADS",
     "Metrics", "Scene", "Selection", "Trial", "UnsupportedError", "ValidationCheck", "ValidationReport", "albedo",
-    "benchmark_specs", "compress", "compress_kinds", "convert", "default_candidates", "export", "fit", "format_of",
-    "formats",
-    "load", "metric_samples", "metrics", "metrics_at", "read_scene", "reciprocity_error", "representations", "save",
-    "simd", "tabulate", "trial", "validate",
+    "benchmark_specs", "compress", "compress_kinds", "convert", "default_candidates", "directions", "export", "fit",
+    "format_of", "formats", "from_half_diff",
+    "load", "load_measurements", "Measurements", "metric_samples", "metrics", "metrics_at", "read_scene", "reciprocity_error", "representations", "save",
+    "simd", "tabulate", "to_half_diff", "trial", "validate",
 ]
 
 Path = Union[str, os.PathLike]
 Progress = Union[bool, Callable[[float], object], None]
 Resolution = Tuple[int, int, int]
+
+
+class Measurements(NamedTuple):
+    """Scattered measurements (Cornell .brdf, ALTA .dat) as load_measurements() reads them: f_r (1/sr,
+    no cosine) at direction pairs, in brdf.h's frame."""
+    wi: np.ndarray  # (N, 3) unit incident directions
+    wo: np.ndarray  # (N, 3) unit outgoing directions
+    f: np.ndarray  # (N, 3) f_r; a monochrome source repeats its value in the three channels
+    channels: int  # 1 or 3
+    source: str  # where the samples came from
+
+
+def load_measurements(path: Path) -> Measurements:
+    """The measurements of a Cornell .brdf or ALTA .dat file, as fit() and metrics() read them
+    (brdfz.UnsupportedError for a file holding a BRDF: load() it)."""
+    return Measurements(**_core.load_measurements(path))
 
 
 class _StderrBar:

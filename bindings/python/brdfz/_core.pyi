@@ -7,7 +7,7 @@ import numpy
 import numpy.typing
 import os
 import typing
-__all__: list[str] = ['Brdf', 'Candidate', 'ChannelMetrics', 'Compressed', 'FitReport', 'FitResult', 'FormatError', 'MAX_THREADS', 'Metrics', 'Scene', 'Selection', 'Trial', 'UnsupportedError', 'ValidationCheck', 'ValidationReport', 'albedo', 'benchmark_specs', 'compress', 'compress_kinds', 'convert', 'default_candidates', 'fit', 'format_of', 'formats', 'load', 'metric_samples', 'metrics', 'metrics_at', 'read_scene', 'reciprocity_error', 'representations', 'save', 'select_representation', 'simd', 'tabulate', 'trial', 'validate']
+__all__: list[str] = ['Brdf', 'Candidate', 'ChannelMetrics', 'Compressed', 'FitReport', 'FitResult', 'FormatError', 'MAX_THREADS', 'Metrics', 'Scene', 'Selection', 'Trial', 'UnsupportedError', 'ValidationCheck', 'ValidationReport', 'albedo', 'benchmark_specs', 'compress', 'compress_kinds', 'convert', 'default_candidates', 'directions', 'fit', 'format_of', 'formats', 'from_half_diff', 'load', 'load_measurements', 'metric_samples', 'metrics', 'metrics_at', 'read_scene', 'reciprocity_error', 'representations', 'save', 'select_representation', 'simd', 'tabulate', 'to_half_diff', 'trial', 'validate']
 class FormatError(ValueError):
     pass
 class UnsupportedError(ValueError):
@@ -24,11 +24,11 @@ class Brdf:
         """
     def eval(self, wi: numpy.typing.NDArray[numpy.floating], wo: numpy.typing.NDArray[numpy.floating]) -> numpy.typing.NDArray[numpy.float64]:
         """
-        f_r (1/sr, no cosine) at direction pairs: wi, wo of shape (N, 3) -> (N, 3) float64
+        f_r (1/sr, no cosine) at direction pairs: wi, wo of shape (..., 3) (arrays, lists or tuples), broadcast over their leading dimensions -> (..., 3) float64 ((3,) for one pair)
         """
     def eval_cos(self, wi: numpy.typing.NDArray[numpy.floating], wo: numpy.typing.NDArray[numpy.floating]) -> numpy.typing.NDArray[numpy.float64]:
         """
-        f_r·cosθi at direction pairs -> (N, 3) float64
+        f_r·cosθi at direction pairs, broadcast as eval -> (..., 3) float64
         """
     def parts(self) -> dict | None:
         """
@@ -36,7 +36,7 @@ class Brdf:
         """
     def pdf(self, wo: numpy.typing.NDArray[numpy.floating], wi: numpy.typing.NDArray[numpy.floating]) -> numpy.typing.NDArray[numpy.float64]:
         """
-        density of sample(wo, ·) at wi per unit solid angle -> (N,)
+        density of sample(wo, ·) at wi per unit solid angle, broadcast as eval -> (...) (a scalar for one pair)
         """
     def sample(self, wo: numpy.typing.NDArray[numpy.floating], u: numpy.typing.NDArray[numpy.floating]) -> tuple[numpy.typing.NDArray[numpy.float64], numpy.typing.NDArray[numpy.float64], numpy.typing.NDArray[numpy.float64]]:
         """
@@ -50,6 +50,11 @@ class Brdf:
     def channels(self) -> int:
         """
         1 (monochrome, repeated in r, g, b) or 3
+        """
+    @property
+    def measured_theta_max(self) -> float:
+        """
+        the largest incident elevation (radians) up to which values are data, not extrapolation: below π/2 for RGL files (their θi range), π/2 otherwise
         """
     @property
     def nbytes(self) -> int:
@@ -407,6 +412,10 @@ def default_candidates() -> list[str]:
     """
     select_representation's candidates, cheapest first
     """
+def directions(theta: numpy.typing.NDArray[numpy.floating], phi: numpy.typing.NDArray[numpy.floating]) -> numpy.typing.NDArray[numpy.float64]:
+    """
+    unit directions at polar angles theta (from the normal +z) and azimuths phi (from +x), radians, broadcast -> (..., 3)
+    """
 def fit(source: typing.Any, model: str, *, loss: str = 'log', starts: typing.SupportsInt | typing.SupportsIndex = 8, seed: typing.SupportsInt | typing.SupportsIndex = 1, robust: str = 'none', robust_scale: typing.SupportsFloat | typing.SupportsIndex = 0.1, max_theta: typing.SupportsFloat | typing.SupportsIndex = 80.0, samples: typing.SupportsInt | typing.SupportsIndex = 20000, max_seconds: typing.SupportsFloat | typing.SupportsIndex = 60.0, threads: typing.SupportsInt | typing.SupportsIndex = 0, progress: typing.Any = None) -> FitResult:
     """
     fits an analytic model (e.g. 'lambert+ggx') to a Brdf or a file, as `brdfz fit`
@@ -419,9 +428,17 @@ def formats() -> list:
     """
     the file formats, as `brdfz formats --json` lists them
     """
+def from_half_diff(theta_h: numpy.typing.NDArray[numpy.floating], theta_d: numpy.typing.NDArray[numpy.floating], phi_d: numpy.typing.NDArray[numpy.floating], phi_h: numpy.typing.NDArray[numpy.floating] = 0.0) -> tuple:
+    """
+    direction pairs (wi, wo) at Rusinkiewicz angles (radians, broadcast), each (..., 3); to_half_diff's inverse
+    """
 def load(path: os.PathLike | str | bytes, *, lookup: str = 'linear', bin_position: str = 'centre', format: str = '') -> Brdf:
     """
     a BRDF file (.binary, .bsdf, .brdfz, .exr, .json; format overrides the extension)
+    """
+def load_measurements(path: os.PathLike | str | bytes) -> dict:
+    """
+    scattered measurements (Cornell .brdf, ALTA .dat): {'wi', 'wo' (N, 3) unit directions, 'f' (N, 3) f_r, 'channels', 'source'}; UnsupportedError for a file holding a BRDF (load it)
     """
 def metric_samples(reference: Brdf, *, max_theta: typing.SupportsFloat | typing.SupportsIndex = 80.0, threads: typing.SupportsInt | typing.SupportsIndex = 0, over: str = 'grid', directions: typing.SupportsInt | typing.SupportsIndex = 262144, seed: typing.SupportsInt | typing.SupportsIndex = 1) -> tuple[numpy.typing.NDArray[numpy.float64], numpy.typing.NDArray[numpy.float64], numpy.typing.NDArray[numpy.float64]]:
     """
@@ -462,6 +479,10 @@ def simd() -> str:
 def tabulate(brdf: Brdf, res: tuple[typing.SupportsInt | typing.SupportsIndex, typing.SupportsInt | typing.SupportsIndex, typing.SupportsInt | typing.SupportsIndex] = (90, 90, 180), *, lookup: str = 'linear', negative: str = 'clamp', symmetry: str = 'reciprocal', threads: typing.SupportsInt | typing.SupportsIndex = 0, progress: typing.Any = None) -> Brdf:
     """
     the Brdf evaluated on a (θh, θd, φd) Rusinkiewicz grid at bin centres, as a table (symmetry: table.h)
+    """
+def to_half_diff(wi: numpy.typing.NDArray[numpy.floating], wo: numpy.typing.NDArray[numpy.floating]) -> tuple:
+    """
+    Rusinkiewicz angles of direction pairs (coords.h), broadcast as Brdf.eval -> (theta_h, phi_h, theta_d, phi_d), radians, each of the leading shape
     """
 def trial(brdf: Brdf, spec: str, *, measure_speed: bool = True, max_theta: typing.SupportsFloat | typing.SupportsIndex = 80.0, threads: typing.SupportsInt | typing.SupportsIndex = 0, over: str = 'grid', directions: typing.SupportsInt | typing.SupportsIndex = 262144, seed: typing.SupportsInt | typing.SupportsIndex = 1, progress: typing.Any = None) -> Trial:
     """

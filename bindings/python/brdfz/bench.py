@@ -18,7 +18,7 @@ what is done, --force rebuilds), and:
     size_vs_<metric>.png         bytes vs each error metric, log-log, one panel per material, Pareto front marked
     speed_vs_error.png           eval speed vs cos_rmse_rel, Pareto front (fast and accurate) marked
     renders/<material>.png       a sphere under a fixed light and sky: reference, the Pareto-optimal
-                                 settings and their ×10 error images
+                                 settings and their error images (one colour scale)
     auto.csv, auto_size_vs_error.png, auto_speed_vs_error.png
                                  brdfz.compress(auto=True, metric="cos") at each budget, the chosen
                                  representations drawn over each method's Pareto front
@@ -54,10 +54,33 @@ _CATALOGUE_NAME = {"repr": "spec", "eval_pairs_per_s": "eval_rate", "build_s": "
 Row = report.Row
 
 
+def default_places() -> List[pathlib.Path]:
+    """Where the default materials are looked for: the RGL files, then the MERL tables."""
+    return [pathlib.Path("../shared/data/rgl"), pathlib.Path(os.environ.get("BRDFZ_MERL_DIR") or "build/merl-tables")]
+
+
 def default_materials() -> List[pathlib.Path]:
-    rgl = sorted(pathlib.Path("../shared/data/rgl").glob("*.bsdf"))
-    merl_dir = pathlib.Path(os.environ.get("BRDFZ_MERL_DIR") or "build/merl-tables")
-    return rgl + sorted(merl_dir.glob("*.binary"))
+    rgl, merl_dir = default_places()
+    return sorted(rgl.glob("*.bsdf")) + sorted(merl_dir.glob("*.binary"))
+
+
+def no_materials(given: Optional[Sequence[str]]) -> str:
+    """Why no material was found: where it looked, and how to name some."""
+    if given:
+        return (f"no materials in {', '.join(given)}: give BRDF files or folders holding "
+                f"{', '.join(sorted(batch.BRDF_SUFFIXES))} files")
+    rgl, merl = (p.resolve() for p in default_places())
+    return (f"no materials: looked for {rgl}/*.bsdf and {merl}/*.binary ($BRDFZ_MERL_DIR), relative to {os.getcwd()}; "
+            "name them with --materials FILE_OR_DIR ...")
+
+
+def missing_charts() -> Optional[str]:
+    """The one line saying what to install when matplotlib, which every chart needs, is missing."""
+    try:
+        import matplotlib  # noqa: F401
+    except ImportError:
+        return "python -m brdfz.bench needs matplotlib for its charts: pip install 'brdfz[bench]' (or matplotlib)"
+    return None
 
 
 # -------------------------------------------------------------------------------------- sweep rows
@@ -141,12 +164,20 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
     batch.engine_arguments(p)
     args = p.parse_args(argv)
 
+    # Before any work: a sweep that ends without its charts has lost its point.
+    missing = missing_charts()
+    if missing:
+        print(missing, file=sys.stderr)
+        return 2
     started = time.monotonic()
+    try:
+        files = batch.material_files(args.materials) if args.materials else default_materials()
+    except FileNotFoundError as e:
+        p.error(str(e))
+    if not files and not args.from_csv:
+        p.error(no_materials(args.materials))
     out = pathlib.Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
-    files = batch.material_files(args.materials) if args.materials else default_materials()
-    if not files and not args.from_csv:
-        p.error("no materials: ../shared/data/rgl and the MERL tables are missing; give --materials")
     named = batch.material_names(files)
     specs = args.specs or (QUICK_SPECS if args.quick else brdfz.benchmark_specs())
     size = args.render_size if args.render_size is not None else (64 if args.quick else 128)

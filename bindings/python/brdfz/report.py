@@ -245,6 +245,34 @@ def _finish(fig, handles_from, path: pathlib.Path) -> None:
     _plt().close(fig)
 
 
+def _short(spec: str) -> str:
+    return spec.replace("tabular:", "").replace("analytic:", "")
+
+
+def _label(ax, text: str, x: float, y: float) -> None:
+    """A point's label placed towards the panel's inside (left of points in its right half, below
+    points in its upper half), so that it stays within the panel rather than spilling into the next."""
+    fx, fy = ax.transAxes.inverted().transform(ax.transData.transform((x, y)))
+    right, top = fx > 0.5, fy > 0.5
+    ax.annotate(text, (x, y), fontsize=6, xytext=(-4 if right else 4, -4 if top else 4), textcoords="offset points",
+                ha="right" if right else "left", va="top" if top else "bottom", annotation_clip=True)
+
+
+def _readable_log_ticks(ax) -> None:
+    """Tick labels of a log-log panel that do not overlap: at most a few decades labelled when the data
+    span several, 1-2-5 steps over less; minor ticks unlabelled (matplotlib labels them, crowded,
+    when fewer than two decades show)."""
+    from matplotlib.ticker import LogFormatterSciNotation, LogLocator, NullFormatter
+
+    ax.autoscale_view()
+    for axis, (lo, hi) in ((ax.xaxis, ax.get_xlim()), (ax.yaxis, ax.get_ylim())):
+        decades = math.log10(hi / lo) if lo > 0 and hi > lo else 1.0
+        subs = (1.0,) if decades >= 1.5 else (1.0, 2.0, 5.0) if decades >= 0.6 else (1.0, 1.5, 2.0, 3.0, 5.0, 7.0)
+        axis.set_major_locator(LogLocator(base=10, subs=subs, numticks=5 if axis is ax.xaxis else 7))
+        axis.set_major_formatter(LogFormatterSciNotation(labelOnlyBase=False))
+        axis.set_minor_formatter(NullFormatter())
+
+
 def chart_tradeoff(rows: Sequence[Row], x: str, y: str, path: pathlib.Path, *, maximize_x: bool = False) -> None:
     """One log-log panel per material: every ok setting coloured by method, the Pareto front joined
     and its points labelled."""
@@ -260,10 +288,10 @@ def chart_tradeoff(rows: Sequence[Row], x: str, y: str, path: pathlib.Path, *, m
         front = pareto_front(xs, ys, maximize_x=maximize_x)
         ax.plot([xs[i] for i in front], [ys[i] for i in front], "k-", lw=1, zorder=1, drawstyle="steps-post")
         ax.scatter([xs[i] for i in front], [ys[i] for i in front], facecolors="none", edgecolors="k", s=70, zorder=3)
-        for i in front:
-            ax.annotate(mine[i]["spec"].replace("tabular:", "").replace("analytic:", ""), (xs[i], ys[i]),
-                        fontsize=6, xytext=(3, 3), textcoords="offset points")
         ax.set(xscale="log", yscale="log", title=name, xlabel=xlabel, ylabel=y)
+        _readable_log_ticks(ax)
+        for i in front:
+            _label(ax, _short(mine[i]["spec"]), xs[i], ys[i])
         ax.grid(True, which="major", alpha=0.3)
     _finish(fig, axes, path)
 
@@ -285,16 +313,17 @@ def chart_auto(rows: Sequence[Row], auto: Sequence[Row], x: str, path: pathlib.P
             front = pareto_front(xs, ys, maximize_x=maximize_x)
             ax.plot([xs[i] for i in front], [ys[i] for i in front], "-o", color=colours[m], ms=3, lw=1, alpha=0.6,
                     label=m)
-        for a in auto:
-            if a["material"] == name and a["chosen"]:
-                k = budgets.index(a["budget"]) % len(markers)
-                ax_x, ax_y = float(a[_AUTO_NAME[x]]), max(float(a["cos_rmse_rel"]), ERROR_FLOOR)
-                ax.scatter(ax_x, ax_y, marker=markers[k], s=160, color="k", zorder=3,
-                           label=f"chosen at budget {a['budget']}")
-                ax.annotate(a["chosen"], (ax_x, ax_y), fontsize=6, xytext=(4, -9), textcoords="offset points")
+        chosen = [a for a in auto if a["material"] == name and a["chosen"]]
+        for a in chosen:
+            k = budgets.index(a["budget"]) % len(markers)
+            ax.scatter(float(a[_AUTO_NAME[x]]), max(float(a["cos_rmse_rel"]), ERROR_FLOOR), marker=markers[k], s=160,
+                       color="k", zorder=3, label=f"chosen at budget {a['budget']}")
         for b in budgets:
             ax.axhline(float(b), color="grey", ls=":", lw=1)
         ax.set(xscale="log", yscale="log", title=name, xlabel=_AXIS_LABEL[x], ylabel="cos_rmse_rel")
+        _readable_log_ticks(ax)
+        for a in chosen:
+            _label(ax, _short(a["chosen"]), float(a[_AUTO_NAME[x]]), max(float(a["cos_rmse_rel"]), ERROR_FLOOR))
         ax.grid(True, which="major", alpha=0.3)
     _finish(fig, axes, path)
 
@@ -322,7 +351,7 @@ def write_charts(out: pathlib.Path, rows: Sequence[Row], auto: Sequence[Row]) ->
 # -------------------------------------------------------------------------------------------- renders
 
 # The fixed lighting of every render: a directional light towards upper left front, and a sky that
-# brightens upwards, sampled at fixed directions (a Fibonacci sphere, the same for every image).
+# brightens upwards (world frame: x right, y up, z towards the viewer).
 LIGHT = np.array([-0.45, 0.55, 0.7]) / np.linalg.norm([-0.45, 0.55, 0.7])
 LIGHT_IRRADIANCE = 2.0
 
@@ -332,22 +361,26 @@ def sky(d: np.ndarray) -> np.ndarray:
     return np.where(up > 0, 0.25 + 0.35 * up, 0.12 + 0.05 * up) * np.array([0.85, 0.95, 1.1])
 
 
-def fibonacci_sphere(n: int) -> np.ndarray:
-    k = np.arange(n) + 0.5
-    z = 1 - 2 * k / n
-    phi = k * math.pi * (3 - math.sqrt(5))
-    r = np.sqrt(1 - z * z)
-    return np.stack([r * np.cos(phi), r * np.sin(phi), z], axis=1)
-
-
 def _local(d: np.ndarray, t: np.ndarray, b: np.ndarray, n: np.ndarray) -> np.ndarray:
     return np.stack([(d * t).sum(1), (d * b).sum(1), (d * n).sum(1)], axis=1)
 
 
-def render_sphere(brdf: brdfz.Brdf, size: int = 128, env_samples: int = 64) -> np.ndarray:
+def render_sphere(brdf: brdfz.Brdf, size: int = 128, env_samples: int = 64, *, light=LIGHT,
+                  irradiance: float = LIGHT_IRRADIANCE, environment=sky, seed: int = 1) -> np.ndarray:
     """Radiance (size, size, 3) of an orthographic unit sphere seen along -z: at each pixel the normal
-    gives the local frame (brdf.h: normal +z), wo is the view direction; the light contributes
-    f·cosθi·E and each sky direction f·cosθi·L·4π/n. Black outside the sphere."""
+    gives the local frame (brdf.h: normal +z), wo is the view direction. The light (a direction in the
+    world frame) contributes f·cosθi·E; the environment (world directions (N, 3) -> radiance (N, 3)) is
+    integrated by importance sampling with the Brdf's own sampler, `env_samples` stratified draws per
+    pixel (the mean of weight·L), which follows a glossy lobe wherever it points (a fixed set of sky
+    directions leaves a dot on a glossy sphere for each). Deterministic for a seed. Black outside."""
+    if not (isinstance(size, int) and 1 <= size <= 8192):
+        raise ValueError(f"size must be an integer in [1, 8192], not {size!r}")
+    if not (isinstance(env_samples, int) and 0 <= env_samples <= 1 << 16):
+        raise ValueError(f"env_samples must be an integer in [0, 65536], not {env_samples!r}")
+    light = np.asarray(light, dtype=float)
+    if light.shape != (3,) or not np.isfinite(light).all() or not light.any():
+        raise ValueError(f"light must be a finite non-zero direction (3,), not {light!r}")
+    light = light / np.linalg.norm(light)
     u = (np.arange(size) + 0.5) / size * 2 - 1
     x, y = np.meshgrid(u, -u)
     inside = x * x + y * y < 1
@@ -359,11 +392,23 @@ def render_sphere(brdf: brdfz.Brdf, size: int = 128, env_samples: int = 64) -> n
     t = np.stack([1 + s * n[:, 0] ** 2 * a, s * bb, -s * n[:, 0]], axis=1)
     b = np.stack([bb, s + n[:, 1] ** 2 * a, -n[:, 1]], axis=1)
     wo = _local(np.broadcast_to([0.0, 0.0, 1.0], n.shape), t, b, n)
-    wi = _local(np.broadcast_to(LIGHT, n.shape), t, b, n)
-    radiance = brdf.eval_cos(wi, wo) * LIGHT_IRRADIANCE
-    dirs = fibonacci_sphere(env_samples)
-    for d, L in zip(dirs, sky(dirs)):
-        radiance += brdf.eval_cos(_local(np.broadcast_to(d, n.shape), t, b, n), wo) * L * (4 * math.pi / env_samples)
+    wi = _local(np.broadcast_to(light, n.shape), t, b, n)
+    radiance = brdf.eval_cos(wi, wo) * irradiance
+    if env_samples:
+        # Jittered strata of a √n × √n grid of u (the rest uniform), drawn anew at each pixel, so that
+        # neighbouring pixels share no pattern.
+        rng = np.random.default_rng(seed)
+        side = math.isqrt(env_samples)
+        env = np.zeros_like(radiance)
+        for k in range(env_samples):
+            if k < side * side:
+                draw = (np.array([k % side, k // side]) + rng.random((len(n), 2))) / side
+            else:
+                draw = rng.random((len(n), 2))
+            d, pdf, weight = brdf.sample(wo, np.minimum(draw, np.nextafter(1.0, 0.0)))  # [0, 1) after rounding
+            world = d[:, :1] * t + d[:, 1:2] * b + d[:, 2:3] * n
+            env += np.where(pdf[:, None] > 0, weight * environment(world), 0.0)
+        radiance += env / env_samples
     image = np.zeros((size, size, 3))
     image[inside] = radiance
     return image
@@ -373,27 +418,49 @@ def tone_map(image: np.ndarray, exposure: float) -> np.ndarray:
     return np.clip(image * exposure, 0, 1) ** (1 / 2.2)
 
 
+def exposure_of(image: np.ndarray) -> float:
+    """The exposure that maps the 99th percentile of a render's luminance to 0.8."""
+    lum = image.mean(axis=2)
+    return 0.8 / max(np.percentile(lum[lum > 0], 99) if (lum > 0).any() else 1.0, 1e-12)
+
+
+def error_scale(errors: Sequence[np.ndarray]) -> float:
+    """One colour scale for error images of several representations: the largest of their 99th
+    percentiles, so that the worst one spans the scale and the better ones read as darker (a fixed
+    gain saturates every image of a poor representation alike)."""
+    tops = [float(np.percentile(e[e > 0], 99)) for e in errors if (e > 0).any()]
+    return max(tops) if tops else 1.0
+
+
 def render_material(name: str, ref: brdfz.Brdf, reps: Sequence[Row], brdfs: Sequence[brdfz.Brdf],
                     path: pathlib.Path, size: int, env_samples: int) -> None:
-    """Reference and each representative setting (`reps`, built as `brdfs`) side by side, the ×10
-    absolute error under each, all tone-mapped with the reference's exposure."""
+    """Reference and each representative setting (`reps`, built as `brdfs`) side by side, tone-mapped
+    with the reference's exposure, and under each its absolute error relative to the reference's
+    99th-percentile luminance, all on one colour scale (error_scale) with a colour bar."""
     plt = _plt()
     reference = render_sphere(ref, size, env_samples)
-    lum = reference.mean(axis=2)
-    exposure = 0.8 / max(np.percentile(lum[lum > 0], 99) if (lum > 0).any() else 1.0, 1e-12)
-    fig, axes = plt.subplots(2, len(reps) + 1, figsize=(2.4 * (len(reps) + 1), 5.3), squeeze=False)
+    exposure = exposure_of(reference)
+    images = [render_sphere(brdf, size, env_samples) for brdf in brdfs]
+    # Relative to the luminance that exposure maps to 0.8: an error of 0.1 is a tenth of a bright pixel.
+    errors = [np.abs(image - reference).mean(axis=2) * exposure / 0.8 for image in images]
+    top = error_scale(errors)
+    fig, axes = plt.subplots(2, len(reps) + 1, figsize=(2.4 * (len(reps) + 1) + 0.8, 5.3), squeeze=False)
     axes[0][0].imshow(tone_map(reference, exposure))
     axes[0][0].set_title(f"{name}\nreference", fontsize=8)
-    axes[1][0].text(0.5, 0.5, "×10 |error|\n(same exposure)", ha="center", va="center", fontsize=8)
-    for k, (r, brdf) in enumerate(zip(reps, brdfs), start=1):
-        image = render_sphere(brdf, size, env_samples)
+    axes[1][0].text(0.5, 0.5, "|error| / bright pixel\n(one scale)", ha="center", va="center", fontsize=8)
+    shown = None
+    for k, (r, image, error) in enumerate(zip(reps, images, errors), start=1):
         axes[0][k].imshow(tone_map(image, exposure))
         axes[0][k].set_title(f"{r['spec']}\n{int(value(r, 'bytes')):,} B, cos_rmse_rel {value(r, 'cos_rmse_rel'):.3g}",
                              fontsize=7)
-        axes[1][k].imshow(tone_map(10 * np.abs(image - reference), exposure))
+        shown = axes[1][k].imshow(error, cmap="magma", vmin=0, vmax=top)
+        axes[1][k].set_title(f"99th pct {np.percentile(error[error > 0], 99) if (error > 0).any() else 0:.3g}",
+                             fontsize=7)
     for ax in axes.flat:
         ax.axis("off")
     fig.tight_layout()
+    if shown is not None:
+        fig.colorbar(shown, ax=list(axes[1][1:]), shrink=0.8)
     fig.savefig(path, dpi=90)
     plt.close(fig)
 
@@ -457,7 +524,7 @@ def write_summary(out: pathlib.Path, title: str, rows: Sequence[Row], charts: Se
                         _g(a["eval_pairs_per_s"]), a["tried"]] for a in auto])]
         md += [f"![{c}]({c})\n" for c in charts if c.startswith("auto_")]
     if renders:
-        md.append("## Renders (reference, Pareto-optimal settings, ×10 error)\n")
+        md.append("## Renders (reference, Pareto-optimal settings, error on one scale)\n")
         md += [f"![{r}]({r})\n" for r in renders]
     failed = [r for r in rows if not ok(r)]
     if failed:
