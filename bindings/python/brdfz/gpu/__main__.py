@@ -1,4 +1,4 @@
-"""python -m brdfz.gpu check FILE [--backend wgpu] [--pairs N]: the shaders against the C++
+"""python -m brdfz.gpu check FILE [--backend wgpu|gl] [--pairs N]: the shaders against the C++
 library on a .brdfzrt material (brdfz export IN -o FILE); prints the worst relative errors, exit status 1
 above tolerance, 2 when the backend cannot start."""
 
@@ -6,9 +6,9 @@ import argparse
 import json
 import sys
 
-from .check import TOLERANCE, check
+from .backend import BackendUnavailable
+from .check import BACKENDS, TOLERANCE, check
 from .slang import SlangError
-from .wgpu_backend import BackendUnavailable
 
 
 def main(argv=None):
@@ -16,7 +16,7 @@ def main(argv=None):
     sub = parser.add_subparsers(dest="command", required=True)
     c = sub.add_parser("check", help="eval, pdf and sample on the GPU against the C++ library")
     c.add_argument("file", help="a runtime layout (.brdfzrt)")
-    c.add_argument("--backend", default="wgpu", choices=["wgpu"])
+    c.add_argument("--backend", default="wgpu", choices=BACKENDS)
     c.add_argument("--pairs", type=int, default=100_000)
     c.add_argument("--tolerance", type=float, default=TOLERANCE)
     c.add_argument("--json", action="store_true", help="the whole report as JSON")

@@ -74,13 +74,20 @@ def excused(bad, ref_call, gpu_value, a, b, tol, rounding=None, seed=2):
     return ok
 
 
-def backend(name="wgpu"):
-    """A started backend by name; BackendUnavailable when it cannot start."""
-    if name != "wgpu":
-        raise ValueError(f"backend '{name}' is not implemented yet (wgpu is)")
-    from .wgpu_backend import WgpuBackend
+BACKENDS = ("wgpu", "gl")
 
-    return WgpuBackend()
+
+def backend(name="wgpu"):
+    """A started backend by name (BACKENDS); BackendUnavailable when it cannot start."""
+    if name == "wgpu":
+        from .wgpu_backend import WgpuBackend
+
+        return WgpuBackend()
+    if name == "gl":
+        from .gl_backend import GlBackend
+
+        return GlBackend()
+    raise ValueError(f"unknown backend '{name}' (one of {', '.join(BACKENDS)})")
 
 
 def check(material, gpu="wgpu", n=100_000, seed=1, tol=TOLERANCE):

@@ -1,21 +1,13 @@
-"""The shaders' check entry points (bindings/gpu/shaders/check.slang) as WGSL compute shaders through
-wgpu: Vulkan, Metal or D3D12 where there is a GPU, Mesa's lavapipe (a software Vulkan driver) where
-there is none."""
+"""The check entry points as WGSL compute shaders through wgpu: Vulkan, Metal or D3D12 where there is a
+GPU, Mesa's lavapipe (a software Vulkan driver) where there is none."""
 
 import numpy as np
 
 from . import slang
-from .layout import Layout
-
-_WORKGROUP = 64
-_MAX_GROUPS = 65535  # per dispatch dimension (WebGPU's default limit)
+from .backend import ENTRIES, WORKGROUP, Backend, BackendUnavailable
 
 
-class BackendUnavailable(RuntimeError):
-    pass
-
-
-class WgpuBackend:
+class WgpuBackend(Backend):
     name = "wgpu"
 
     def __init__(self):
@@ -39,14 +31,13 @@ class WgpuBackend:
         pipeline_layout = self.device.create_pipeline_layout(bind_group_layouts=[self.group_layout])
         source = slang.SHADERS / "check.slang"
         self.pipelines = {}
-        for entry in ("check_eval", "check_rounding", "check_pdf", "check_sample"):
+        for entry in ENTRIES:
             module = self.device.create_shader_module(code=slang.compile_entry(source, entry, "wgsl").decode())
             self.pipelines[entry] = self.device.create_compute_pipeline(
                 layout=pipeline_layout, compute={"module": module, "entry_point": entry})
         self.material = self.desc = None
 
-    def bind(self, layout: Layout):
-        """Uploads the material that the next calls evaluate."""
+    def bind(self, layout):
         if len(layout.data) > self.limit:
             raise BackendUnavailable(f"the layout's {len(layout.data)} bytes exceed the adapter's storage buffer limit ({self.limit})")
         usage = self.wgpu.BufferUsage.STORAGE
@@ -54,52 +45,24 @@ class WgpuBackend:
         self.desc = self.device.create_buffer_with_data(data=layout.desc.tobytes(), usage=usage)
         return self
 
-    def _run(self, entry, a, b, width):
+    def _dispatch(self, entry, a, b, count, width):
         wgpu = self.wgpu
-        n = len(a) // 3
-        out = np.empty(n * width, np.float32)
-        step = _WORKGROUP * _MAX_GROUPS
-        for lo in range(0, max(n, 1), step):
-            hi = min(n, lo + step)
-            m = hi - lo
-            if m == 0:
-                break
-            per_b = len(b) // n
-            bufs = [self.device.create_buffer_with_data(data=np.ascontiguousarray(x, np.float32).tobytes(),
-                                                        usage=wgpu.BufferUsage.STORAGE)
-                    for x in (a[3 * lo:3 * hi], b[per_b * lo:per_b * hi])]
-            count = self.device.create_buffer_with_data(data=np.array([m], np.uint32).tobytes(), usage=wgpu.BufferUsage.STORAGE)
-            result = self.device.create_buffer(size=4 * m * width, usage=wgpu.BufferUsage.STORAGE | wgpu.BufferUsage.COPY_SRC)
-            group = self.device.create_bind_group(layout=self.group_layout, entries=[
-                {"binding": 0, "resource": {"buffer": self.material}},
-                {"binding": 1, "resource": {"buffer": self.desc}},
-                {"binding": 2, "resource": {"buffer": bufs[0]}},
-                {"binding": 3, "resource": {"buffer": bufs[1]}},
-                {"binding": 4, "resource": {"buffer": result}},
-                {"binding": 5, "resource": {"buffer": count}}])
-            encoder = self.device.create_command_encoder()
-            compute = encoder.begin_compute_pass()
-            compute.set_pipeline(self.pipelines[entry])
-            compute.set_bind_group(0, group)
-            compute.dispatch_workgroups((m + _WORKGROUP - 1) // _WORKGROUP)
-            compute.end()
-            self.device.queue.submit([encoder.finish()])
-            out[width * lo:width * hi] = np.frombuffer(self.device.queue.read_buffer(result), np.float32)
-        return out
-
-    def eval(self, wi, wo):
-        """f(wi, wo) per pair, (n, 3) float32."""
-        return self._run("check_eval", np.ravel(wi), np.ravel(wo), 3).reshape(-1, 3)
-
-    def rounding(self, wi, wo):
-        """Each channel's scale of float rounding at each pair, (n, 3): f itself for tables; for
-        factorisations the magnitude of the summed terms (the shaders' brdfz_eval_rounding)."""
-        return self._run("check_rounding", np.ravel(wi), np.ravel(wo), 3).reshape(-1, 3)
-
-    def pdf(self, wo, wi):
-        return self._run("check_pdf", np.ravel(wo), np.ravel(wi), 1)
-
-    def sample(self, wo, u):
-        """(wi (n, 3), pdf (n,), weight (n, 3)) per draw."""
-        r = self._run("check_sample", np.ravel(wo), np.ravel(u), 7).reshape(-1, 7)
-        return r[:, :3], r[:, 3], r[:, 4:]
+        storage = wgpu.BufferUsage.STORAGE
+        inputs = [self.device.create_buffer_with_data(data=x.tobytes(), usage=storage) for x in (a, b)]
+        n = self.device.create_buffer_with_data(data=np.array([count], np.uint32).tobytes(), usage=storage)
+        result = self.device.create_buffer(size=4 * count * width, usage=storage | wgpu.BufferUsage.COPY_SRC)
+        group = self.device.create_bind_group(layout=self.group_layout, entries=[
+            {"binding": 0, "resource": {"buffer": self.material}},
+            {"binding": 1, "resource": {"buffer": self.desc}},
+            {"binding": 2, "resource": {"buffer": inputs[0]}},
+            {"binding": 3, "resource": {"buffer": inputs[1]}},
+            {"binding": 4, "resource": {"buffer": result}},
+            {"binding": 5, "resource": {"buffer": n}}])
+        encoder = self.device.create_command_encoder()
+        compute = encoder.begin_compute_pass()
+        compute.set_pipeline(self.pipelines[entry])
+        compute.set_bind_group(0, group)
+        compute.dispatch_workgroups((count + WORKGROUP - 1) // WORKGROUP)
+        compute.end()
+        self.device.queue.submit([encoder.finish()])
+        return np.frombuffer(self.device.queue.read_buffer(result), np.float32)

@@ -1,10 +1,10 @@
-"""The GPU shaders (bindings/gpu/shaders, through brdfz.gpu) against the C++ library on Mesa's lavapipe
-via wgpu: eval and pdf within 1e-4 of the library on float32 direction pairs, and every GPU draw's pdf
-and weight equal to the same backend's pdf and eval, on compact representations of a real RGL file of
-every kind the shaders evaluate (tables of each dtype and symmetry, svd and nmf factors) with their
-compact samplers."""
+"""The GPU shaders (bindings/gpu/shaders, through brdfz.gpu) against the C++ library on every backend
+that starts here (wgpu: Mesa's lavapipe, Vulkan; gl: Mesa's llvmpipe, OpenGL 4.5 through EGL, where
+there is no GPU): eval and pdf within 1e-4 of the library on float32 direction pairs, every GPU draw's
+pdf and weight equal to the same backend's pdf and eval, and the library's draw for the same u, on
+compact representations of a real RGL file of every kind the shaders evaluate (tables of each dtype
+and symmetry, svd and nmf factors) with their compact samplers."""
 
-import numpy as np
 import pytest
 
 from conftest import SHARED, import_brdfz
@@ -25,22 +25,24 @@ SPECS = {
 }
 
 
-@pytest.fixture(scope="module")
-def gpu():
-    brdfz = import_brdfz()
+@pytest.fixture(scope="module", params=["wgpu", "gl"])
+def gpu(request):
+    import_brdfz()
     if not RGL.exists():
         pytest.skip(f"../shared is missing ({RGL})")
     from brdfz import gpu as brdfz_gpu
 
     try:
-        return brdfz_gpu.backend("wgpu")
+        return brdfz_gpu.backend(request.param)
     except brdfz_gpu.BackendUnavailable as e:
-        pytest.skip(f"the wgpu backend cannot start: {e}")
+        pytest.skip(f"the {request.param} backend cannot start: {e}")
 
 
 @pytest.fixture(scope="module")
-def exported(gpu, tmp_path_factory):
+def exported(tmp_path_factory):
     brdfz = import_brdfz()
+    if not RGL.exists():
+        pytest.skip(f"../shared is missing ({RGL})")
     out = tmp_path_factory.mktemp("gpu")
     source = brdfz.load(RGL)
     paths = {}
@@ -86,7 +88,7 @@ def test_command_line(gpu, exported, tmp_path):
     import subprocess
     import sys
 
-    ok = subprocess.run([sys.executable, "-m", "brdfz.gpu", "check", str(exported["nmf"]), "--pairs", "2000"],
+    ok = subprocess.run([sys.executable, "-m", "brdfz.gpu", "check", str(exported["nmf"]), "--pairs", "2000", "--backend", gpu.name],
                         capture_output=True, text=True, timeout=120)
     assert ok.returncode == 0, ok.stderr
     assert "eval   worst relative error" in ok.stdout and "ok: worst" in ok.stdout
