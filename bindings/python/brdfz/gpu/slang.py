@@ -40,8 +40,8 @@ def _api():
     lib.spCompile.argtypes = [ctypes.c_void_p]
     lib.spGetDiagnosticOutput.argtypes = [ctypes.c_void_p]
     lib.spGetDiagnosticOutput.restype = ctypes.c_char_p
-    lib.spGetEntryPointCode.argtypes = [ctypes.c_void_p, ctypes.c_int, ctypes.POINTER(ctypes.c_size_t)]
-    lib.spGetEntryPointCode.restype = ctypes.c_void_p
+    lib.spGetCompileRequestCode.argtypes = [ctypes.c_void_p, ctypes.POINTER(ctypes.c_size_t)]
+    lib.spGetCompileRequestCode.restype = ctypes.c_void_p
     return lib, lib.spCreateSession(None)
 
 
@@ -63,7 +63,8 @@ def compile_entry(source: str, entry: str, target: str, stage: str = "compute") 
         if failed:
             raise SlangError(f"slang: {entry} for {target}: {diagnostics}")
         size = ctypes.c_size_t(0)
-        code = lib.spGetEntryPointCode(request, 0, ctypes.byref(size))
+        # The request's whole output (one entry point): spGetEntryPointCode has none for SPIR-V, Metal or CUDA.
+        code = lib.spGetCompileRequestCode(request, ctypes.byref(size))
         if not code or size.value == 0:
             raise SlangError(f"slang: {entry} for {target}: no code")
         return ctypes.string_at(code, size.value)
