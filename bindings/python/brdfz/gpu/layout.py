@@ -13,7 +13,13 @@ from .slang import SHADERS
 
 MAGIC = b"\x89BZRT\r\n\x1a"
 KIND_NAMES = {1: "table", 2: "factorisation", 3: "analytic", 4: "φh stack"}
-GPU_KINDS = (1, 2)  # what the shaders evaluate so far
+GPU_KINDS = (1, 2, 3)  # what the shaders evaluate so far
+
+# Lobe families by their id (the order of lib/runtime/include/brdfz/runtime/kernels/lobes/families.h)
+# and their parameter counts, for the families the shaders have (lobes.slang).
+LOBE_FAMILIES = {"lambert": (0, 3), "ggx": (3, 5), "ggx_dielectric": (4, 5), "ggx_conductor": (5, 10),
+                 "ggx_sep": (6, 5), "ggx_dielectric_sep": (7, 5), "ggx_conductor_sep": (8, 10), "ggx_aniso": (12, 6)}
+ALBEDO_NODES = 16
 
 
 def _tag(s: str) -> int:
@@ -56,6 +62,12 @@ class Layout:
         self.data = data + b"\0" * (-len(data) % 4)
         self.desc = self._descriptor()
 
+    def _append(self, array) -> int:
+        """Appends 32-bit words to the bytes the shaders read; returns their byte offset."""
+        offset = len(self.data)
+        self.data += np.ascontiguousarray(array).tobytes()
+        return offset
+
     def _find(self, tag):
         return self.sections.get(_tag(tag))
 
@@ -72,6 +84,8 @@ class Layout:
     def _descriptor(self) -> np.ndarray:
         d = np.zeros(1, desc_dtype())
         d["kind"] = self.kind
+        if self.kind == 3:
+            return self._lobes(d)
         grid = self._array("GRID", "<i4")
         for name, v in zip(("n_theta_h", "n_theta_d", "n_phi_d", "centre", "phi_d_axis", "lookup"), grid):
             d[name] = v
@@ -100,4 +114,24 @@ class Layout:
         d["cos_theta_max"], d["cosine_share"] = self._array("SPRM", "<f8")
         d["s_edges"], d["row_cdf"] = self._offset("SEDG"), self._offset("SROW")
         d["col_cdf"], d["edge_weight"] = self._offset("SCOL"), self._offset("SEWT")
+        return d
+
+    def _lobes(self, d) -> np.ndarray:
+        model = bytes(self._array("MODL", "u1")).decode()
+        terms = []
+        first = 0
+        for name in model.split("+"):
+            if name not in LOBE_FAMILIES:
+                raise ValueError(f"{self.path}: the GPU shaders have no '{name}' lobe yet (they have {', '.join(LOBE_FAMILIES)})")
+            family, count = LOBE_FAMILIES[name]
+            terms.append((family, first))
+            first += count
+        params = self._array("PRMS", "<f8")
+        albedo = self._array("ALBD", "<f8")
+        if len(params) != first or len(albedo) != ALBEDO_NODES * len(terms):
+            raise ValueError(f"{self.path}: PRMS or ALBD does not fit the model '{model}'")
+        d["lobe_count"] = len(terms)
+        d["lobe_terms"] = self._append(np.array(terms, "<u4"))
+        d["lobe_params"] = self._append(params.astype("<f4"))
+        d["lobe_albedo"] = self._append(albedo.astype("<f4"))
         return d
