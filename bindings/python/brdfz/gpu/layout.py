@@ -84,6 +84,8 @@ class Layout:
     def _descriptor(self) -> np.ndarray:
         d = np.zeros(1, desc_dtype())
         d["kind"] = self.kind
+        if self._find("SAMP"):
+            self._sampler(d)
         if self.kind == 3:
             return self._lobes(d)
         grid = self._array("GRID", "<i4")
@@ -109,12 +111,16 @@ class Layout:
             top = np.minimum(self._array("FMAX", "<f4").astype(np.float64), np.finfo(np.float32).max)
             ceiling = np.log1p(top) if space == 2 else np.cbrt(top) if space == 3 else top
             d["ceiling_r"], d["ceiling_g"], d["ceiling_b"] = ceiling.astype(np.float32)
+        return d
+
+    def _sampler(self, d):
+        """The compact sampler's sections: every table and factorisation has one, an analytic model
+        may (else its lobes' mixture draws)."""
         slices, rows, cols = self._array("SAMP", "<i4")
         d["slices"], d["rows"], d["cols"] = slices, rows, cols
         d["cos_theta_max"], d["cosine_share"] = self._array("SPRM", "<f8")
         d["s_edges"], d["row_cdf"] = self._offset("SEDG"), self._offset("SROW")
         d["col_cdf"], d["edge_weight"] = self._offset("SCOL"), self._offset("SEWT")
-        return d
 
     def _lobes(self, d) -> np.ndarray:
         model = bytes(self._array("MODL", "u1")).decode()
@@ -127,11 +133,14 @@ class Layout:
             terms.append((family, first))
             first += count
         params = self._array("PRMS", "<f8")
-        albedo = self._array("ALBD", "<f8")
-        if len(params) != first or len(albedo) != ALBEDO_NODES * len(terms):
-            raise ValueError(f"{self.path}: PRMS or ALBD does not fit the model '{model}'")
+        if len(params) != first:
+            raise ValueError(f"{self.path}: PRMS does not fit the model '{model}'")
         d["lobe_count"] = len(terms)
         d["lobe_terms"] = self._append(np.array(terms, "<u4"))
         d["lobe_params"] = self._append(params.astype("<f4"))
-        d["lobe_albedo"] = self._append(albedo.astype("<f4"))
+        if not self._find("SAMP"):
+            albedo = self._array("ALBD", "<f8")
+            if len(albedo) != ALBEDO_NODES * len(terms):
+                raise ValueError(f"{self.path}: ALBD does not fit the model '{model}'")
+            d["lobe_albedo"] = self._append(albedo.astype("<f4"))
         return d
