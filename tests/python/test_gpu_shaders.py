@@ -3,7 +3,7 @@ that starts here (wgpu: Mesa's lavapipe, Vulkan; gl: Mesa's llvmpipe, OpenGL 4.5
 there is no GPU): eval and pdf within 1e-4 of the library on float32 direction pairs, every GPU draw's
 pdf and weight equal to the same backend's pdf and eval, and the library's draw for the same u, on
 compact representations of a real RGL file of every kind the shaders evaluate (tables of each dtype
-and symmetry, svd and nmf factors) with their compact samplers."""
+and symmetry, svd and nmf factors, lobe mixtures) with their samplers."""
 
 import pytest
 
@@ -22,6 +22,10 @@ SPECS = {
     "svd_log_hd_p": "svd:rank=4,space=log,colour=shared,layout=hd_p,res=20x14x32,fit=lsq,symmetry=none,dtype=f16",
     "svd_log_separate": "svd:rank=3,space=log,res=20x14x32",
     "nmf": "nmf:rank=4,res=32x32x32",
+    # Lobe mixtures of every lobe family the shaders have.
+    "lobes": "analytic:lambert+ggx,starts=2",
+    "lobes_conductor_sep": "analytic:lambert+ggx_conductor_sep,starts=2",
+    "lobes_dielectric_aniso": "analytic:ggx_dielectric+ggx_aniso,starts=2",
 }
 
 
@@ -94,7 +98,7 @@ def test_command_line(gpu, exported, tmp_path):
     assert "eval   worst relative error" in ok.stdout and "ok: worst" in ok.stdout
     # A kind the shaders do not evaluate yet is refused with a reason, not compared.
     brdfz = import_brdfz()
-    lobes = tmp_path / "lobes.brdfzrt"
-    brdfz.export(brdfz.load(exported["table_f16"]), lobes, repr="analytic:lambert")
-    refused = subprocess.run([sys.executable, "-m", "brdfz.gpu", "check", str(lobes)], capture_output=True, text=True, timeout=120)
-    assert refused.returncode == 2 and "do not evaluate analytic layouts" in refused.stderr
+    stack = tmp_path / "phih.brdfzrt"
+    brdfz.export(brdfz.load(exported["table_f16"]), stack, repr="tabular:res=8x8x16,phih=2,symmetry=none")
+    refused = subprocess.run([sys.executable, "-m", "brdfz.gpu", "check", str(stack)], capture_output=True, text=True, timeout=120)
+    assert refused.returncode == 2 and "do not evaluate φh stack layouts" in refused.stderr
