@@ -102,3 +102,17 @@ def test_command_line(gpu, exported, tmp_path):
     brdfz.export(brdfz.load(exported["table_f16"]), stack, repr="tabular:res=8x8x16,phih=2,symmetry=none")
     refused = subprocess.run([sys.executable, "-m", "brdfz.gpu", "check", str(stack)], capture_output=True, text=True, timeout=120)
     assert refused.returncode == 2 and "do not evaluate φh stack layouts" in refused.stderr
+
+
+@pytest.mark.parametrize("theta_o", [30.0, 75.0])
+def test_gpu_sampler_passes_chi2(gpu, exported, theta_o):
+    """The GPU's draws follow the GPU's pdf (Pearson's χ² over cells of equal solid angle), and the test
+    tells draws from another wo's pdf apart."""
+    if gpu.name != "wgpu":
+        pytest.skip("χ² on one backend: the draws are the same code on every backend (test_shaders_match_the_library)")
+    from brdfz.gpu.check import chi2
+
+    _, _, p = chi2(exported["svd_cos_shared"], gpu, theta_o=theta_o)
+    assert p > 1e-3, p
+    _, _, p_other = chi2(exported["svd_cos_shared"], gpu, theta_o=theta_o, against=theta_o - 10)
+    assert p_other < 1e-6, p_other

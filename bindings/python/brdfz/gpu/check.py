@@ -149,3 +149,46 @@ def check(material, gpu="wgpu", n=100_000, seed=1, tol=TOLERANCE):
     report["worst"] = worst
     report["ok"] = bool(worst <= tol)
     return report
+
+
+def chi2(material, gpu="wgpu", theta_o=45.0, n=200_000, res=(32, 64), seed=3, against=None):
+    """Pearson's χ² test of the GPU sampler's draws at wo (polar angle theta_o, in degrees, azimuth 0)
+    against the same backend's pdf at wo (or at polar angle `against`, which a working sampler
+    fails), integrated over res = (cosθ, φ) cells of equal solid angle by 8×8 midpoints each; cells
+    expecting fewer than 5 draws pooled. Returns (statistic, degrees of freedom, p-value)."""
+    from scipy.stats import chi2 as chi2_distribution
+
+    layout = material if isinstance(material, Layout) else Layout(material)
+    gpu = (backend(gpu) if isinstance(gpu, str) else gpu).bind(layout)
+    t = np.radians(theta_o)
+    wo1 = np.array([np.sin(t), 0.0, np.cos(t)], np.float32)
+    u = np.random.default_rng(seed).random((n, 2), dtype=np.float32)
+    wi, pdf, _ = gpu.sample(np.tile(wo1, (n, 1)), u)
+    wi = wi[pdf > 0]
+    nc, nphi = res
+    sub = 8
+
+    def cell_of(w):
+        phi = np.mod(np.arctan2(w[:, 1], w[:, 0]), 2 * np.pi)
+        return (np.minimum((w[:, 2] * nc).astype(int), nc - 1) * nphi +
+                np.minimum((phi / (2 * np.pi) * nphi).astype(int), nphi - 1))
+
+    observed = np.bincount(cell_of(wi), minlength=nc * nphi).astype(float)
+    # The cells' midpoints: cosθ and φ on a (nc·sub) × (nphi·sub) grid, each point's solid angle equal.
+    c = (np.arange(nc * sub) + 0.5) / (nc * sub)
+    phi = (np.arange(nphi * sub) + 0.5) / (nphi * sub) * 2 * np.pi
+    cc, pp = np.meshgrid(c, phi, indexing="ij")
+    s = np.sqrt(1 - cc * cc)
+    points = np.stack([s * np.cos(pp), s * np.sin(pp), cc], -1).reshape(-1, 3).astype(np.float32)
+    t = np.radians(theta_o if against is None else against)
+    wo_pdf = np.array([np.sin(t), 0.0, np.cos(t)], np.float32)
+    density = gpu.pdf(np.tile(wo_pdf, (len(points), 1)), points).astype(float)
+    mass = density.reshape(nc, sub, nphi, sub).sum(axis=(1, 3)) * (2 * np.pi / (nc * sub * nphi * sub))
+    expected = mass.ravel() * n
+    small = expected < 5
+    obs = np.append(observed[~small], observed[small].sum())
+    exp = np.append(expected[~small], expected[small].sum())
+    keep = exp > 0
+    statistic = float(np.sum((obs[keep] - exp[keep]) ** 2 / exp[keep]))
+    dof = int(keep.sum()) - 1
+    return statistic, dof, float(chi2_distribution.sf(statistic, dof))
