@@ -1,6 +1,7 @@
 """Every shading language the one shader source (bindings/gpu/shaders) is translated to, compiled by a
 compiler that installs here: GLSL by glslangValidator (Vulkan), HLSL by glslang's HLSL front end, both
-then checked by spirv-val; CUDA by NVRTC (the nvidia-cuda-nvrtc wheel) to PTX. WGSL and GLSL run in
+then checked by spirv-val; GLSL ES 3.10 by glslangValidator; CUDA by NVRTC (the nvidia-cuda-nvrtc
+wheel) to PTX. WGSL and GLSL run in
 test_gpu_shaders.py. Metal has no compiler off macOS, and Debian 12's SPIRV-Tools predate the source
 language Slang writes into its own SPIR-V: those two are only what Slang itself accepts."""
 
@@ -21,13 +22,13 @@ ENTRIES = ["check_eval", "check_rounding", "check_pdf", "check_sample"]
 @pytest.fixture(scope="module")
 def compile_entry():
     import_brdfz()
-    from brdfz.gpu import SlangError, compile_entry, slang
+    from brdfz.gpu import SlangError, emit
 
     try:
-        compile_entry(slang.SHADERS / "check.slang", ENTRIES[0], "wgsl")
+        emit(ENTRIES[0], "wgsl")
     except SlangError as e:
         pytest.skip(f"no Slang compiler: {e}")
-    return lambda entry, target: compile_entry(slang.SHADERS / "check.slang", entry, target)
+    return emit
 
 
 def tool(name):
@@ -37,7 +38,7 @@ def tool(name):
     return path
 
 
-@pytest.mark.parametrize("target", ["wgsl", "glsl", "hlsl", "metal", "cuda", "spirv"])
+@pytest.mark.parametrize("target", ["wgsl", "glsl", "hlsl", "metal", "cuda", "spirv", "essl"])
 def test_every_target_is_emitted(compile_entry, target):
     for entry in ENTRIES:
         code = compile_entry(entry, target)
@@ -45,7 +46,17 @@ def test_every_target_is_emitted(compile_entry, target):
             assert code[:4] == bytes.fromhex("03022307"), entry  # SPIR-V's magic number, little-endian
         else:
             # GLSL names every entry point main.
-            assert ("void main()" if target == "glsl" else entry) in code.decode(), (target, entry)
+            assert ("void main()" if target in ("glsl", "essl") else entry) in code.decode(), (target, entry)
+
+
+def test_essl_compiles(compile_entry, tmp_path):
+    glslang = tool("glslangValidator")
+    for entry in ENTRIES:
+        source = tmp_path / f"{entry}.comp"
+        source.write_bytes(compile_entry(entry, "essl"))
+        assert source.read_text().startswith("#version 310 es")
+        r = subprocess.run([glslang, str(source)], capture_output=True, text=True)
+        assert r.returncode == 0, r.stdout + r.stderr
 
 
 @pytest.mark.parametrize("target", ["glsl", "hlsl"])

@@ -7,6 +7,7 @@ language by the Slang compiler) and their check against the C++ library on softw
 from .backend import BackendUnavailable
 from .check import BACKENDS, TOLERANCE, backend, check
 from .layout import Layout
-from .slang import TARGETS, SlangError, compile_entry
+from .slang import SlangError, compile_entry
+from .targets import TARGETS, emit
 
-__all__ = ["BACKENDS", "TOLERANCE", "backend", "check", "Layout", "TARGETS", "SlangError", "compile_entry", "BackendUnavailable"]
+__all__ = ["BACKENDS", "TOLERANCE", "backend", "check", "Layout", "TARGETS", "SlangError", "compile_entry", "emit", "BackendUnavailable"]
