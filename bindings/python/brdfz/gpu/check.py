@@ -33,15 +33,16 @@ def pairs(n, seed=1):
     return _unit(wi).astype(np.float32), _unit(wo).astype(np.float32)
 
 
-# A factorisation's sum of float terms is known to a few float ulps of its terms' magnitude: where they
-# cancel to below this share of it, the value is judged on that scale (8 ulps of the magnitude at 1e-4).
+# A factorisation's sum of float terms is known to some float ulps of its terms' magnitude per term:
+# where they cancel to below this share of it, the value is judged on that scale (at 1e-4, 40 ulps of
+# the magnitude, the rounding of a sum of tens of terms).
 CANCELLATION = 0.05
 
 
 def relative_error(gpu, ref, rounding=None):
     """Per row (a pair's channels, or one pdf): the largest |gpu − ref| over the row's largest |ref|
     (a colour's error relative to its brightness), or over CANCELLATION times its largest float
-    rounding scale (WgpuBackend.rounding) where that is larger; 0 where they are equal."""
+    rounding scale (Backend.rounding) where that is larger; 0 where they are equal."""
     gpu = np.asarray(gpu, np.float64).reshape(len(gpu), -1)
     ref = np.asarray(ref, np.float64).reshape(len(ref), -1)
     diff = np.max(np.abs(gpu - ref), axis=1)
