@@ -3,7 +3,7 @@ that starts here (wgpu: Mesa's lavapipe, Vulkan; gl: Mesa's llvmpipe, OpenGL 4.5
 there is no GPU): eval and pdf within 1e-4 of the library on float32 direction pairs, every GPU draw's
 pdf and weight equal to the same backend's pdf and eval, and the library's draw for the same u, on
 compact representations of a real RGL file of every kind the shaders evaluate (tables of each dtype
-and symmetry, svd and nmf factors, lobe mixtures) with their samplers."""
+and symmetry, svd and nmf factors, lobe mixtures, φh stacks) with their samplers."""
 
 import pytest
 
@@ -22,6 +22,9 @@ SPECS = {
     "svd_log_hd_p": "svd:rank=4,space=log,colour=shared,layout=hd_p,res=20x14x32,fit=lsq,symmetry=none,dtype=f16",
     "svd_log_separate": "svd:rank=3,space=log,res=20x14x32",
     "nmf": "nmf:rank=4,res=32x32x32",
+    # φh stacks of tables and of factorisations, on the full and the mirror-folded φh range.
+    "phi_h_tables": "tabular:res=32x16x32,phih=8,symmetry=none",
+    "phi_h_svd_bilateral": "svd:rank=4,space=log,res=16x10x16,phih=4,symmetry=bilateral",
     # Lobe mixtures of every lobe family the shaders have.
     "lobes": "analytic:lambert+ggx,starts=2",
     "lobes_conductor_sep": "analytic:lambert+ggx_conductor_sep,starts=2",
@@ -96,12 +99,12 @@ def test_command_line(gpu, exported, tmp_path):
                         capture_output=True, text=True, timeout=120)
     assert ok.returncode == 0, ok.stderr
     assert "eval   worst relative error" in ok.stdout and "ok: worst" in ok.stdout
-    # A kind the shaders do not evaluate yet is refused with a reason, not compared.
+    # A lobe family the shaders do not have is refused with a reason, not compared.
     brdfz = import_brdfz()
-    stack = tmp_path / "phih.brdfzrt"
-    brdfz.export(brdfz.load(exported["table_f16"]), stack, repr="tabular:res=8x8x16,phih=2,symmetry=none")
-    refused = subprocess.run([sys.executable, "-m", "brdfz.gpu", "check", str(stack)], capture_output=True, text=True, timeout=120)
-    assert refused.returncode == 2 and "do not evaluate φh stack layouts" in refused.stderr
+    model = tmp_path / "blinn_phong.brdfzrt"
+    brdfz.export(brdfz.load(RGL), model, repr="analytic:blinn_phong,starts=1")
+    refused = subprocess.run([sys.executable, "-m", "brdfz.gpu", "check", str(model)], capture_output=True, text=True, timeout=120)
+    assert refused.returncode == 2 and "have no 'blinn_phong' lobe" in refused.stderr
 
 
 @pytest.mark.parametrize("theta_o", [30.0, 75.0])

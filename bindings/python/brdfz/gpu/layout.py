@@ -13,7 +13,7 @@ from .slang import SHADERS
 
 MAGIC = b"\x89BZRT\r\n\x1a"
 KIND_NAMES = {1: "table", 2: "factorisation", 3: "analytic", 4: "φh stack"}
-GPU_KINDS = (1, 2, 3)  # what the shaders evaluate so far
+GPU_KINDS = (1, 2, 3, 4)
 
 # Lobe families by their id (the order of lib/runtime/include/brdfz/runtime/kernels/lobes/families.h)
 # and their parameter counts, for the families the shaders have (lobes.slang).
@@ -53,14 +53,14 @@ class Layout:
             raise ValueError(f"{path}: runtime layout version {version} (this reads 1)")
         self.kind = kind
         if kind not in GPU_KINDS:
-            raise ValueError(f"{path}: the GPU shaders do not evaluate {KIND_NAMES.get(kind, kind)} layouts yet")
-        self.sections = {}
+            raise ValueError(f"{self.path}: the GPU shaders do not evaluate {KIND_NAMES.get(kind, kind)} layouts")
+        objects = {}
         for i in range(count):
             tag, dtype, offset, n, obj = struct.unpack_from("<IIQQI", data, 64 + 32 * i)
-            if obj == 0:
-                self.sections[tag] = (dtype, offset, n)
+            objects.setdefault(obj, {})[tag] = (dtype, offset, n)
         self.data = data + b"\0" * (-len(data) % 4)
-        self.desc = self._descriptor()
+        # One descriptor per object: the root, then a φh stack's slices in order.
+        self.desc = np.concatenate([self._descriptor(objects[k]) for k in sorted(objects)])
 
     def _append(self, array) -> int:
         """Appends 32-bit words to the bytes the shaders read; returns their byte offset."""
@@ -74,25 +74,34 @@ class Layout:
     def _offset(self, tag):
         s = self._find(tag)
         if s is None:
-            raise ValueError(f"the layout has no {tag} section")
+            raise ValueError(f"{self.path}: an object has no {tag} section")
         return s[1]
 
     def _array(self, tag, dtype):
-        _, offset, n = self.sections[_tag(tag)]
-        return np.frombuffer(self.data, dtype=dtype, count=n, offset=offset)
+        s = self._find(tag)
+        if s is None:
+            raise ValueError(f"{self.path}: an object has no {tag} section")
+        return np.frombuffer(self.data, dtype=dtype, count=s[2], offset=s[1])
 
-    def _descriptor(self) -> np.ndarray:
+    def _descriptor(self, sections) -> np.ndarray:
+        """One object's descriptor, from its sections."""
+        self.sections = sections
         d = np.zeros(1, desc_dtype())
-        d["kind"] = self.kind
+        kind = int(self._array("KIND", "<i4")[0])
+        d["kind"] = kind
         if self._find("SAMP"):
             self._sampler(d)
-        if self.kind == 3:
+        if kind == 3:
             return self._lobes(d)
+        if kind == 4:
+            symmetry, slices = self._array("PHIH", "<i4")
+            d["phi_h_bilateral"], d["phi_h_slices"] = symmetry == 2, slices
+            return d
         grid = self._array("GRID", "<i4")
         for name, v in zip(("n_theta_h", "n_theta_d", "n_phi_d", "centre", "phi_d_axis", "lookup"), grid):
             d[name] = v
         d["theta_d_warp"] = self._array("WARP", "<f8")[0] if self._find("WARP") else 0.0
-        if self.kind == 1:
+        if kind == 1:
             if self._find("VF32"):
                 d["dtype"], d["values"] = 0, self._offset("VF32")
             elif self._find("VF16"):
