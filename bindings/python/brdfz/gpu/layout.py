@@ -1,7 +1,7 @@
-"""A .brdfzrt file (formats/SPEC.md §6) as the shaders read it: its bytes as they are, and the
-descriptor (bindings/gpu/shaders/desc.slang's BrdfzDesc) of the root object's section offsets and small
-parameters, read from the section table. The C++ reader checks the file (brdfz.load does); this reads
-only what the descriptor needs."""
+"""A .brdfzrt file (formats/SPEC.md §6) as the shaders read it: its bytes as they are (then float
+copies of its float64 arrays), and a descriptor per object (bindings/gpu/shaders/desc.slang's
+BrdfzDesc: section offsets and small parameters, read from the section table). The C++ reader checks
+the file (brdfz.load does); this reads only what the descriptors need."""
 
 import re
 import struct
@@ -41,7 +41,7 @@ def desc_dtype() -> np.dtype:
 
 
 class Layout:
-    """The file's bytes (padded to a multiple of 4 for 32-bit reads) and its descriptor."""
+    """The file's bytes (padded to a multiple of 4 for 32-bit reads) and its descriptors."""
 
     def __init__(self, path):
         self.path = Path(path)
