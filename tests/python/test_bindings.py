@@ -181,6 +181,15 @@ def test_save_load_round_trips(demo, tmp_path):
         assert np.array_equal(back.eval(wi, wo), model.eval(wi, wo))
 
 
+def test_export_writes_the_representation(demo, tmp_path):
+    rng = np.random.default_rng(6)
+    wi, wo = random_dirs(rng, 500), random_dirs(rng, 500)
+    r = brdfz.export(demo, tmp_path / "t.brdfzrt", repr="tabular:res=8x8x16,dtype=f16")
+    assert "f16" in r["describe"] or "float16" in r["describe"], r
+    small = brdfz.compress(demo, "tabular:res=8x8x16,dtype=f16")
+    assert np.allclose(brdfz.load(tmp_path / "t.brdfzrt").eval(wi, wo), small.eval(wi, wo), rtol=1e-6, atol=0)
+
+
 def test_convert_equals_cli(cli, demo_table, tmp_path):
     counts = brdfz.convert(demo_table, tmp_path / "py.binary", res=(45, 45, 90))
     run(cli, "convert", demo_table, tmp_path / "cli.binary", "--res", "45x45x90")

@@ -144,7 +144,7 @@ def export(source: Union[Brdf, Path], path: Path, *, repr: Optional[str] = None,
     compact sampler brdfz::runtime and GPUs read. Returns the path, its bytes and what it holds."""
     brdf = source if isinstance(source, Brdf) else load(source)
     if repr:
-        brdf = compress(brdf, repr, threads=threads, progress=progress).brdf
+        brdf = compress(brdf, repr, threads=threads, progress=progress)
     save(brdf, path, format="brdfzrt")
     return {"path": os.fspath(path), "bytes": os.path.getsize(path), "describe": brdf.describe()}
 

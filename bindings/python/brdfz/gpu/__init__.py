@@ -1,0 +1,13 @@
+"""brdfz on the GPU: the shaders of bindings/gpu/shaders (one Slang source, translated to each shading
+language by the Slang compiler) and their check against the C++ library on software or real GPUs.
+
+    python -m brdfz.gpu check FILE.brdfzrt [--backend wgpu|gl] [--pairs N]
+"""
+
+from .backend import BackendUnavailable
+from .check import BACKENDS, TOLERANCE, backend, check
+from .layout import Layout
+from .slang import SlangError, compile_entry
+from .targets import TARGETS, emit
+
+__all__ = ["BACKENDS", "TOLERANCE", "backend", "check", "Layout", "TARGETS", "SlangError", "compile_entry", "emit", "BackendUnavailable"]

@@ -1,0 +1,53 @@
+"""What every backend gives the check: the shaders' check entry points (bindings/gpu/shaders/
+check.slang) over arrays of float32 directions, on one bound material."""
+
+import numpy as np
+
+WORKGROUP = 64        # check.slang's numthreads
+MAX_GROUPS = 65535    # per dispatch dimension (WebGPU's and OpenGL's guaranteed minimum)
+ENTRIES = ("check_eval", "check_rounding", "check_pdf", "check_sample")
+
+
+class BackendUnavailable(RuntimeError):
+    pass
+
+
+class Backend:
+    name = "?"
+    adapter = "?"  # the device it runs on, in words
+
+    def bind(self, layout):
+        """Uploads the material (a Layout) that the next calls evaluate; returns self."""
+        raise NotImplementedError
+
+    def _dispatch(self, entry, a, b, count, width):
+        """Runs `entry` on `count` items with inputs a and b (float32 arrays); returns count·width floats."""
+        raise NotImplementedError
+
+    def _run(self, entry, a, b, width):
+        n = len(a) // 3
+        per_b = len(b) // n if n else 0
+        out = np.empty(n * width, np.float32)
+        step = WORKGROUP * MAX_GROUPS
+        for lo in range(0, n, step):
+            hi = min(n, lo + step)
+            out[width * lo:width * hi] = self._dispatch(entry, np.ascontiguousarray(a[3 * lo:3 * hi], np.float32),
+                                                        np.ascontiguousarray(b[per_b * lo:per_b * hi], np.float32), hi - lo, width)
+        return out
+
+    def eval(self, wi, wo):
+        """f(wi, wo) per pair, (n, 3) float32."""
+        return self._run("check_eval", np.ravel(wi), np.ravel(wo), 3).reshape(-1, 3)
+
+    def rounding(self, wi, wo):
+        """Each channel's scale of float rounding at each pair, (n, 3): f itself for tables; for
+        factorisations the magnitude of the summed terms (the shaders' brdfz_eval_rounding)."""
+        return self._run("check_rounding", np.ravel(wi), np.ravel(wo), 3).reshape(-1, 3)
+
+    def pdf(self, wo, wi):
+        return self._run("check_pdf", np.ravel(wo), np.ravel(wi), 1)
+
+    def sample(self, wo, u):
+        """(wi (n, 3), pdf (n,), weight (n, 3)) per draw."""
+        r = self._run("check_sample", np.ravel(wo), np.ravel(u), 7).reshape(-1, 7)
+        return r[:, :3], r[:, 3], r[:, 4:]
