@@ -22,8 +22,8 @@
 
 namespace brdfz {
 
-// The defaults keep E[w²]/E[w]² low over four views within 16 KiB (14,748 bytes); bench/README.md
-// says on which files they were chosen and on which they are judged.
+// The defaults: weights of low variance up to grazing views within 16 KiB of tables; bench/README.md
+// names the files they were chosen on and those they are judged on.
 struct CompactSamplerOptions {
     int slices = 12;              // view elevations, uniform in cosθo over [0°, kMaxThetaODeg], ≥ 2
     int rows = 32;                // s rows, ≥ 1
