@@ -14,6 +14,7 @@
 #include "brdfz/compress.h"
 #include "brdfz/errors.h"
 #include "brdfz/fit/fit.h"
+#include "brdfz/formats/container.h"
 #include "brdfz/formats/io.h"
 #include "brdfz/formats/registry.h"
 #include "brdfz/metrics.h"
@@ -227,6 +228,33 @@ void bind_operations(py::module_& m) {
           "writes atomically (format from the extension unless given); returns the written bins' counts. .brdfz "
           "keeps provenance: build_spec (the compress() spec), source (the file it came from: name, format and "
           "SHA-256) and source_metrics (its metrics against that file)");
+
+    m.def("container_metadata", [](const Path& path) {
+              const container::Metadata meta = reading(path, [&] {
+                  py::gil_scoped_release release;
+                  return container::read_metadata(path.string());
+              });
+              py::dict source, achieved, d;
+              source["file"] = meta.source.file;
+              source["format"] = meta.source.format;
+              source["sha256"] = meta.source.sha256;
+              achieved["lossless"] = meta.achieved.lossless;
+              achieved["nbytes"] = meta.achieved.nbytes;
+              achieved["metrics"] = meta.achieved.metrics ? py::cast(*meta.achieved.metrics) : py::none();
+              d["version"] = meta.version;
+              d["library_version"] = meta.library_version;
+              d["created"] = meta.created;
+              d["source"] = source;
+              d["representation"] = meta.representation;
+              d["spec"] = meta.spec;
+              d["build_spec"] = meta.build_spec;
+              d["achieved"] = achieved;
+              return d;
+          },
+          py::arg("path"),
+          "a .brdfz file's provenance without reading its arrays: {'version', 'library_version', 'created', "
+          "'source' {'file', 'format', 'sha256'}, 'representation', 'spec', 'build_spec', 'achieved' {'lossless', "
+          "'nbytes', 'metrics' (against the source, or None)}}");
 
     m.def("convert", [](const Path& src, const Path& dst, const Resolution& res, const std::string& src_format,
                         const std::string& dst_format, const std::string& lookup, const std::string& bin_position,

@@ -16,7 +16,7 @@ import pytest
 
 from conftest import import_brdfz
 
-ENTRIES = ["check_eval", "check_rounding", "check_pdf", "check_sample"]
+ENTRIES = ["brdfz_eval_kernel", "check_rounding", "brdfz_pdf_kernel", "brdfz_sample_kernel"]
 
 
 @pytest.fixture(scope="module")

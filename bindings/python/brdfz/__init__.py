@@ -49,6 +49,7 @@ from ._core import (
     albedo,
     benchmark_specs,
     compress_kinds,
+    container_metadata,
     default_candidates,
     directions,
     format_of,
@@ -64,7 +65,7 @@ from ._core import (
 __all__ = [
     "Brdf", "Candidate", "ChannelMetrics", "Compressed", "FitReport", "FitResult", "FormatError", "MAX_THREADS",
     "Metrics", "Scene", "Selection", "Trial", "UnsupportedError", "ValidationCheck", "ValidationReport", "albedo",
-    "benchmark_specs", "compress", "compress_kinds", "convert", "default_candidates", "directions", "export", "fit",
+    "benchmark_specs", "compress", "compress_kinds", "container_metadata", "convert", "default_candidates", "directions", "export", "fit",
     "format_of", "formats", "from_half_diff",
     "load", "load_measurements", "Measurements", "metric_samples", "metrics", "metrics_at", "read_scene", "reciprocity_error", "representations", "save",
     "simd", "tabulate", "to_half_diff", "trial", "validate",

@@ -7,7 +7,7 @@ import numpy
 import numpy.typing
 import os
 import typing
-__all__: list[str] = ['Brdf', 'Candidate', 'ChannelMetrics', 'Compressed', 'FitReport', 'FitResult', 'FormatError', 'MAX_THREADS', 'Metrics', 'Scene', 'Selection', 'Trial', 'UnsupportedError', 'ValidationCheck', 'ValidationReport', 'albedo', 'benchmark_specs', 'compress', 'compress_kinds', 'convert', 'default_candidates', 'directions', 'fit', 'format_of', 'formats', 'from_half_diff', 'load', 'load_measurements', 'metric_samples', 'metrics', 'metrics_at', 'read_scene', 'reciprocity_error', 'representations', 'save', 'select_representation', 'simd', 'tabulate', 'to_half_diff', 'trial', 'validate']
+__all__: list[str] = ['Brdf', 'Candidate', 'ChannelMetrics', 'Compressed', 'FitReport', 'FitResult', 'FormatError', 'MAX_THREADS', 'Metrics', 'Scene', 'Selection', 'Trial', 'UnsupportedError', 'ValidationCheck', 'ValidationReport', 'albedo', 'benchmark_specs', 'compress', 'compress_kinds', 'container_metadata', 'convert', 'default_candidates', 'directions', 'fit', 'format_of', 'formats', 'from_half_diff', 'load', 'load_measurements', 'metric_samples', 'metrics', 'metrics_at', 'read_scene', 'reciprocity_error', 'representations', 'save', 'select_representation', 'simd', 'tabulate', 'to_half_diff', 'trial', 'validate']
 class FormatError(ValueError):
     pass
 class UnsupportedError(ValueError):
@@ -404,6 +404,10 @@ def compress(brdf: Brdf, spec: str, *, threads: typing.SupportsInt | typing.Supp
     """
 def compress_kinds() -> list[str]:
     ...
+def container_metadata(path: os.PathLike | str | bytes) -> dict:
+    """
+    a .brdfz file's provenance without reading its arrays: {'version', 'library_version', 'created', 'source' {'file', 'format', 'sha256'}, 'representation', 'spec', 'build_spec', 'achieved' {'lossless', 'nbytes', 'metrics' (against the source, or None)}}
+    """
 def convert(src: os.PathLike | str | bytes, dst: os.PathLike | str | bytes, *, res: tuple[typing.SupportsInt | typing.SupportsIndex, typing.SupportsInt | typing.SupportsIndex, typing.SupportsInt | typing.SupportsIndex] | None = None, src_format: str = '', dst_format: str = '', lookup: str = 'linear', bin_position: str = 'centre', threads: typing.SupportsInt | typing.SupportsIndex = 0, progress: typing.Any = None) -> dict:
     """
     as `brdfz convert SRC DST`; returns the written bins' counts

@@ -1,11 +1,11 @@
 """What every backend gives the check: the shaders' check entry points (bindings/gpu/shaders/
-check.slang) over arrays of float32 directions, on one bound material."""
+kernels.slang, check.slang) over arrays of float32 directions, on one bound material."""
 
 import numpy as np
 
-WORKGROUP = 64        # check.slang's numthreads
+WORKGROUP = 64        # kernels.slang's numthreads
 MAX_GROUPS = 65535    # per dispatch dimension (WebGPU's and OpenGL's guaranteed minimum)
-ENTRIES = ("check_eval", "check_rounding", "check_pdf", "check_sample")
+ENTRIES = ("brdfz_eval_kernel", "check_rounding", "brdfz_pdf_kernel", "brdfz_sample_kernel")
 
 
 class BackendUnavailable(RuntimeError):
@@ -37,7 +37,7 @@ class Backend:
 
     def eval(self, wi, wo):
         """f(wi, wo) per pair, (n, 3) float32."""
-        return self._run("check_eval", np.ravel(wi), np.ravel(wo), 3).reshape(-1, 3)
+        return self._run("brdfz_eval_kernel", np.ravel(wi), np.ravel(wo), 3).reshape(-1, 3)
 
     def rounding(self, wi, wo):
         """Each channel's scale of float rounding at each pair, (n, 3): f itself for tables; for
@@ -45,9 +45,9 @@ class Backend:
         return self._run("check_rounding", np.ravel(wi), np.ravel(wo), 3).reshape(-1, 3)
 
     def pdf(self, wo, wi):
-        return self._run("check_pdf", np.ravel(wo), np.ravel(wi), 1)
+        return self._run("brdfz_pdf_kernel", np.ravel(wo), np.ravel(wi), 1)
 
     def sample(self, wo, u):
         """(wi (n, 3), pdf (n,), weight (n, 3)) per draw."""
-        r = self._run("check_sample", np.ravel(wo), np.ravel(u), 7).reshape(-1, 7)
+        r = self._run("brdfz_sample_kernel", np.ravel(wo), np.ravel(u), 7).reshape(-1, 7)
         return r[:, :3], r[:, 3], r[:, 4:]

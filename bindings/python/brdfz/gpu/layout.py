@@ -62,6 +62,20 @@ class Layout:
         # One descriptor per object: the root, then a φh stack's slices in order.
         self.desc = np.concatenate([self._descriptor(objects[k]) for k in sorted(objects)])
 
+    @classmethod
+    def from_export(cls, folder):
+        """The buffers `brdfz export --target` wrote into `folder` (material.bin, descriptors.bin), as the
+        backends bind them."""
+        folder = Path(folder)
+        layout = cls.__new__(cls)
+        layout.path = folder / "material.bin"
+        layout.data = layout.path.read_bytes()
+        layout.desc = np.frombuffer((folder / "descriptors.bin").read_bytes(), desc_dtype()).copy()
+        if len(layout.data) % 4 or len(layout.data) < 64 or layout.data[:8] != MAGIC or len(layout.desc) == 0:
+            raise ValueError(f"{folder}: not a brdfz GPU export")
+        layout.kind = int(layout.desc["kind"][0])
+        return layout
+
     def _append(self, array) -> int:
         """Appends 32-bit words to the bytes the shaders read; returns their byte offset."""
         offset = len(self.data)
