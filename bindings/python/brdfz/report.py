@@ -366,13 +366,15 @@ def _local(d: np.ndarray, t: np.ndarray, b: np.ndarray, n: np.ndarray) -> np.nda
 
 
 def render_sphere(brdf: brdfz.Brdf, size: int = 128, env_samples: int = 64, *, light=LIGHT,
-                  irradiance: float = LIGHT_IRRADIANCE, environment=sky, seed: int = 1) -> np.ndarray:
+                  irradiance: float = LIGHT_IRRADIANCE, environment=sky, seed: int = 1, draws=None) -> np.ndarray:
     """Radiance (size, size, 3) of an orthographic unit sphere seen along -z: at each pixel the normal
     gives the local frame (brdf.h: normal +z), wo is the view direction. The light (a direction in the
     world frame) contributes f·cosθi·E; the environment (world directions (N, 3) -> radiance (N, 3)) is
     integrated by importance sampling with the Brdf's own sampler, `env_samples` stratified draws per
     pixel (the mean of weight·L), which follows a glossy lobe wherever it points (a fixed set of sky
-    directions leaves a dot on a glossy sphere for each). Deterministic for a seed. Black outside."""
+    directions leaves a dot on a glossy sphere for each). Deterministic for a seed. Black outside.
+    `draws`, a function (k, pixels) -> u (len(pixels), 2) in [0, 1), gives the k-th draw's u at
+    `pixels` (flat indices into the row-major image) in place of the seeded strata."""
     if not (isinstance(size, int) and 1 <= size <= 8192):
         raise ValueError(f"size must be an integer in [1, 8192], not {size!r}")
     if not (isinstance(env_samples, int) and 0 <= env_samples <= 1 << 16):
@@ -400,8 +402,11 @@ def render_sphere(brdf: brdfz.Brdf, size: int = 128, env_samples: int = 64, *, l
         rng = np.random.default_rng(seed)
         side = math.isqrt(env_samples)
         env = np.zeros_like(radiance)
+        pixels = np.flatnonzero(inside)
         for k in range(env_samples):
-            if k < side * side:
+            if draws is not None:
+                draw = np.asarray(draws(k, pixels), dtype=float)
+            elif k < side * side:
                 draw = (np.array([k % side, k // side]) + rng.random((len(n), 2))) / side
             else:
                 draw = rng.random((len(n), 2))

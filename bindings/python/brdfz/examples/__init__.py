@@ -1,1 +1,2 @@
-"""Runnable examples: python -m brdfz.examples.mitsuba_sphere FILE.bsdf"""
+"""Runnable examples: python -m brdfz.examples.mitsuba_sphere FILE.bsdf, python -m
+brdfz.examples.realtime FILE (a sphere through the GPU shaders against the CPU reference)"""
