@@ -31,7 +31,7 @@ import numpy as np
 
 import brdfz
 from brdfz import report
-from brdfz.gpu import BackendUnavailable, Layout, SlangError, slang
+from brdfz.gpu import BackendUnavailable, Layout, SlangError, export, slang
 
 DEFAULT_REPR = "svd:rank=10,space=cos,colour=shared,res=25x20x14,dwarp=0.9,fit=lsq,symmetry=bilateral,dtype=f16"
 MIN_PSNR = 40.0
@@ -42,14 +42,17 @@ WORKGROUP = 8  # sphere.slang's numthreads, in x and y
 EVALS_PER_DISPATCH = 1 << 20
 
 
-def _material(path, repr, workdir) -> Layout:
-    """The runtime layout the GPU renders: a .brdfzrt as it is (without `repr`), or the file's `repr`
-    representation exported to `workdir`."""
-    if repr is None and brdfz.format_of(os.fspath(path)) == "brdfzrt":
-        return Layout(path)
-    out = pathlib.Path(workdir) / "material.brdfzrt"
-    brdfz.export(path, out, repr=repr or DEFAULT_REPR)
-    return Layout(out)
+def _material(path, repr, workdir):
+    """What a renderer ships, as `brdfz export --target slang` writes it into `workdir`/gpu (the buffers
+    and the shaders), and the runtime layout the library reads for the reference: a .brdfzrt as it is
+    (without `repr`), or the file's `repr` representation. Returns (layout path, export folder)."""
+    rt = pathlib.Path(path)
+    if repr is not None or brdfz.format_of(os.fspath(path)) != "brdfzrt":
+        rt = pathlib.Path(workdir) / "material.brdfzrt"
+        brdfz.export(path, rt, repr=repr or DEFAULT_REPR)
+    folder = pathlib.Path(workdir) / "gpu"
+    export(rt, folder, "slang")
+    return rt, folder
 
 
 def _pcg_hash(v: np.ndarray) -> np.ndarray:
@@ -240,10 +243,11 @@ def main(argv=None) -> int:
     try:
         with tempfile.TemporaryDirectory() as tmp:
             print(f"loading {args.file} ...", file=sys.stderr, flush=True)
-            layout = _material(args.file, args.repr, tmp)
-            ref_brdf = brdfz.load(layout.path)
-            nbytes = os.path.getsize(layout.path)
-        gpu = SphereRenderer()
+            rt, folder = _material(args.file, args.repr, tmp)
+            layout = Layout.from_export(folder)
+            ref_brdf = brdfz.load(rt)
+            nbytes = os.path.getsize(rt)
+            gpu = SphereRenderer(shaders=folder / "shaders")
         image = gpu.render(layout, args.size, args.env_samples, args.seed,
                            progress=report.Bar("GPU render", len(dispatches(args.size, args.env_samples))))
         t = time.perf_counter()
