@@ -1,0 +1,5 @@
+import sys
+
+from brdfz.view import main
+
+sys.exit(main())
