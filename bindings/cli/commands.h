@@ -18,5 +18,6 @@ void add_pca_train(CLI::App& app);
 void add_formats(CLI::App& app);
 void add_representations(CLI::App& app);
 void add_export(CLI::App& app);
+void add_view(CLI::App& app);
 
 }  // namespace brdfz::cli

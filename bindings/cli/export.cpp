@@ -4,12 +4,6 @@
 // brdfz export IN -o DIR --target T [--repr SPEC]: that layout with the shader module, descriptor and
 // integration note for a GPU renderer. The shader code comes from the Slang compiler, which ships in a
 // Python wheel, so this runs `python -m brdfz.gpu export` (bindings/python/brdfz/gpu/export.py).
-#include <spawn.h>
-#include <sys/wait.h>
-
-#include <cerrno>
-#include <cstdlib>
-#include <cstring>
 #include <filesystem>
 #include <iostream>
 
@@ -18,47 +12,13 @@
 #include "brdfz/formats/runtime_layout.h"
 #include "commands.h"
 #include "output.h"
-
-extern char** environ;
+#include "python_forward.h"
 
 namespace brdfz::cli {
 
 namespace {
 
 const std::vector<std::string> kGpuTargets = {"glsl", "essl", "hlsl", "wgsl", "cuda", "metal", "slang"};
-
-// A missing package is reported in one line rather than as Python's traceback.
-constexpr const char* kBootstrap =
-    "import sys\n"
-    "try:\n"
-    "    from brdfz.gpu.__main__ import main\n"
-    "except ImportError as e:\n"
-    "    print(f'brdfz export --target needs the brdfz Python package and the Slang compiler (slangpy): {e}; "
-    "PYTHONPATH says where brdfz is, BRDFZ_PYTHON_EXECUTABLE which interpreter', file=sys.stderr)\n"
-    "    sys.exit(1)\n"
-    "sys.exit(main(sys.argv[1:]))\n";
-
-// Runs the Python exporter with these arguments; its messages are the user's. Non-zero exit: a failure
-// it has already reported.
-void run_python_export(const std::vector<std::string>& args) {
-    const char* env = std::getenv("BRDFZ_PYTHON_EXECUTABLE");
-    const std::string python = env && *env ? env : "python3";
-    std::vector<std::string> all = {python, "-c", kBootstrap, "export"};
-    all.insert(all.end(), args.begin(), args.end());
-    std::vector<char*> argv;
-    for (std::string& a : all) argv.push_back(a.data());
-    argv.push_back(nullptr);
-    std::cout.flush();
-    pid_t pid = 0;
-    const int spawned = posix_spawnp(&pid, python.c_str(), nullptr, nullptr, argv.data(), environ);
-    if (spawned != 0)
-        throw ValueError("export --target runs " + python + " -m brdfz.gpu export: " + std::strerror(spawned) +
-                         " (BRDFZ_PYTHON_EXECUTABLE names the interpreter)");
-    int status = 0;
-    while (waitpid(pid, &status, 0) < 0)
-        if (errno != EINTR) throw ValueError(std::string("export --target: waiting for Python: ") + std::strerror(errno));
-    if (!WIFEXITED(status) || WEXITSTATUS(status) != 0) throw CLI::RuntimeError(1);
-}
 
 }  // namespace
 
@@ -88,7 +48,9 @@ void add_export(CLI::App& app) {
             std::vector<std::string> forward = {args->in, "-o", args->out, "--target", args->target,
                                                 "--threads", std::to_string(args->threads)};
             if (!args->repr.empty()) forward.insert(forward.end(), {"--repr", args->repr});
-            run_python_export(forward);
+            forward.insert(forward.begin(), "export");
+            run_python("export --target", "brdfz.gpu.__main__", "the brdfz Python package and the Slang compiler (slangpy)",
+                       forward);
             return;
         }
         CompressOptions options = with_file_access({});

@@ -27,6 +27,7 @@ int main(int argc, char** argv) {
     brdfz::cli::add_formats(app);
     brdfz::cli::add_representations(app);
     brdfz::cli::add_export(app);
+    brdfz::cli::add_view(app);
     try {
         app.parse(argc, argv);
     } catch (const CLI::ParseError& e) {
