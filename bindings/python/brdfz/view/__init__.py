@@ -91,29 +91,30 @@ def build(files: Sequence[str], compare: Sequence[str] = (), *, size: int = 256,
           progress: bool = True) -> dict:
     """The page's data: every material's views and runtime layout, the sphere's WGSL and parameters.
     The spheres of FILEs render their runtime layout (brdfz.export); a SPEC's its own."""
-    # Every file is read before the long steps, so that a bad one fails at once.
+    # Every file is read, and the representations built, before the other long steps: bad input fails
+    # early (a malformed first spec before any progress line).
     loaded = [brdfz.load(f) for f in files]
-    bar = report.Bar("views", len(files) + len(compare) + 1) if progress else None
+    bar = report.Bar("views", len(files) + 2 * len(compare) + 1) if progress else None
 
     def step(what):
         if bar is not None:
             bar.step(what)
 
-    materials: List[dict] = []
+    built = []
+    for spec in compare:
+        built.append(brdfz.compress(loaded[0], spec))
+        step(f"built {spec}")
     code = slang.compile_entry(os.fspath(SPHERE), "sphere_render", "wgsl", include=(os.fspath(slang.SHADERS),))
     step("sphere shader (WGSL)")
+    materials: List[dict] = []
     with tempfile.TemporaryDirectory() as tmp:
-        for k, (f, brdf) in enumerate(zip(files, loaded)):
+        shown = [(pathlib.Path(f).name, b, os.fspath(f), os.path.getsize(f)) for f, b in zip(files, loaded)]
+        shown += [(spec.split(":")[0] + f" ({b.nbytes:,} B)", b, spec, b.nbytes) for spec, b in zip(compare, built)]
+        for k, (label, brdf, source, nbytes) in enumerate(shown):
             rt = pathlib.Path(tmp) / f"{k}.brdfzrt"
             brdfz.export(brdf, rt)
-            materials.append(_material(pathlib.Path(f).name, brdf, rt, os.fspath(f), os.path.getsize(f)))
-            step(pathlib.Path(f).name)
-        for k, spec in enumerate(compare):
-            brdf = brdfz.compress(loaded[0], spec)
-            rt = pathlib.Path(tmp) / f"c{k}.brdfzrt"
-            brdfz.export(brdf, rt)
-            materials.append(_material(spec.split(":")[0] + f" ({brdf.nbytes:,} B)", brdf, rt, spec, brdf.nbytes))
-            step(spec)
+            materials.append(_material(label, brdf, rt, source, nbytes))
+            step(label)
     lobe_dirs = lobe_directions()
     wi, _ = slice_directions()
     return {
@@ -196,6 +197,8 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
             print(f"wrote {args.html} ({len(html.encode()):,} bytes)")
             return 0
         serve(html, args.port)
+    except KeyboardInterrupt:
+        return 130
     except (OSError, ValueError, RuntimeError) as e:
         message = f"{e.filename}: {e.strerror}" if isinstance(e, OSError) and e.filename and e.strerror else e
         print(f"brdfz view: {message}", file=sys.stderr)

@@ -253,9 +253,9 @@ function drawAlbedoError() {
 const gpu = { device: null, pipeline: null, buffers: new Map(), images: {}, error: null };
 
 async function startGpu() {
-  if (!navigator.gpu) throw new Error("this browser has no WebGPU (Chromium: --enable-unsafe-webgpu; or a recent Chrome)");
+  if (!navigator.gpu) throw new Error("this browser has no WebGPU (Chrome or Edge have it; Chromium: --enable-unsafe-webgpu)");
   const adapter = await navigator.gpu.requestAdapter();
-  if (!adapter) throw new Error("WebGPU found no adapter");
+  if (!adapter) throw new Error("WebGPU found no adapter (Chromium without a GPU: --enable-unsafe-webgpu)");
   const biggest = Math.max(...DATA.materials.map((m) => m.layout_bytes), 12 * SPHERE.size * SPHERE.size);
   if (biggest > adapter.limits.maxStorageBufferBindingSize) throw new Error(`a layout of ${biggest} bytes exceeds this GPU's storage buffers`);
   gpu.device = await adapter.requestDevice({ requiredLimits: {
@@ -331,9 +331,9 @@ function putSphere(id, colour) {
   g.putImageData(img, 0, 0);
 }
 // The sun's elevation in each pixel's frame beyond A's measured range: plot.sun_elevation's mask.
-function sunMasked(p, tmax) {
+function sunMasked(p, tmax, l) {
   const size = SPHERE.size, x = (2 * (p % size) + 1 - size) / size, y = (size - 2 * Math.floor(p / size) - 1) / size;
-  const z = Math.sqrt(Math.max(0, 1 - x * x - y * y)), l = state.light;
+  const z = Math.sqrt(Math.max(0, 1 - x * x - y * y));
   const d = Math.hypot(x - l[0], y - l[1], z - l[2]);
   return 2 * Math.asin(Math.min(0.5 * d, 1)) > tmax;
 }
@@ -347,7 +347,7 @@ function drawSpheres() {
   const e = new Float64Array(n);
   for (let p = 0; p < n; p++) {
     const a = (A[3 * p] + A[3 * p + 1] + A[3 * p + 2]) / 3, b = (B[3 * p] + B[3 * p + 1] + B[3 * p + 2]) / 3;
-    e[p] = a > 0 && !sunMasked(p, tmax) ? (b - a) / a : NaN;
+    e[p] = a > 0 && !sunMasked(p, tmax, gpu.images.light) ? (b - a) / a : NaN;
   }
   const top = errorTop(e);
   putSphere("sphere-e", (p) => (Number.isFinite(e[p]) ? diverging(e[p], top) : (A[3 * p] > 0 ? MASKED : [0, 0, 0])));
