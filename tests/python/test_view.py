@@ -195,15 +195,22 @@ def test_served_page(pages, materials, tmp_path):
     assert errors == []
 
 
+@pytest.mark.parametrize("case", ["missing file", "bad spec"])
 @pytest.mark.parametrize("how", ["python", "cli"])
-def test_bad_input_is_one_line_without_a_page(how, tmp_path):
+def test_bad_input_is_one_line_without_a_page(how, case, tmp_path):
     import_brdfz()
     cli = os.environ.get("BRDFZ_CLI")
     if how == "cli" and not (cli and os.path.exists(cli)):
         pytest.skip("BRDFZ_CLI is not set to the built brdfz command")
     out = tmp_path / "view.html"
-    p = subprocess.run(_view_command(cli if how == "cli" else None, tmp_path / "missing.bsdf", "--html", out),
+    if case == "missing file":
+        args, named = [str(tmp_path / "missing.bsdf")], "missing.bsdf"
+    else:
+        if not RGL.exists():
+            pytest.skip(f"../shared is missing ({RGL})")
+        args, named = [str(RGL), "--compare", "svd:rank=0"], "rank"
+    p = subprocess.run(_view_command(cli if how == "cli" else None, *args, "--html", str(out)),
                        capture_output=True, text=True, env=_env(), timeout=120)
-    assert p.returncode != 0
-    assert len(p.stderr.strip().splitlines()) == 1 and "missing.bsdf" in p.stderr, p.stderr
+    assert p.returncode == 1
+    assert len(p.stderr.strip().splitlines()) == 1 and named in p.stderr and "Traceback" not in p.stderr, p.stderr
     assert not out.exists() and list(tmp_path.iterdir()) == []
