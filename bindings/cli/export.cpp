@@ -45,12 +45,11 @@ void add_export(CLI::App& app) {
             if (cmd->count("--lookup") + cmd->count("--bin-position") > 0)
                 throw ValueError("export --target reads IN as brdfz.load does: --lookup and --bin-position apply only "
                                  "to a .brdfzrt export");
-            std::vector<std::string> forward = {args->in, "-o", args->out, "--target", args->target,
+            std::vector<std::string> forward = {"export", args->in, "-o", args->out, "--target", args->target,
                                                 "--threads", std::to_string(args->threads)};
             if (!args->repr.empty()) forward.insert(forward.end(), {"--repr", args->repr});
-            forward.insert(forward.begin(), "export");
-            run_python("export --target", "brdfz.gpu.__main__", "the brdfz Python package and the Slang compiler (slangpy)",
-                       forward);
+            run_python("export --target", "brdfz.gpu.__main__",
+                       "the brdfz Python package and the Slang compiler (slangpy)", forward);
             return;
         }
         CompressOptions options = with_file_access({});

@@ -150,7 +150,10 @@ function drawLobeMesh(c, g, points, radius, colourOf) {
   g.lineWidth = 1;
   // Floor and normal for orientation.
   g.strokeStyle = "#ccc"; g.beginPath();
-  for (let a = 0; a <= 64; a++) { const q = project([Math.cos(a / 32 * Math.PI), Math.sin(a / 32 * Math.PI), 0]); const x = cx + R * q[0], y = cy - R * q[1]; if (a) g.lineTo(x, y); else g.moveTo(x, y); }
+  for (let a = 0; a <= 64; a++) {
+    const q = project([Math.cos(a / 32 * Math.PI), Math.sin(a / 32 * Math.PI), 0]), x = cx + R * q[0], y = cy - R * q[1];
+    if (a) g.lineTo(x, y); else g.moveTo(x, y);
+  }
   g.stroke();
   const t = THETA_I[state.lobeTheta] * DEG, wi = project([Math.sin(t), 0, Math.cos(t)]);
   g.strokeStyle = "#e0a000"; g.beginPath(); g.moveTo(cx, cy); g.lineTo(cx + R * wi[0], cy - R * wi[1]); g.stroke();
