@@ -1,5 +1,5 @@
-// brdfz view: draws the values brdfz.view computed (window data below) on 2D canvases, and renders
-// the lit sphere with WebGPU through the exported shaders. No network, no library.
+// brdfz view: draws the values brdfz.view computed (the JSON in #brdfz-data) on 2D canvases, and
+// renders the lit sphere with WebGPU through the exported shaders. No network, no library.
 "use strict";
 (() => {
 const DATA = JSON.parse(document.getElementById("brdfz-data").textContent);
@@ -18,7 +18,7 @@ const SLICE = DATA.slice_res, SLICE_ELEVATION = f32(DATA.slice_wi_elevation);
 const SPHERE = DATA.sphere;
 const DEG = Math.PI / 180;
 
-// Each material's views, decoded once: polar and albedo keep r, g, b; mean() takes their average.
+// Each material's views, decoded once: polar and albedo keep r, g, b; mean3 takes their average.
 const views = DATA.materials.map((m) => ({
   polar: f32(m.views.polar), lobe: f32(m.views.lobe), slice: f32(m.views.slice), albedo: f32(m.views.albedo),
 }));
@@ -368,7 +368,6 @@ function requestSpheres() {
       const [A, B] = await Promise.all([renderSphere(a, light), renderSphere(b, light)]);
       Object.assign(gpu.images, { a: A, b: B, light, materials: [a, b] });
       drawSpheres();
-      api.renders++;
     } while (pending);
   })().catch((e) => { status(`sphere: ${e.message}`); console.warn(e); }).finally(() => { rendering = null; });
   return rendering;
@@ -390,15 +389,16 @@ function drawAll() {
   for (const w of ["a", "b"]) {
     const m = DATA.materials[state[w]];
     $(`head-${w}`).textContent = `${w.toUpperCase()}: ${m.label}`;
-    $(`about-${w}`).textContent = `${w.toUpperCase()}: ${m.describe} — ${m.bytes.toLocaleString("en")} bytes; measured to θ ${(m.theta_max / DEG).toFixed(1)}°`;
+    $(`about-${w}`).textContent = `${w.toUpperCase()}: ${m.source}: ${m.describe} — ${m.bytes.toLocaleString("en")} bytes; `
+      + `measured to θ ${(m.theta_max / DEG).toFixed(1)}°`;
     drawPolar(w); drawLobe(w); drawSlice(w); drawAlbedo(w);
   }
   drawPolarError(); drawLobeError(); drawSliceError(); drawAlbedoError();
 }
 
 const plotted = { polar: {} };
+// For tests and scripts: what the page drew, and a promise for the end of the spheres' rendering.
 const api = {
-  renders: 0,
   materials: DATA.materials.map((m) => m.label),
   gpu: () => gpu.adapter || null,
   error: () => gpu.error,
@@ -407,8 +407,6 @@ const api = {
   sphere: (which) => ({ light: gpu.images.light, material: gpu.images.materials[which === "a" ? 0 : 1],
     size: SPHERE.size, env_samples: SPHERE.env_samples, seed: SPHERE.seed, pixels: Array.from(gpu.images[which]) }),
   polar: (which) => plotted.polar[which],
-  select: (a, b) => { state.a = a; state.b = b; $("pick-a").value = a; $("pick-b").value = b; drawAll(); return requestSpheres(); },
-  setLight: (l) => { state.light = normalise(l); return requestSpheres(); },
   idle: async () => { while (rendering) await rendering; },
 };
 window.brdfzView = api;
@@ -441,6 +439,7 @@ function setup() {
       drawLobe("a"); drawLobe("b"); drawLobeError();
     });
   }
+  $("slice-about").textContent = `f_r (mean) at φd = ${DATA.slice_phi_d}°`;
   drawAll();
   api.ready = startGpu().then(requestSpheres, (e) => {
     gpu.error = e.message;
