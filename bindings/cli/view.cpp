@@ -37,7 +37,7 @@ void add_view(CLI::App& app) {
         forward.insert(forward.end(), {"--port", std::to_string(args->port), "--size", std::to_string(args->size),
                                        "--env-samples", std::to_string(args->env_samples)});
         if (!args->html.empty()) forward.insert(forward.end(), {"--html", args->html});
-        run_python("view", "brdfz.view", "the brdfz Python package and the Slang compiler (slangpy)", forward);
+        run_python("view", "brdfz.view", "the brdfz Python package", forward);
     });
 }
 

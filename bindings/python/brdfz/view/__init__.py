@@ -104,7 +104,13 @@ def build(files: Sequence[str], compare: Sequence[str] = (), *, size: int = 256,
     for spec in compare:
         built.append(brdfz.compress(loaded[0], spec))
         step(f"built {spec}")
-    code = slang.compile_entry(os.fspath(SPHERE), "sphere_render", "wgsl", include=(os.fspath(slang.SHADERS),))
+    # Without the Slang compiler the page still plots; it says why the sphere is missing.
+    try:
+        code, missing = slang.compile_entry(os.fspath(SPHERE), "sphere_render", "wgsl",
+                                            include=(os.fspath(slang.SHADERS),)).decode(), None
+    except slang.SlangError as e:
+        code, missing = None, str(e)
+        print(f"brdfz view: no sphere: {e}", file=sys.stderr)
     step("sphere shader (WGSL)")
     materials: List[dict] = []
     with tempfile.TemporaryDirectory() as tmp:
@@ -123,7 +129,7 @@ def build(files: Sequence[str], compare: Sequence[str] = (), *, size: int = 256,
         "lobe_res": list(LOBE_RES), "lobe_dirs": _f32(lobe_dirs),
         "slice_res": SLICE_RES, "slice_phi_d": SLICE_PHI_D, "slice_wi_elevation": _f32(plot._elevation(wi)),
         "albedo_theta": _f32(ALBEDO_THETA),
-        "sphere": {"wgsl": code.decode(), "size": size, "env_samples": env_samples, "seed": 1,
+        "sphere": {"wgsl": code, "missing": missing, "size": size, "env_samples": env_samples, "seed": 1,
                    "irradiance": report.LIGHT_IRRADIANCE, "light": [float(v) for v in report.LIGHT]},
     }
 

@@ -256,6 +256,7 @@ function drawAlbedoError() {
 const gpu = { device: null, pipeline: null, buffers: new Map(), images: {}, error: null };
 
 async function startGpu() {
+  if (!SPHERE.wgsl) throw new Error(SPHERE.missing);
   if (!navigator.gpu) throw new Error("this browser has no WebGPU (Chrome or Edge have it; Chromium: --enable-unsafe-webgpu)");
   const adapter = await navigator.gpu.requestAdapter();
   if (!adapter) throw new Error("WebGPU found no adapter (Chromium without a GPU: --enable-unsafe-webgpu)");
