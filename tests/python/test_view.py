@@ -2,8 +2,9 @@
 Playwright) opens the --html page from disk and the served page, on a real RGL file and its ≤ 16 KB
 factorisation. The sphere the page renders with WebGPU (SwiftShader here) matches the C++ library's
 render with the same light and draws, also after the light is moved with the mouse, and not another
-material's; the polar plot's values are eval's at its points; no console errors. Screenshots go to
-the test's tmp dir and to $BRDFZ_TEST_ARTEFACTS when set. Bad input is a one-line error without a page."""
+material's; the polar plot's and the θh × θd image's values are eval's at their points; no console
+errors. Screenshots go to the test's tmp dir and to $BRDFZ_TEST_ARTEFACTS when set. Bad input is a
+one-line error without a page."""
 
 import importlib.util
 import os
@@ -167,6 +168,12 @@ def test_html_page_from_disk(pages, materials, tmp_path):
         rgb = brdf.eval(wi[:, None, :], wo[None, :, :]).astype(np.float32).astype(float)
         expected = (rgb[..., 0] + rgb[..., 1] + rgb[..., 2]) / 3
         np.testing.assert_allclose(np.reshape(polar["values"], expected.shape), expected, rtol=1e-15, atol=0)
+        # The θh × θd image: the mean of r, g, b at its bin centres, sent as float32.
+        image = page.evaluate(f"window.brdfzView.slice('{which}')")
+        centres = np.radians((np.arange(image["bins"]) + 0.5) * 90 / image["bins"])
+        pairs = brdfz.from_half_diff(centres[None, :], centres[:, None], np.radians(image["phi_d"]))
+        expected = brdf.eval(*pairs).mean(axis=-1).astype(np.float32)
+        np.testing.assert_array_equal(np.reshape(image["values"], expected.shape).astype(np.float32), expected)
 
     # Dragging on the sphere moves the sun: a new image, still the library's.
     old_light, old = page.evaluate("window.brdfzView.light()"), _sphere(page, "a")[1]

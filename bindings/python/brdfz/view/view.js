@@ -224,6 +224,7 @@ function drawSlice(which) {
   const v = views[state[which]].slice, [low, top] = sliceRange();
   drawImage(`slice-${which}`, SLICE, SLICE, (i) => (v[i] > 0 ? heat(state.log ? Math.log(v[i] / low) / Math.log(top / low) : v[i] / top) : [255, 255, 255]),
     state.log ? `log ${low.toPrecision(2)}–${top.toPrecision(3)}` : `0–${top.toPrecision(3)}`);
+  plotted.slice[which] = { material: state[which], bins: SLICE, phi_d: DATA.slice_phi_d, values: Array.from(v) };
 }
 function drawSliceError() {
   const A = views[state.a].slice, B = views[state.b].slice, tmax = DATA.materials[state.a].theta_max;
@@ -397,7 +398,7 @@ function drawAll() {
   drawPolarError(); drawLobeError(); drawSliceError(); drawAlbedoError();
 }
 
-const plotted = { polar: {} };
+const plotted = { polar: {}, slice: {} };
 // For tests and scripts: what the page drew, and a promise for the end of the spheres' rendering.
 const api = {
   materials: DATA.materials.map((m) => m.label),
@@ -408,6 +409,7 @@ const api = {
   sphere: (which) => ({ light: gpu.images.light, material: gpu.images.materials[which === "a" ? 0 : 1],
     size: SPHERE.size, env_samples: SPHERE.env_samples, seed: SPHERE.seed, pixels: Array.from(gpu.images[which]) }),
   polar: (which) => plotted.polar[which],
+  slice: (which) => plotted.slice[which],  // θd rows × θh columns at bin centres over [0, 90°)
   idle: async () => { while (rendering) await rendering; },
 };
 window.brdfzView = api;
