@@ -111,7 +111,8 @@ class WebglBackend(Backend):
         words = np.frombuffer(layout.data, "<u4")
         rows = -(-len(words) // self.texture_width)
         if rows > self.max_size:
-            raise BackendUnavailable(f"the layout's {len(layout.data)} bytes exceed the largest texture ({self.max_size}² texels)")
+            raise BackendUnavailable(f"the layout's {len(layout.data)} bytes exceed the largest texture "
+                                     f"({self.texture_width} × {self.max_size} words)")
         data = np.zeros(rows * self.texture_width, "<u4")
         data[:len(words)] = words
         desc = layout.desc.view("<u4").reshape(len(layout.desc), -1)
