@@ -2,6 +2,7 @@
 
     PYTHONPATH=build/python .venv/bin/python bench/nbrdf.py [--files F.bsdf ...] [--small SPEC]
                                                               [--budget E] [--directions N] [--csv OUT.csv]
+    PYTHONPATH=build/python .venv/bin/python bench/nbrdf.py --sized [--files F.bsdf ...] [--csv OUT.csv]
 
 For each RGL-EPFL file that ../shared/data/rgl-nbrdf/weights.npz has a fit of, the published 6-21-21-3
 network (675 float32 parameters: 2,700 B) is evaluated with numpy on exactly the samples brdfz's metrics
@@ -12,6 +13,10 @@ default candidates (E = --budget, 0.02), and the setting of at most 16 KiB it wo
 that is no larger, else the candidate of at most 16 KiB with the lowest error over directions. Each is
 built from the file and judged with brdfz.metrics on the same samples. Prints one row per file
 (cos_rmse_rel, %) and the medians; --csv writes the rows.
+
+With --sized, only what `compress --auto --max-bytes B --metric cos --over directions` picks with B the
+network's bytes (the most accurate default candidate that is no larger) against the network, over
+directions and on the grid, counted separately on the tune and validate halves of the files (TUNE).
 
 The network's input is the half vector rotated to φh = 0, (sin θh, 0, cos θh), and the difference
 vector of wo in the half vector's frame (brdfz's wi is the file's incident direction; ../shared/data/README.md);
@@ -32,6 +37,9 @@ SHARED = pathlib.Path(__file__).resolve().parents[2] / "shared" / "data"
 # The setting bench/README.md reports ("Neural-BRDF peer"); see docs/repr-specs.md.
 SMALL = "svd:rank=4,space=log,colour=shared,layout=hd_p,res=20x14x32,fit=lsq,symmetry=none,dtype=f16"
 MEDIUM_BYTES = 16 * 1024
+# The half of the shared files defaults and constants are chosen on (bench/README.md); the rest validate.
+TUNE = {"acrylic_felt_white", "cardboard", "cc_nothern_aurora", "colodur_azure_4e", "irid_flake_paint2", "paper_white",
+        "satin_rosaline"}
 
 
 def nbrdf_eval(weights, name, wi, wo):
@@ -57,6 +65,44 @@ def nbrdf_bytes(weights, name):
     return sum(weights[f"{name}/{k}"].size for k in ("W1", "b1", "W2", "b2", "W3", "b3")) * 4
 
 
+def sized(args, weights, names):
+    """--sized: --auto --max-bytes (the network's bytes) against the network on the same samples."""
+    header = ["file", "half", "nbrdf_bytes", "sized_bytes", "nbrdf_dirs", "sized_dirs", "nbrdf_grid", "sized_grid", "sized_spec"]
+    print(" ".join(f"{h:>12}" for h in header[:-1]), header[-1])
+    rows = []
+    for path in args.files:
+        name = path.name.removesuffix("_rgb.bsdf").removesuffix(".bsdf")
+        if name not in names:
+            print(f"{name}: no Neural-BRDF fit, skipped", file=sys.stderr)
+            continue
+        ref = brdfz.load(path)
+        budget = nbrdf_bytes(weights, name)
+        picked = brdfz.compress(ref, auto=True, max_bytes=budget, metric="cos", over="directions",
+                                directions=args.directions, threads=args.threads, report=True)
+        row = {"file": name, "half": "tune" if name in TUNE else "validate", "nbrdf_bytes": budget,
+               "sized_bytes": picked.brdf.nbytes, "sized_spec": picked.candidates[picked.chosen].spec}
+        for over, key in (("directions", "dirs"), ("grid", "grid")):
+            opts = dict(over=over, directions=args.directions, threads=args.threads)
+            wi, wo, f = brdfz.metric_samples(ref, **opts)
+            row[f"nbrdf_{key}"] = brdfz.metrics_at(wi, f, nbrdf_eval(weights, name, wi, wo)).cos_rmse_rel.mean
+            row[f"sized_{key}"] = brdfz.metrics(ref, picked.brdf, **opts).cos_rmse_rel.mean
+        rows.append(row)
+        print(" ".join(f"{row[h]:>12}" if isinstance(row[h], (str, int)) else f"{100 * row[h]:>11.2f}%"
+                       for h in header[:-1]), row["sized_spec"], flush=True)
+    if not rows:
+        sys.exit("nbrdf: no file had a fit")
+    for half in ("tune", "validate"):
+        part = [r for r in rows if r["half"] == half]
+        wins = {k: sum(r[f"sized_{k}"] < r[f"nbrdf_{k}"] for r in part) for k in ("dirs", "grid")}
+        print(f"{half}: --auto --max-bytes (network's bytes) below the network on {wins['dirs']} of {len(part)} files "
+              f"over directions, {wins['grid']} of {len(part)} on the grid")
+    if args.csv:
+        with open(args.csv, "w", newline="") as f:
+            w = csv.DictWriter(f, fieldnames=header)
+            w.writeheader()
+            w.writerows(rows)
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--files", nargs="*", type=pathlib.Path,
@@ -67,11 +113,14 @@ def main():
     ap.add_argument("--directions", type=int, default=1 << 18)
     ap.add_argument("--threads", type=int, default=0)
     ap.add_argument("--csv", type=pathlib.Path)
+    ap.add_argument("--sized", action="store_true", help="only --auto --max-bytes at the network's bytes")
     args = ap.parse_args()
     if not args.files or not args.weights.exists():
         sys.exit(f"nbrdf: no RGL files or no weights ({SHARED}): nothing to compare")
     weights = np.load(args.weights)
     names = {k.split("/")[0] for k in weights.files}
+    if args.sized:
+        return sized(args, weights, names)
     rows = []
     header = ["file", "nbrdf_bytes", "small_bytes", "k16_bytes", "auto_bytes"] + [
         f"{who}_{over}" for over in ("grid", "dirs") for who in ("nbrdf", "small", "k16", "auto")] + [

@@ -1,15 +1,16 @@
 // brdfz compress IN -o OUT --repr SPEC
-// brdfz compress IN -o OUT --auto --max-error E [--metric log|cos|image] [--scene SCENE.json]
-//                                  [--over grid|directions]
+// brdfz compress IN -o OUT --auto [--max-error E] [--max-bytes B] [--metric log|cos|image]
+//                                  [--scene SCENE.json] [--over grid|directions]
 // Builds a compact representation (compress.h) of any BRDF file, or fits scattered measurements
 // (analytic only), writes it (.brdfz keeps the representation itself; table formats tabulate it) and
 // reports what it achieved: bytes, ratio to the input file, the metrics against the input, batch
 // eval speed and build time. --auto tries candidates from cheapest to richest (select.h) and keeps the
-// smallest that meets the error budget, reporting every candidate; exit status 2, nothing written,
-// when none does.
+// smallest that meets the error budget, the most accurate within the size budget, or the smallest
+// within both, reporting every candidate; exit status 2, nothing written, when none does.
 #include <cmath>
 #include <filesystem>
 #include <iostream>
+#include <sstream>
 
 #include "brdfz/errors.h"
 #include "brdfz/formats/scene_json.h"
@@ -89,6 +90,7 @@ void add_compress(CLI::App& app) {
         std::vector<std::string> candidates;
         bool json = false, automatic = false;
         double max_error = 0;
+        std::uint64_t max_bytes = 0;
         int threads = 0;
         LoadOptions load;
         MetricOptions metrics;
@@ -104,8 +106,23 @@ void add_compress(CLI::App& app) {
         return kinds + " (keys and defaults: docs/repr-specs.md)";
     }());
     CLI::Option* automatic =
-        cmd->add_flag("--auto", args->automatic, "choose the smallest candidate that meets --max-error")->excludes(repr);
-    cmd->add_option("--max-error", args->max_error, "error budget of --auto (unitless, in --metric)")->needs(automatic);
+        cmd->add_flag("--auto", args->automatic, "choose a candidate by budget: the smallest that meets --max-error, the "
+                                                  "most accurate within --max-bytes, or the smallest within both")
+            ->excludes(repr);
+    CLI::Option* max_error =
+        cmd->add_option("--max-error", args->max_error, "error budget of --auto (unitless, in --metric)")->needs(automatic);
+    CLI::Option* max_bytes =
+        cmd->add_option("--max-bytes", args->max_bytes, "size budget of --auto: the representation's bytes at most")
+            // Checked as text: the conversion to an unsigned count would wrap a negative one.
+            ->check(CLI::Validator(
+                [](std::string& text) {
+                    const bool digits = !text.empty() && text.find_first_not_of("0123456789") == std::string::npos;
+                    return digits && text.find_first_not_of('0') != std::string::npos
+                               ? std::string()
+                               : "must be a whole number of bytes >= 1, not " + text;
+                },
+                "BYTES"))
+            ->needs(automatic);
     cmd->add_option("--metric", args->metric, "error of --auto: log (log_rmse), cos (cos_rmse_rel) or image "
                                               "(relative pixel RMSE)")
         ->capture_default_str()
@@ -119,17 +136,28 @@ void add_compress(CLI::App& app) {
     add_threads_option(cmd, args->threads);
     cmd->add_flag("--json", args->json, "print the report as JSON");
     add_load_options(cmd, args->load);
-    cmd->callback([args] {
-        if (!args->automatic && args->repr.empty()) throw ValueError("compress: give --repr SPEC or --auto --max-error E");
-        if (args->automatic && !(args->max_error > 0.0)) throw ValueError("compress --auto: give --max-error E > 0");
+    cmd->callback([args, max_error, max_bytes] {
+        if (!args->automatic && args->repr.empty())
+            throw ValueError("compress: give --repr SPEC or --auto with --max-error E, --max-bytes B or both");
+        if (args->automatic && !*max_error && !*max_bytes)
+            throw ValueError("compress --auto: give --max-error E, --max-bytes B or both");
+        if (*max_error && !(args->max_error > 0.0 && std::isfinite(args->max_error)))
+            throw ValueError("compress --auto: --max-error must be a finite number > 0");
         // Check what can be checked before spending time on loading and building.
         if (!args->automatic) check_spec(args->repr);
         for (const std::string& c : args->candidates) check_spec(c);
         format_of(args->out, Access::Write);
         check_output(args->out);
+        const auto budget = [&] {
+            std::ostringstream text;
+            if (*max_error) text << "error at most " << args->max_error;
+            if (*max_bytes) text << (*max_error ? ", " : "") << "at most " << args->max_bytes << " bytes";
+            return text.str();
+        };
         SelectOptions select;
         if (args->automatic) {
-            select.max_error = args->max_error;
+            select.max_error = *max_error ? std::optional<double>(args->max_error) : std::nullopt;
+            if (*max_bytes) select.max_bytes = args->max_bytes;
             select.metric = parse_scene_metric(args->metric);
             select.candidates = args->candidates;
             if (!args->scene.empty()) select.scene = scene_json::load(args->scene);
@@ -167,8 +195,8 @@ void add_compress(CLI::App& app) {
             if (args->automatic) {
                 select.trial = options;
                 if (!args->json)
-                    std::cout << "trying candidates for " << args->in << " (budget " << args->max_error << " in "
-                              << args->metric << (args->scene.empty() ? "" : " under " + args->scene) << " over "
+                    std::cout << "trying candidates for " << args->in << " (" << budget() << ", error in " << args->metric
+                              << (args->scene.empty() ? "" : " under " + args->scene) << " over "
                               << over_name(args->metrics.over) << ")\n";
                 select.on_candidate = [&](const Candidate& c) {
                     if (!args->json) print_candidate(c, std::cout), std::cout.flush();
@@ -190,8 +218,7 @@ void add_compress(CLI::App& app) {
                 std::cout << "\n";
             }
             std::cout.flush();
-            std::cerr << "brdfz: " << args->in << ": no candidate meets the budget " << args->max_error
-                      << "; nothing written\n";
+            std::cerr << "brdfz: " << args->in << ": no candidate meets the budget (" << budget() << "); nothing written\n";
             throw CLI::RuntimeError(2);
         }
         o.trial = args->automatic ? &selection.best()->trial : &single;
@@ -206,7 +233,9 @@ void add_compress(CLI::App& app) {
             write_trial_keys(j, o);
             if (args->automatic) {
                 j.key("chosen").value(o.trial->spec).key("error").value(selection.best()->error);
-                j.key("max_error").value(args->max_error).key("metric").value(args->metric);
+                j.key("max_error").value(*max_error ? args->max_error : std::nan(""));
+                j.key("max_bytes").value(*max_bytes ? static_cast<double>(args->max_bytes) : std::nan(""));
+                j.key("metric").value(args->metric);
                 j.key("over").value(std::string(over_name(args->metrics.over)));
                 j.key("scene").value(args->scene);
                 write_candidates(j, selection);

@@ -122,11 +122,13 @@ void bind_select(py::module_& m) {
           "compress(brdf, spec) and measure it: bytes, metrics, eval speed, build time");
 
     m.def("select_representation",
-          [](const BrdfPtr& brdf, double max_error, const std::string& metric, const std::optional<Scene>& scene,
-             const std::vector<std::string>& candidates, bool measure_speed, int threads, const std::string& over,
-             std::size_t directions, std::uint64_t seed, py::object on_candidate) {
+          [](const BrdfPtr& brdf, const std::optional<double>& max_error, const std::optional<std::uint64_t>& max_bytes,
+             const std::string& metric, const std::optional<Scene>& scene, const std::vector<std::string>& candidates,
+             bool measure_speed, int threads, const std::string& over, std::size_t directions, std::uint64_t seed,
+             py::object on_candidate) {
               SelectOptions o;
               o.max_error = max_error;
+              o.max_bytes = max_bytes;
               o.metric = parse_scene_metric(metric);
               o.scene = scene;
               o.candidates = candidates;
@@ -150,11 +152,13 @@ void bind_select(py::module_& m) {
               if (out.chosen >= 0) out.brdf = out.candidates[static_cast<std::size_t>(out.chosen)].brdf;
               return out;
           },
-          py::arg("brdf").none(false), py::arg("max_error"), py::kw_only(), py::arg("metric") = "log", py::arg("scene") = py::none(),
+          py::arg("brdf").none(false), py::arg("max_error") = py::none(), py::kw_only(), py::arg("max_bytes") = py::none(),
+          py::arg("metric") = "log", py::arg("scene") = py::none(),
           py::arg("candidates") = std::vector<std::string>{}, py::arg("measure_speed") = true, py::arg("threads") = 0,
           py::arg("over") = "grid", py::arg("directions") = MetricOptions{}.directions,
           py::arg("seed") = MetricOptions{}.seed, py::arg("on_candidate") = py::none(),
-          "the smallest candidate within the budget (select.h); on_candidate(candidate, index, total) after each");
+          "by budget (select.h): the smallest candidate within max_error, the most accurate within max_bytes, or the "
+          "smallest within both; on_candidate(candidate, index, total) after each");
 
     m.def("benchmark_specs", &benchmark_specs, "the settings the compression benchmark sweeps");
     m.def("default_candidates", &default_candidates, "select_representation's candidates, cheapest first");

@@ -92,8 +92,10 @@ std::vector<std::string> default_candidates() {
 }
 
 Selection select_representation(const Brdf& source, const SelectOptions& options) {
-    if (!(std::isfinite(options.max_error) && options.max_error > 0.0))
+    if (!options.max_error && !options.max_bytes) throw ValueError("select: give an error budget, a size budget or both");
+    if (options.max_error && !(std::isfinite(*options.max_error) && *options.max_error > 0.0))
         throw ValueError("select: the error budget must be a finite number > 0");
+    if (options.max_bytes && *options.max_bytes == 0) throw ValueError("select: the size budget must be at least 1 byte");
     const std::vector<std::string> candidates = options.candidates.empty() ? default_candidates() : options.candidates;
     const std::optional<Scene> judge =
         options.scene ? options.scene
@@ -102,22 +104,40 @@ Selection select_representation(const Brdf& source, const SelectOptions& options
     // A thread count beyond the bound is the caller's mistake, not every candidate's failure.
     resolve_threads(options.trial.compress.threads);
     resolve_threads(options.trial.metrics.threads);
+    // Without an error budget the choice is the most accurate within the size budget, known only when
+    // the candidates within it have all been measured: until then the best so far is kept.
+    const bool most_accurate = !options.max_error;
     Selection out;
     for (const std::string& spec : candidates) {
         poll_stop();
         Candidate c;
+        bool larger = false;
         try {
             c.trial = trial(source, spec, options.trial);
             if (judge)
                 c.error = scene_error(source, *c.trial.brdf, *judge, options.metric);
             else
                 c.error = options.metric == SceneMetric::Cos ? c.trial.metrics.cos_rmse_rel.mean : c.trial.metrics.log_rmse.mean;
-            char buf[96];
+            char buf[128];
+            larger = options.max_bytes && c.trial.bytes > *options.max_bytes;
             if (!std::isfinite(c.error)) {
                 c.reason = "error is not finite";
-            } else if (c.error > options.max_error) {
-                std::snprintf(buf, sizeof buf, "error %.4g > budget %.4g", c.error, options.max_error);
+            } else if (larger) {
+                std::snprintf(buf, sizeof buf, "%zu bytes > size budget %llu", c.trial.bytes,
+                              static_cast<unsigned long long>(*options.max_bytes));
                 c.reason = buf;
+            } else if (options.max_error && c.error > *options.max_error) {
+                std::snprintf(buf, sizeof buf, "error %.4g > budget %.4g", c.error, *options.max_error);
+                c.reason = buf;
+            } else if (most_accurate) {
+                const Candidate* best = out.best();
+                if (best && best->error <= c.error) {
+                    std::snprintf(buf, sizeof buf, "error %.4g, not below %.4g of %s", c.error, best->error, best->trial.spec.c_str());
+                    c.reason = buf;
+                } else {
+                    c.accepted = true;
+                    c.reason = "the most accurate within the size budget so far";
+                }
             } else {
                 c.accepted = true;
                 c.reason = "meets the budget";
@@ -130,13 +150,20 @@ Selection select_representation(const Brdf& source, const SelectOptions& options
             c.reason = std::string("failed: ") + e.what();
         }
         if (!c.accepted) c.trial.brdf.reset();  // only the chosen one is kept in memory
-        out.tried.push_back(std::move(c));
-        if (options.on_candidate) options.on_candidate(out.tried.back());
-        if (out.tried.back().accepted) {
-            out.chosen = static_cast<int>(out.tried.size()) - 1;
-            break;
+        if (c.accepted && most_accurate && out.best()) {
+            Candidate& before = out.tried[static_cast<std::size_t>(out.chosen)];
+            before.accepted = false;
+            before.trial.brdf.reset();
+            char buf[128];
+            std::snprintf(buf, sizeof buf, "error %.4g, above %.4g of %s", before.error, c.error, c.trial.spec.c_str());
+            before.reason = buf;
         }
+        out.tried.push_back(std::move(c));
+        if (out.tried.back().accepted) out.chosen = static_cast<int>(out.tried.size()) - 1;
+        if (options.on_candidate) options.on_candidate(out.tried.back());
+        if ((out.tried.back().accepted && !most_accurate) || larger) break;
     }
+    if (most_accurate && out.best()) out.tried[static_cast<std::size_t>(out.chosen)].reason = "the most accurate within the size budget";
     return out;
 }
 

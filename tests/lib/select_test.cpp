@@ -112,6 +112,59 @@ TEST_CASE("selection keeps the cheapest candidate inside the budget and reports 
     CHECK_THROWS_AS(select_representation(source, o), ValueError);
 }
 
+TEST_CASE("a size budget keeps the most accurate candidate within it; with an error budget, the smallest within both", "[select]") {
+    const CoatedDiffuse source;
+    SelectOptions o;
+    o.metric = SceneMetric::Cos;
+    o.trial.measure_speed = false;
+    // By size; the nearest lookup is as large as the linear one before it and less accurate.
+    o.candidates = {"tabular:res=4x4x8,dtype=f16", "tabular:res=16x16x32,dtype=f16",
+                    "tabular:res=16x16x32,dtype=f16,lookup=nearest", "tabular:res=45x45x90"};
+    o.max_error = 1e-12;
+    const Selection all = select_representation(source, o);
+    REQUIRE(all.tried.size() == 4);
+    const std::size_t mid = all.tried[2].trial.bytes;
+    REQUIRE(all.tried[1].trial.bytes == mid);
+    REQUIRE(all.tried[2].error > all.tried[1].error);
+    REQUIRE(all.tried[1].error < all.tried[0].error);
+
+    o.max_error = std::nullopt;
+    o.max_bytes = mid;  // three fit; the most accurate of them is the second, not the last
+    const Selection within = select_representation(source, o);
+    REQUIRE(within.chosen == 1);
+    CHECK(within.tried.size() == 4);  // the search stops at the first larger than the budget
+    CHECK_THAT(within.tried[3].reason, Catch::Contains("> size budget"));
+    CHECK_THAT(within.tried[2].reason, Catch::Contains("not below"));
+    CHECK_THAT(within.tried[0].reason, Catch::Contains("above"));
+    CHECK(within.best()->reason == "the most accurate within the size budget");
+    CHECK(within.best()->trial.brdf);
+    for (std::size_t k : {0, 2, 3}) CHECK_FALSE(within.tried[k].trial.brdf);
+
+    o.max_bytes = mid - 1;  // only the first fits
+    const Selection smaller = select_representation(source, o);
+    CHECK(smaller.chosen == 0);
+    CHECK(smaller.tried.size() == 2);
+
+    // Both budgets: the smallest within both, so the first when its error is allowed...
+    o.max_error = all.tried[0].error * 1.01;
+    o.max_bytes = all.tried[3].trial.bytes;
+    const Selection both = select_representation(source, o);
+    CHECK(both.chosen == 0);
+    CHECK(both.tried.size() == 1);
+    // ...and none when the error asks for more than the size allows.
+    o.max_error = 0.5 * (all.tried[1].error + all.tried[3].error);
+    o.max_bytes = mid;
+    const Selection none = select_representation(source, o);
+    CHECK(none.chosen == -1);
+    CHECK_THAT(none.tried.back().reason, Catch::Contains("> size budget"));
+
+    o.max_bytes = 0;
+    CHECK_THROWS_AS(select_representation(source, o), ValueError);
+    o.max_bytes = std::nullopt;
+    o.max_error = std::nullopt;
+    CHECK_THROWS_AS(select_representation(source, o), ValueError);
+}
+
 TEST_CASE("a scene that looks near the normal needs a smaller model than grazing views under the sky", "[select]") {
     // The demo material as a MERL-resolution table: the full-resolution candidate reproduces it exactly.
     const TabularBrdf source(tabulate(CoatedDiffuse{}).table);

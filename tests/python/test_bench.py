@@ -102,7 +102,9 @@ def test_bench_csv_equals_compress_sweep(bench_out, demo_table, cli, tmp_path):
 
 def test_bench_charts_renders_summary(bench_out):
     pngs = ["size_vs_cos_rmse_rel.png", "size_vs_cos_rmse.png", "size_vs_log_rmse.png", "size_vs_cbrt_rmse.png",
-            "speed_vs_error.png", "auto_size_vs_error.png", "auto_speed_vs_error.png", "renders/coated-diffuse.png"]
+            "speed_vs_error.png", "auto_size_vs_error.png", "auto_speed_vs_error.png", "renders/coated-diffuse.png",
+            # No setting within 5 %: the material's own views, no comparison.
+            "views/coated-diffuse_polar.png", "views/coated-diffuse_slices.png"]
     for p in pngs:
         assert is_png(bench_out / p), p
     summary = (bench_out / "summary.md").read_text()
@@ -115,6 +117,17 @@ def test_bench_charts_renders_summary(bench_out):
     assert auto[0] == bench.AUTO_COLUMNS
     assert [r[:3] for r in auto[1:]] == [["coated-diffuse", "0.5", "tabular:res=16x16x32"], ["coated-diffuse", "1e-09", ""]]
     assert auto[2][-1] == "2"  # both candidates tried
+
+
+def test_views_compare_a_setting(demo_table, tmp_path):
+    """With a setting to show, the views put it beside the material and draw its error."""
+    from brdfz import batch
+
+    pick = {"spec": "tabular:res=16x16x32", "bytes": "98304"}
+    written = batch.views_task("coated-diffuse", str(demo_table), pick, None, str(tmp_path))
+    assert [pathlib.Path(p).name for p in written] == [f"coated-diffuse_{v}.png" for v in batch.VIEWS]
+    assert all(is_png(pathlib.Path(p)) for p in written)
+    assert not list(tmp_path.glob(".*"))  # no temporary file left
 
 
 def test_stability_heatmap(tmp_path):

@@ -96,6 +96,28 @@ def test_kernels_are_the_checked_ones(exports, target):
     assert len(slots) == 6, d
 
 
+def test_essl_carries_webgl2_passes(exports):
+    """GLSL ES: the 3.10 compute kernels and WebGL2's 3.00 render passes (what the webgl backend runs
+    against the library), with the textures' shapes the passes read."""
+    from brdfz.gpu import emit
+
+    folder, d = exports["essl"]
+    w = d["webgl2"]
+    for name in [w["vertex"]] + [p["file"] for p in w["passes"]]:
+        entry = name.rsplit(".", 1)[0]
+        assert (folder / name).read_bytes() == emit(entry, "essl")
+        assert (folder / name).read_text().startswith("#version 300 es") and name in d["files"]
+    material, descs = w["textures"]["material"], w["textures"]["descriptors"]
+    words = (folder / "material.bin").stat().st_size // 4
+    assert material["width"] * (material["height"] - 1) < words <= material["width"] * material["height"]
+    assert descs["width"] * 4 == d["buffers"][1]["stride"] and descs["height"] == d["buffers"][1]["count"]
+    for uniform in (material["uniform"], descs["uniform"], *w["inputs"]):
+        assert f"usampler2D {uniform};" in (folder / "webgl_eval.frag").read_text() or \
+               f"sampler2D {uniform};" in (folder / "webgl_eval.frag").read_text(), uniform
+    assert "## WebGL2" in (folder / "INTEGRATION.md").read_text()
+    assert "webgl2" not in exports["glsl"][1]
+
+
 def test_slang_export_is_the_source(exports):
     from brdfz.gpu import slang
 

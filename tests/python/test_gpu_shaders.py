@@ -1,6 +1,6 @@
 """The GPU shaders (bindings/gpu/shaders, through brdfz.gpu) against the C++ library on every backend
 that starts here (wgpu: Mesa's lavapipe, Vulkan; gl: Mesa's llvmpipe, OpenGL 4.5 through EGL, where
-there is no GPU): eval and pdf within 1e-4 of the library on float32 direction pairs, every GPU draw's
+there is no GPU; webgl: WebGL2 fragment shaders in headless Chromium, SwiftShader): eval and pdf within 1e-4 of the library on float32 direction pairs, every GPU draw's
 pdf and weight equal to the same backend's pdf and eval, and the library's draw for the same u, on
 compact representations of a real RGL file of every kind the shaders evaluate (tables of each dtype
 and symmetry, svd and nmf factors, lobe mixtures, φh stacks) with their samplers."""
@@ -32,7 +32,7 @@ SPECS = {
 }
 
 
-@pytest.fixture(scope="module", params=["wgpu", "gl"])
+@pytest.fixture(scope="module", params=["wgpu", "gl", "webgl"])
 def gpu(request):
     import_brdfz()
     if not RGL.exists():
@@ -105,6 +105,17 @@ def test_command_line(gpu, exported, tmp_path):
     brdfz.export(brdfz.load(RGL), model, repr="analytic:blinn_phong,starts=1")
     refused = subprocess.run([sys.executable, "-m", "brdfz.gpu", "check", str(model)], capture_output=True, text=True, timeout=120)
     assert refused.returncode == 2 and "have no 'blinn_phong' lobe" in refused.stderr
+
+
+def test_webgl_reports_console_errors(gpu, exported):
+    """What the page logs as an error fails the next call (WebGL errors fail the call itself: webgl.js)."""
+    if gpu.name != "webgl":
+        pytest.skip("the webgl backend's page")
+    from brdfz.gpu import Layout
+
+    gpu.page.evaluate("console.error('an error in the page')")
+    with pytest.raises(RuntimeError, match="an error in the page"):
+        gpu.bind(Layout(exported["nmf"]))
 
 
 @pytest.mark.parametrize("theta_o", [30.0, 75.0])

@@ -1,14 +1,15 @@
 """Every shading language the one shader source (bindings/gpu/shaders) is translated to, compiled by a
 compiler that installs here: GLSL by glslangValidator (Vulkan), HLSL by glslang's HLSL front end, both
-then checked by spirv-val; GLSL ES 3.10 by glslangValidator; CUDA by NVRTC (the nvidia-cuda-nvrtc
-wheel) to PTX. WGSL and GLSL run in
-test_gpu_shaders.py. Metal has no compiler off macOS, and Debian 12's SPIRV-Tools predate the source
+then checked by spirv-val; GLSL ES (3.10 compute kernels; 3.00 for WebGL2's entry points,
+webgl.slang) by glslangValidator; CUDA by NVRTC (the nvidia-cuda-nvrtc wheel) to PTX. WGSL, GLSL and
+GLSL ES 3.00 run in test_gpu_shaders.py. Metal has no compiler off macOS, and Debian 12's SPIRV-Tools predate the source
 language Slang writes into its own SPIR-V: those two are only what Slang itself accepts."""
 
 import ctypes
 import glob
 import importlib.util
 import os
+import re
 import shutil
 import subprocess
 
@@ -17,6 +18,12 @@ import pytest
 from conftest import import_brdfz
 
 ENTRIES = ["brdfz_eval_kernel", "check_rounding", "brdfz_pdf_kernel", "brdfz_sample_kernel"]
+
+
+def entries(target):
+    from brdfz.gpu.targets import WEBGL_ENTRIES
+
+    return ENTRIES + list(WEBGL_ENTRIES) if target == "essl" else ENTRIES
 
 
 @pytest.fixture(scope="module")
@@ -40,7 +47,7 @@ def tool(name):
 
 @pytest.mark.parametrize("target", ["wgsl", "glsl", "hlsl", "metal", "cuda", "spirv", "essl"])
 def test_every_target_is_emitted(compile_entry, target):
-    for entry in ENTRIES:
+    for entry in entries(target):
         code = compile_entry(entry, target)
         if target == "spirv":
             assert code[:4] == bytes.fromhex("03022307"), entry  # SPIR-V's magic number, little-endian
@@ -50,13 +57,23 @@ def test_every_target_is_emitted(compile_entry, target):
 
 
 def test_essl_compiles(compile_entry, tmp_path):
+    """GLSL ES 3.10 compute kernels (OpenGL ES 3.1), and WebGL2's GLSL ES 3.00 vertex and fragment entry
+    points (webgl.slang)."""
+    from brdfz.gpu.targets import WEBGL_ENTRIES
+
     glslang = tool("glslangValidator")
-    for entry in ENTRIES:
-        source = tmp_path / f"{entry}.comp"
+    for entry, stage in {**dict.fromkeys(ENTRIES, "compute"), **WEBGL_ENTRIES}.items():
+        source = tmp_path / f"{entry}.{ {'compute': 'comp', 'vertex': 'vert', 'fragment': 'frag'}[stage] }"
         source.write_bytes(compile_entry(entry, "essl"))
-        assert source.read_text().startswith("#version 310 es")
+        text = source.read_text()
+        assert text.startswith("#version 310 es" if stage == "compute" else "#version 300 es"), entry
         r = subprocess.run([glslang, str(source)], capture_output=True, text=True)
         assert r.returncode == 0, r.stdout + r.stderr
+        # Fragment shaders' float defaults to mediump, which SwiftShader computes in float32 but a
+        # phone's GPU need not: every float value the shaders declare is highp.
+        if stage == "fragment":
+            loose = [line for line in text.splitlines() if re.search(r"\b(float|vec[234]|u?sampler2D)\s+\w", line) and "highp" not in line]
+            assert not loose, (entry, loose[:5])
 
 
 @pytest.mark.parametrize("target", ["glsl", "hlsl"])

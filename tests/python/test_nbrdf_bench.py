@@ -82,3 +82,28 @@ def test_the_symmetry_none_candidates(nbrdf):
     assert over_directions(small) < over_directions(brdfz.compress(ref, "bivariate:res=32x32,dtype=u8log"))
     assert over_directions(medium) < over_directions(brdfz.compress(ref, "svd:rank=6,space=cos,colour=shared,res=90x32x16"))
     assert over_directions(medium) < 0.02
+
+
+def test_the_sized_rows(tmp_path):
+    """--sized: --auto --max-bytes at the network's bytes picks a candidate no larger, the most accurate
+    of those over directions, and the row says which half of the files it is in."""
+    if not (WEIGHTS.exists() and FILE.exists()):
+        pytest.skip("../shared/data/rgl or rgl-nbrdf is missing")
+    out = tmp_path / "sized.csv"
+    env = dict(os.environ, PYTHONPATH=str(pathlib.Path(brdfz.__file__).resolve().parents[1]))
+    run = subprocess.run([sys.executable, str(REPO / "bench" / "nbrdf.py"), "--sized", "--files", str(FILE),
+                          "--directions", "16384", "--threads", "2", "--csv", str(out)], capture_output=True, text=True,
+                         env=env)
+    assert run.returncode == 0, run.stderr
+    (r,) = list(csv.DictReader(out.open()))
+    assert r["file"] == "paper_white" and r["half"] == "tune"
+    assert int(r["sized_bytes"]) <= int(r["nbrdf_bytes"]) == 2700
+    ref = brdfz.load(FILE)
+    # No default candidate within the size is more accurate over the same pairs.
+    trials = [brdfz.trial(ref, c, measure_speed=False, over="directions", directions=16384)
+              for c in brdfz.default_candidates()[:4]]
+    errors = {t.spec: t.metrics.cos_rmse_rel.mean for t in trials if t.bytes <= 2700}
+    assert len(errors) == 3
+    assert r["sized_spec"] == min(errors, key=errors.get)
+    assert float(r["sized_dirs"]) == pytest.approx(errors[r["sized_spec"]], rel=1e-9)
+    assert "validate: --auto --max-bytes" in run.stdout

@@ -49,6 +49,34 @@ def test_auto_equals_cli(cli, demo_table, demo, tmp_path):
     assert isinstance(chosen, brdfz.Brdf) and chosen.nbytes == expected["bytes"]
 
 
+def test_size_budget_equals_cli(cli, demo_table, demo, tmp_path):
+    """--max-bytes: the most accurate candidate within the size; with --max-error too, the smallest within
+    both; the JSON keeps max_error (null without one) beside max_bytes."""
+    sizes = [brdfz.trial(demo, c, measure_speed=False).bytes for c in CANDIDATES]
+    budget = sizes[1]
+    status, expected = cli_auto(cli, demo_table, tmp_path, "--max-bytes", budget, "--metric", "cos")
+    assert status == 0 and expected["max_error"] is None and expected["max_bytes"] == budget
+    s = brdfz.compress(demo, auto=True, max_bytes=budget, metric="cos", candidates=CANDIDATES, report=True)
+    # The richest within the size is the most accurate here; the third is tried, found larger, and ends it.
+    assert s.candidates[s.chosen].spec == expected["chosen"] == CANDIDATES[1]
+    assert_same_candidates(s, expected["candidates"])
+    assert "> size budget" in s.candidates[2].reason and s.brdf.nbytes <= budget
+    fractions = []
+    brdfz.compress(demo, auto=True, max_bytes=budget, metric="cos", candidates=CANDIDATES, progress=fractions.append)
+    assert fractions == [pytest.approx(1 / 3), pytest.approx(2 / 3), 1.0]  # an accepted candidate does not end it
+    # Both: the first within the error (cos about 1.3, 0.20, 0.045) that fits.
+    both = brdfz.compress(demo, auto=True, max_error=0.5, max_bytes=sizes[2], metric="cos", candidates=CANDIDATES,
+                          report=True)
+    assert both.candidates[both.chosen].spec == CANDIDATES[1] and len(both.candidates) == 2
+    status, none = cli_auto(cli, demo_table, tmp_path, "--max-bytes", sizes[1], "--max-error", 0.1, "--metric", "cos")
+    assert status == 2 and none["chosen"] == ""
+    with pytest.raises(ValueError, match=f"no candidate meets the budget 0.1 in cos, {sizes[1]} bytes"):
+        brdfz.compress(demo, auto=True, max_error=0.1, max_bytes=sizes[1], metric="cos", candidates=CANDIDATES)
+    for bad in (0, -5, 2.5):
+        with pytest.raises(ValueError, match="max_bytes"):
+            brdfz.compress(demo, auto=True, max_bytes=bad)
+
+
 def test_scene_dict_equals_scene_file(cli, demo_table, demo, tmp_path):
     path = tmp_path / "spot.json"
     path.write_text(json.dumps({"format": "brdfz-scene", "version": 1, **SCENE}))

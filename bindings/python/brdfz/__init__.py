@@ -194,7 +194,7 @@ def trial(brdf: Brdf, spec: str, *, measure_speed: bool = True, max_theta: float
                        directions=directions, seed=seed, progress=_hook(progress, "compressing"))
 
 
-def _candidate_hook(progress: Progress) -> Optional[Callable[[Candidate, int, int], object]]:
+def _candidate_hook(progress: Progress, done_on_accept: bool = True) -> Optional[Callable[[Candidate, int, int], object]]:
     if progress is None or progress is False:
         return None
     if progress is True:
@@ -204,12 +204,14 @@ def _candidate_hook(progress: Progress) -> Optional[Callable[[Candidate, int, in
             sys.stderr.flush()
         return line
     if callable(progress):
-        return lambda c, index, total: progress(1.0 if c.accepted else (index + 1) / total)
+        # An accepted candidate ends the search only under an error budget; under a size budget alone it
+        # is the best so far.
+        return lambda c, index, total: progress(1.0 if c.accepted and done_on_accept else (index + 1) / total)
     raise ValueError("progress must be True, False, None or a callable taking the fraction done")
 
 
 def compress(brdf: Brdf, spec: Optional[str] = None, *, auto: bool = False, max_error: Optional[float] = None,
-             metric: str = "log", scene: Union[Path, Mapping, Scene, None] = None,
+             max_bytes: Optional[int] = None, metric: str = "log", scene: Union[Path, Mapping, Scene, None] = None,
              candidates: Optional[Sequence[str]] = None, over: str = "grid", directions: int = 1 << 18,
              seed: int = 1, report: bool = False, threads: int = 0, progress: Progress = None):
     """Builds the representation `spec` names, as ``brdfz compress`` spells it ("tabular:res=45x45x90",
@@ -220,26 +222,33 @@ def compress(brdf: Brdf, spec: Optional[str] = None, *, auto: bool = False, max_
     from cheapest to richest and returns the first, so the smallest, whose error in `metric` ("log":
     log_rmse, "cos": cos_rmse_rel, "image": relative pixel RMSE; under `scene` when given, a scene
     file or dict) is at most `max_error`, the errors without a scene taken `over` the grid or over
-    direction pairs (as in metrics()); report=True returns the :class:`Selection` instead, every
+    direction pairs (as in metrics()). With `max_bytes` (``--max-bytes``) alone it returns the most
+    accurate candidate of at most that many bytes; with both, the smallest within both. report=True returns the :class:`Selection` instead, every
     candidate with its bytes, error, eval_rate, build_seconds and why it was rejected. No candidate
     within the budget is a ValueError (its ``selection`` attribute holds the report). progress=True
     prints a line per candidate."""
     if not auto:
         if spec is None:
-            raise ValueError("compress: give a spec, or auto=True and max_error")
+            raise ValueError("compress: give a spec, or auto=True with max_error, max_bytes or both")
         built = _core.compress(brdf, spec, threads=threads, progress=_hook(progress, "compressing"))
         return built if report else built.brdf
     if spec is not None:
         raise ValueError("compress: give a spec or auto=True, not both")
-    if max_error is None or not (math.isfinite(max_error) and max_error > 0):
-        raise ValueError("compress(auto=True): give max_error, a finite number > 0")
+    if max_error is None and max_bytes is None:
+        raise ValueError("compress(auto=True): give max_error, max_bytes or both")
+    if max_error is not None and not (math.isfinite(max_error) and max_error > 0):
+        raise ValueError("compress(auto=True): max_error must be a finite number > 0")
+    if max_bytes is not None and not (isinstance(max_bytes, int) and max_bytes >= 1):
+        raise ValueError(f"compress(auto=True): max_bytes must be an integer >= 1, not {max_bytes!r}")
     selection = _core.select_representation(
-        brdf, max_error, metric=metric, scene=None if scene is None else read_scene(scene),
+        brdf, max_error, max_bytes=max_bytes, metric=metric, scene=None if scene is None else read_scene(scene),
         candidates=list(candidates or []), threads=threads, over=over, directions=directions, seed=seed,
-        on_candidate=_candidate_hook(progress))
+        on_candidate=_candidate_hook(progress, done_on_accept=max_error is not None))
     if selection.chosen < 0:
         tried = "; ".join(f"{c.spec}: {c.reason}" for c in selection.candidates)
-        error = ValueError(f"compress(auto=True): no candidate meets the budget {max_error:g} in {metric} ({tried})")
+        budget = ", ".join(([f"{max_error:g} in {metric}"] if max_error is not None else []) +
+                           ([f"{max_bytes} bytes"] if max_bytes is not None else []))
+        error = ValueError(f"compress(auto=True): no candidate meets the budget {budget} ({tried})")
         error.selection = selection
         raise error
     return selection if report else selection.brdf

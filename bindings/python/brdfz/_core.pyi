@@ -472,9 +472,9 @@ def save(brdf: Brdf, path: os.PathLike | str | bytes, *, res: tuple[typing.Suppo
     """
     writes atomically (format from the extension unless given); returns the written bins' counts. .brdfz keeps provenance: build_spec (the compress() spec), source (the file it came from: name, format and SHA-256) and source_metrics (its metrics against that file)
     """
-def select_representation(brdf: Brdf, max_error: typing.SupportsFloat | typing.SupportsIndex, *, metric: str = 'log', scene: Scene | None = None, candidates: collections.abc.Sequence[str] = [], measure_speed: bool = True, threads: typing.SupportsInt | typing.SupportsIndex = 0, over: str = 'grid', directions: typing.SupportsInt | typing.SupportsIndex = 262144, seed: typing.SupportsInt | typing.SupportsIndex = 1, on_candidate: typing.Any = None) -> Selection:
+def select_representation(brdf: Brdf, max_error: typing.SupportsFloat | typing.SupportsIndex | None = None, *, max_bytes: typing.SupportsInt | typing.SupportsIndex | None = None, metric: str = 'log', scene: Scene | None = None, candidates: collections.abc.Sequence[str] = [], measure_speed: bool = True, threads: typing.SupportsInt | typing.SupportsIndex = 0, over: str = 'grid', directions: typing.SupportsInt | typing.SupportsIndex = 262144, seed: typing.SupportsInt | typing.SupportsIndex = 1, on_candidate: typing.Any = None) -> Selection:
     """
-    the smallest candidate within the budget (select.h); on_candidate(candidate, index, total) after each
+    by budget (select.h): the smallest candidate within max_error, the most accurate within max_bytes, or the smallest within both; on_candidate(candidate, index, total) after each
     """
 def simd() -> str:
     """

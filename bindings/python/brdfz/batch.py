@@ -652,6 +652,82 @@ def render_all(engine: Engine, out: pathlib.Path, rows: Sequence[Row], named: Di
     return sorted(done)
 
 
+VIEWS = ("polar", "slices", "compare")
+
+
+def views_task(name: str, path: str, pick: Optional[Row], output: Optional[str], folder: str) -> List[str]:
+    """One material's views (brdfz.plot) into folder/<name>_{polar,slices,compare}.png: its incidence-plane
+    polar plot and θh×θd image beside those of `pick` (a sweep row: the smallest setting within 2 %, else
+    5 %), and pick's relative error in both; without a pick, the material alone. Written atomically."""
+    import matplotlib.pyplot as plt
+
+    from brdfz import plot
+
+    ref = brdfz.load(path)
+    items = {name: ref}
+    if pick:
+        items[f"{pick['spec']} ({int(report.value(pick, 'bytes')):,} B)"] = brdfz.load(output) if output else \
+            brdfz.compress(ref, pick["spec"])
+    figures = {"polar": lambda: plot.polar(items, theta_i=(0, 30, 60)),
+               "slices": lambda: plot.theta_h_theta_d(items)}
+    if pick:
+        figures["compare"] = lambda: _side_by_side(plot.polar(items, theta_i=(30, 60), error="relative"),
+                                                   plot.theta_h_theta_d(items, error="relative"))
+    written = []
+    for kind, draw in figures.items():
+        target = pathlib.Path(folder) / f"{name}_{kind}.png"
+        tmp = target.with_name(f".{target.stem}.{os.getpid()}.tmp.png")
+        fig = draw()
+        fig.savefig(tmp, dpi=80)
+        plt.close(fig)
+        os.replace(tmp, target)
+        written.append(str(target))
+    return written
+
+
+def _side_by_side(*figures):
+    """The figures' images in one figure, left to right (each drawn by brdfz.plot at its own size)."""
+    import matplotlib.pyplot as plt
+    import numpy as np
+
+    images = []
+    for fig in figures:
+        fig.canvas.draw()
+        images.append(np.asarray(fig.canvas.buffer_rgba()))
+        plt.close(fig)
+    height = max(i.shape[0] for i in images)
+    width = sum(i.shape[1] for i in images)
+    out = plt.figure(figsize=(width / 100, height / 100), dpi=100)
+    x = 0
+    for image in images:
+        ax = out.add_axes([x / width, 1 - image.shape[0] / height, image.shape[1] / width, image.shape[0] / height])
+        ax.imshow(image)
+        ax.axis("off")
+        x += image.shape[1]
+    return out
+
+
+def views_all(engine: Engine, out: pathlib.Path, rows: Sequence[Row], named: Dict[str, pathlib.Path]) -> List[str]:
+    """Each material's views (views_task) into out/views/, one task per material; returns the image paths
+    relative to `out` that were written."""
+    (out / "views").mkdir(exist_ok=True)
+    jobs = []
+    for name, mine in report.by_material(rows).items():
+        if name not in named:
+            continue
+        pick = report.smallest_within(mine, 0.02) or report.smallest_within(mine, 0.05)
+        output = str(out / pick["output"]) if pick and pick.get("output") else None
+        jobs.append(Job(views_task, (name, str(named[name]), pick, output, str(out / "views")), name,
+                        estimate_memory(named[name].stat().st_size, "")))
+    done = []
+    for job, result, error in engine.map(jobs, "views"):
+        if error:
+            print(f"views: {job.label}: {error}", file=sys.stderr)
+        else:
+            done += [str(pathlib.Path(p).relative_to(out)) for p in result]
+    return sorted(done)
+
+
 # ---------------------------------------------------------------------------------------------- main
 
 def engine_arguments(p: argparse.ArgumentParser) -> None:

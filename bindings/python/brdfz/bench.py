@@ -19,6 +19,10 @@ what is done, --force rebuilds), and:
     speed_vs_error.png           eval speed vs cos_rmse_rel, Pareto front (fast and accurate) marked
     renders/<material>.png       a sphere under a fixed light and sky: reference, the Pareto-optimal
                                  settings and their error images (one colour scale)
+    views/<material>_polar.png, _slices.png, _compare.png
+                                 brdfz.plot's incidence-plane polar plots and θh×θd images of the material
+                                 and its smallest setting within 2 % (else 5 %), and that setting's
+                                 relative error in both (not drawn with --render-size 0)
     auto.csv, auto_size_vs_error.png, auto_speed_vs_error.png
                                  brdfz.compress(auto=True, metric="cos") at each budget, the chosen
                                  representations drawn over each method's Pareto front
@@ -196,6 +200,7 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
             report.write_csv([sweep_row(r) for r in rows], out / "sweep.csv",
                              COLUMNS + (DIRECTIONS_COLUMNS if report.has_directions(rows) else []))
             renders = batch.render_all(engine, out, rows, named, size, 32 if args.quick else 128) if size > 0 else []
+            views = batch.views_all(engine, out, rows, named) if size > 0 else []
             materials = {n: f for n, f in named.items() if n in {r["material"] for r in rows}}
             auto = auto_selection(engine, materials, budgets, args.candidates) if budgets and materials else []
     except KeyboardInterrupt:
@@ -205,13 +210,15 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
         report.write_csv(auto, out / "auto.csv", AUTO_COLUMNS)
     charts = report.write_charts(out, rows, auto)
     summary = report.write_summary(out, "brdfz compression benchmark", rows, charts, source=source, table="sweep.csv",
-                                   renders=renders, auto=auto,
+                                   renders=renders, views=views, auto=auto,
                                    auto_heading="Budget-driven selection (`brdfz.compress(auto=True, metric=\"cos\")`)")
     print(f"bench: {len(rows)} rows in {time.monotonic() - started:.0f} s")
     print(f"  table   {out / 'sweep.csv'}")
     print(f"  charts  {', '.join(str(out / c) for c in charts)}")
     if renders:
         print(f"  renders {out / 'renders'}/ ({len(renders)} materials)")
+    if views:
+        print(f"  views   {out / 'views'}/ ({len(views)} images)")
     print(f"  summary {summary}")
     return 0
 

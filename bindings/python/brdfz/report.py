@@ -488,11 +488,12 @@ def _smallest_cells(rows: Sequence[Row], limit: float) -> List[str]:
 
 
 def write_summary(out: pathlib.Path, title: str, rows: Sequence[Row], charts: Sequence[str], *,
-                  source: str, table: str, renders: Sequence[str] = (), auto: Sequence[Row] = (),
-                  auto_heading: str = "") -> pathlib.Path:
+                  source: str, table: str, renders: Sequence[str] = (), views: Sequence[str] = (),
+                  auto: Sequence[Row] = (), auto_heading: str = "") -> pathlib.Path:
     """out/summary.md: the smallest setting within 2 % and 5 %, every chart, each material's Pareto
     front, eval speed per method, the choices at the budgets (`auto`, under `auto_heading`), the
-    renders and the failed tasks. `table` names the file with every row."""
+    renders, the views (polar plots, θh×θd images, comparisons) and the failed tasks. `table` names the
+    file with every row."""
     mats = by_material(rows)
     directions = has_directions(rows)
     md = [f"# {title}\n",
@@ -531,6 +532,10 @@ def write_summary(out: pathlib.Path, title: str, rows: Sequence[Row], charts: Se
     if renders:
         md.append("## Renders (reference, Pareto-optimal settings, error on one scale)\n")
         md += [f"![{r}]({r})\n" for r in renders]
+    if views:
+        md.append("## Views (the material and its smallest setting within 2 % or 5 %: polar plots, θh×θd images, "
+                  "relative error)\n")
+        md += [f"![{v}]({v})\n" for v in views]
     failed = [r for r in rows if not ok(r)]
     if failed:
         md += ["## Failed\n",

@@ -38,16 +38,21 @@ struct Trial {
 Trial trial(const Brdf& source, const std::string& spec, const TrialOptions& options = {});
 Trial trial(const MeasurementSet& source, const std::string& spec, const TrialOptions& options = {});
 
-// Budget-driven selection: the smallest candidate whose error meets the budget.
+// Budget-driven selection, by an error budget, a size budget or both:
+//   max_error alone: the smallest candidate whose error meets it;
+//   max_bytes alone: the most accurate candidate of at most that many bytes (the first of equal error);
+//   both:            the smallest candidate within both.
 //
 // The error of a candidate, by metric:
 //   without a scene: cos = cos_rmse_rel (mean of channels), log = log_rmse, image = scene_error on
 //                    default_scene();
 //   with a scene:    scene_error(metric) under that scene (scene.h).
 // Candidates are tried in the order given — cheapest (fewest bytes) first — and the search stops at
-// the first that meets the budget, so the order must be by size; default_candidates() is.
+// the first that meets an error budget, or at the first larger than the size budget, so the order must
+// be by size; default_candidates() is.
 struct SelectOptions {
-    double max_error = 0.05;
+    std::optional<double> max_error = 0.05;
+    std::optional<std::uint64_t> max_bytes;
     SceneMetric metric = SceneMetric::Log;
     std::optional<Scene> scene;
     std::vector<std::string> candidates;  // empty: default_candidates()
@@ -88,7 +93,8 @@ std::string sweep_csv_row(const std::string& material, const std::string& format
 // rank, compact tables, the full-resolution table. Only registered kinds, as benchmark_specs().
 std::vector<std::string> default_candidates();
 
-// ValueError for a budget that is not finite and > 0, or an empty candidate list; SpecError for a
+// ValueError for no budget, an error budget that is not finite and > 0, a size budget of 0, or an
+// empty candidate list; SpecError for a
 // misspelt candidate: before anything is built when check_spec() finds it (an unknown kind or key),
 // else when its builder refuses a value. A candidate that fails to build otherwise is rejected with
 // its error message as the reason, not thrown.

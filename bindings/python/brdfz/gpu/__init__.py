@@ -1,7 +1,7 @@
 """brdfz on the GPU: the shaders of bindings/gpu/shaders (one Slang source, translated to each shading
 language by the Slang compiler) and their check against the C++ library on software or real GPUs.
 
-    python -m brdfz.gpu check FILE.brdfzrt [--backend wgpu|gl] [--pairs N]
+    python -m brdfz.gpu check FILE.brdfzrt [--backend wgpu|gl|webgl] [--pairs N]
     python -m brdfz.gpu export IN -o DIR --target glsl|essl|hlsl|wgsl|cuda|metal|slang [--repr SPEC]
 """
 

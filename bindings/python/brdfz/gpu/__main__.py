@@ -1,4 +1,4 @@
-"""python -m brdfz.gpu check FILE [--backend wgpu|gl] [--pairs N]: the shaders against the C++
+"""python -m brdfz.gpu check FILE [--backend wgpu|gl|webgl] [--pairs N]: the shaders against the C++
 library on a .brdfzrt material (brdfz export IN -o FILE); prints the worst relative errors, exit status 1
 above tolerance, 2 when the backend cannot start.
 

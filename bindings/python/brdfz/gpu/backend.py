@@ -15,6 +15,7 @@ class BackendUnavailable(RuntimeError):
 class Backend:
     name = "?"
     adapter = "?"  # the device it runs on, in words
+    batch = WORKGROUP * MAX_GROUPS  # the most items a _dispatch
 
     def bind(self, layout):
         """Uploads the material (a Layout) that the next calls evaluate; returns self."""
@@ -28,9 +29,8 @@ class Backend:
         n = len(a) // 3
         per_b = len(b) // n if n else 0
         out = np.empty(n * width, np.float32)
-        step = WORKGROUP * MAX_GROUPS
-        for lo in range(0, n, step):
-            hi = min(n, lo + step)
+        for lo in range(0, n, self.batch):
+            hi = min(n, lo + self.batch)
             out[width * lo:width * hi] = self._dispatch(entry, np.ascontiguousarray(a[3 * lo:3 * hi], np.float32),
                                                         np.ascontiguousarray(b[per_b * lo:per_b * hi], np.float32), hi - lo, width)
         return out

@@ -75,7 +75,7 @@ def excused(bad, ref_call, gpu_value, a, b, tol, rounding=None, seed=2):
     return ok
 
 
-BACKENDS = ("wgpu", "gl")
+BACKENDS = ("wgpu", "gl", "webgl")
 
 
 def backend(name="wgpu"):
@@ -88,6 +88,10 @@ def backend(name="wgpu"):
         from .gl_backend import GlBackend
 
         return GlBackend()
+    if name == "webgl":
+        from .webgl_backend import WebglBackend
+
+        return WebglBackend()
     raise ValueError(f"unknown backend '{name}' (one of {', '.join(BACKENDS)})")
 
 

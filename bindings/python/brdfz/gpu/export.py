@@ -5,7 +5,9 @@
   descriptors.bin   binding 1: BrdfzDesc records (bindings/gpu/shaders/desc.slang), the root's first
   the shader module the target names: the kernels brdfz_eval_kernel, brdfz_pdf_kernel and
                     brdfz_sample_kernel (kernels.slang), one file each; for `slang` the source itself,
-                    whose functions brdfz_eval, brdfz_pdf and brdfz_sample a renderer's Slang code calls
+                    whose functions brdfz_eval, brdfz_pdf and brdfz_sample a renderer's Slang code calls;
+                    for `essl` also WebGL2's render passes (webgl.slang: GLSL ES 3.00, which has no
+                    compute shaders), which read the same two files as R32UI textures
   brdfz.json        the descriptor: bindings per target, formats, sizes, the spec and its measured error
   INTEGRATION.md    how a renderer in the target's API binds the buffers and calls the kernels
 
@@ -24,7 +26,7 @@ import numpy as np
 
 from . import slang
 from .layout import Layout, desc_dtype
-from .targets import emit
+from .targets import WEBGL_ENTRIES, emit
 
 KERNELS = ("brdfz_eval_kernel", "brdfz_pdf_kernel", "brdfz_sample_kernel")
 WORKGROUP = (64, 1, 1)
@@ -36,6 +38,12 @@ IO = {
     "brdfz_eval_kernel": ("wi: float[3n]", "wo: float[3n]", "f: float[3n], RGB, without the cosine"),
     "brdfz_pdf_kernel": ("wo: float[3n]", "wi: float[3n]", "pdf: float[n], per unit solid angle of wi"),
     "brdfz_sample_kernel": ("wo: float[3n]", "u: float[2n] in [0, 1)", "float[7n]: wi (3), pdf, weight = f·cosθi/pdf (3)"),
+}
+# WebGL2's passes (webgl.slang) a renderer runs: one pair or draw per pixel; webgl_rounding is the checks'.
+WEBGL_PASSES = {
+    "webgl_eval": ("wi", "wo", "RGBA32F: f (rgb)"),
+    "webgl_pdf": ("wo", "wi", "RGBA32F: pdf (r)"),
+    "webgl_sample": ("wo", "u (xy)", "two RGBA32F targets: wi and pdf (rgba), weight (rgb)"),
 }
 NAMES = {"brdfz_data": "material", "brdfz_desc": "descriptors", "brdfz_in_a": "a", "brdfz_in_b": "b",
          "brdfz_out": "out", "brdfz_count": "count"}
@@ -67,6 +75,31 @@ def _slots(target: str, code: str) -> dict:
         name, slot = (m.group(2), m.group(1)) if m.group(1)[0].isdigit() else (m.group(1), m.group(2))
         found[name] = slot if not slot.isdigit() else int(slot)
     return found
+
+
+def _webgl(folder: Path, layout, dtype) -> dict:
+    """WebGL2's render passes written into `folder`, and how their textures are laid out."""
+    width = int(re.search(r"#define BRDFZ_TEXTURE_WIDTH (\d+)", (slang.SHADERS / "webgl.slang").read_text()).group(1))
+    files = {}
+    for entry in ("webgl_vertex", *WEBGL_PASSES):
+        name = f"{entry}.{'vert' if WEBGL_ENTRIES[entry] == 'vertex' else 'frag'}"
+        (folder / name).write_bytes(emit(entry, "essl"))
+        files[entry] = name
+    words = len(layout.data) // 4
+    return {
+        "version": "GLSL ES 3.00",
+        "vertex": files["webgl_vertex"],
+        "vertex_input": "attribute 0 (corner_0): vec2 corners of a triangle covering the viewport, e.g. (-1,-1), (3,-1), (-1,3)",
+        "textures": {
+            "material": {"uniform": "brdfz_data_0", "file": "material.bin", "format": "R32UI", "width": width,
+                         "height": -(-words // width), "note": "the file's 32-bit words row by row, the last row zero-padded"},
+            "descriptors": {"uniform": "brdfz_desc_words_0", "file": "descriptors.bin", "format": "R32UI",
+                            "width": dtype.itemsize // 4, "height": int(len(layout.desc)), "note": "one descriptor per row"},
+        },
+        "inputs": {"pair_a_0": "RGBA32F texture, one direction (xyz) per texel, the same texel as the pixel drawn",
+                   "pair_b_0": "RGBA32F texture, likewise"},
+        "passes": [{"entry": e, "file": files[e], "pair_a": a, "pair_b": b, "out": o} for e, (a, b, o) in WEBGL_PASSES.items()],
+    }
 
 
 def _measured_error(path, brdf, reference, pairs: int):
@@ -119,7 +152,19 @@ bindings above. OpenGL: `glShaderSource` + `glCompileShader` as `GL_COMPUTE_SHAD
 
 As OpenGL: each `.comp` file is a compute shader for `glCreateShader(GL_COMPUTE_SHADER)`; bind the
 buffers with `glBindBufferBase(GL_SHADER_STORAGE_BUFFER, binding, buffer)` and call
-`glDispatchCompute(ceil(n / 64), 1, 1)`. WebGL2 has no compute shaders or storage buffers.
+`glDispatchCompute(ceil(n / 64), 1, 1)`.
+
+## WebGL2 (GLSL ES 3.00 render passes)
+
+WebGL2 has no compute shaders or storage buffers, so `webgl_eval.frag`, `webgl_pdf.frag` and
+`webgl_sample.frag` compute one pair or draw per pixel, each linked with `webgl_vertex.vert`. Upload
+`material.bin` and `descriptors.bin` as `R32UI` textures (`texImage2D(TEXTURE_2D, 0, R32UI, width,
+height, 0, RED_INTEGER, UNSIGNED_INT, words)`) with the widths and heights `brdfz.json`'s `webgl2.textures`
+gives (the material's last row zero-padded), `NEAREST` filtering, and set the samplers `brdfz_data_0`
+and `brdfz_desc_words_0` to their units. The inputs are `RGBA32F` textures `pair_a_0` and `pair_b_0`
+(one direction, or u in xy, per texel); render into `RGBA32F` colour attachments (the
+`EXT_color_buffer_float` extension; `webgl_sample` writes two, `drawBuffers`), a triangle covering the
+viewport from attribute 0, then `readPixels(..., RGBA, FLOAT, ...)`.
 """,
         "hlsl": """## Direct3D 12 (HLSL, compute shader model 5.0+)
 
@@ -251,6 +296,9 @@ def export(source, out_dir, target: str = "slang", *, repr=None, reference=None,
         }
         if target == "slang":
             descriptor["kernels"] = [dict(k, file="shaders/kernels.slang") for k in descriptor["kernels"]]
+        if target == "essl":
+            descriptor["webgl2"] = _webgl(tmp, layout, dtype)
+            descriptor["files"][-2:-2] = [descriptor["webgl2"]["vertex"]] + [p["file"] for p in descriptor["webgl2"]["passes"]]
         (tmp / "INTEGRATION.md").write_text(_integration(target, slots))
         (tmp / "brdfz.json").write_text(json.dumps(descriptor, indent=2, allow_nan=False) + "\n")
         for name in descriptor["files"]:
