@@ -29,6 +29,14 @@ SPECS = {
     "lobes": "analytic:lambert+ggx,starts=2",
     "lobes_conductor_sep": "analytic:lambert+ggx_conductor_sep,starts=2",
     "lobes_dielectric_aniso": "analytic:ggx_dielectric+ggx_aniso,starts=2",
+    "lobes_phong_ward": "analytic:blinn_phong+ward,starts=2",
+    "lobes_lafortune": "analytic:lambert+lafortune2,starts=2",
+}
+# Models drawn by their lobes' own samplers (sampler=lobes) rather than the compact sampler.
+LOBE_SAMPLED = {
+    "lobes_sampled_phong": "analytic:lambert+blinn_phong,starts=2,sampler=lobes",
+    "lobes_sampled_ward": "analytic:lambert+ward,starts=2,sampler=lobes",
+    "lobes_sampled_lafortune": "analytic:lafortune3,starts=2,sampler=lobes",
 }
 
 
@@ -53,7 +61,7 @@ def exported(tmp_path_factory):
     out = tmp_path_factory.mktemp("gpu")
     source = brdfz.load(RGL)
     paths = {}
-    for name, spec in SPECS.items():
+    for name, spec in {**SPECS, **LOBE_SAMPLED}.items():
         paths[name] = out / f"{name}.brdfzrt"
         brdfz.export(source, paths[name], repr=spec)
     return paths
@@ -101,10 +109,10 @@ def test_command_line(gpu, exported, tmp_path):
     assert "eval   worst relative error" in ok.stdout and "ok: worst" in ok.stdout
     # A lobe family the shaders do not have is refused with a reason, not compared.
     brdfz = import_brdfz()
-    model = tmp_path / "blinn_phong.brdfzrt"
-    brdfz.export(brdfz.load(RGL), model, repr="analytic:blinn_phong,starts=1")
+    model = tmp_path / "beckmann.brdfzrt"
+    brdfz.export(brdfz.load(RGL), model, repr="analytic:beckmann,starts=1")
     refused = subprocess.run([sys.executable, "-m", "brdfz.gpu", "check", str(model)], capture_output=True, text=True, timeout=120)
-    assert refused.returncode == 2 and "have no 'blinn_phong' lobe" in refused.stderr
+    assert refused.returncode == 2 and "have no 'beckmann' lobe" in refused.stderr
 
 
 def test_webgl_reports_console_errors(gpu, exported):
@@ -116,6 +124,38 @@ def test_webgl_reports_console_errors(gpu, exported):
     gpu.page.evaluate("console.error('an error in the page')")
     with pytest.raises(RuntimeError, match="an error in the page"):
         gpu.bind(Layout(exported["nmf"]))
+
+
+@pytest.mark.parametrize("name", LOBE_SAMPLED)
+def test_lobe_samplers(gpu, exported, name):
+    """Blinn-Phong, Ward and Lafortune lobes drawn by their own samplers: eval within the tolerance,
+    every draw's pdf and weight the backend's own, the library's draws, χ² of the draws. The pdf against
+    the library holds on all but a few pairs in 10^4: grazing pairs of nearly opposite azimuth, where
+    the density folded from below the horizon (wo plus wi mirrored, a cancelling sum) moves by 6e-4 when
+    the float input's length, 1 ± 3e-8, is normalised in double by the library and not by the shader
+    (which keeps a draw's bits); at the mirror direction that fold is an integrable spike."""
+    if gpu.name != "wgpu":
+        pytest.skip("on one backend: the shader code is the same on every backend (test_shaders_match_the_library)")
+    import numpy as np
+
+    from brdfz.gpu import TOLERANCE, Layout, check
+    from brdfz.gpu.check import chi2, relative_error
+
+    r = check(exported[name], gpu, n=PAIRS)
+    assert r["eval"]["worst"] <= TOLERANCE, r
+    assert r["pdf"]["p99"] <= TOLERANCE, r
+    s = r["sample"]
+    assert s["pdf_vs_own_pdf"] <= 1e-6 and s["weight_vs_own_eval"] <= 1e-6, r
+    assert s["same_draw"] > 0.999 and s["drawn"] > 0.99 * PAIRS, r
+    brdfz = import_brdfz()
+    lib = brdfz.load(exported[name])
+    from brdfz.gpu.check import pairs
+
+    wi, wo = pairs(PAIRS)
+    err = relative_error(gpu.bind(Layout(exported[name])).pdf(wo, wi), lib.pdf(wo.astype(np.float64), wi.astype(np.float64)))
+    assert np.mean(err > TOLERANCE) < 5e-4, np.sort(err)[-10:]
+    _, _, p = chi2(exported[name], gpu, theta_o=45.0)
+    assert p > 1e-3, p
 
 
 @pytest.mark.parametrize("theta_o", [30.0, 75.0])

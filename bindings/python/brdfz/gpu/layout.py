@@ -17,7 +17,7 @@ GPU_KINDS = (1, 2, 3, 4)
 
 # Lobe families by their id (the order of lib/runtime/include/brdfz/runtime/kernels/lobes/families.h)
 # and their parameter counts, for the families the shaders have (lobes.slang).
-LOBE_FAMILIES = {"lambert": (0, 3), "ggx": (3, 5), "ggx_dielectric": (4, 5), "ggx_conductor": (5, 10),
+LOBE_FAMILIES = {"lambert": (0, 3), "blinn_phong": (1, 4), "ward": (2, 4), "lafortune": (14, 6), "ggx": (3, 5), "ggx_dielectric": (4, 5), "ggx_conductor": (5, 10),
                  "ggx_sep": (6, 5), "ggx_dielectric_sep": (7, 5), "ggx_conductor_sep": (8, 10), "ggx_aniso": (12, 6)}
 ALBEDO_NODES = 16
 
@@ -149,12 +149,15 @@ class Layout:
         model = bytes(self._array("MODL", "u1")).decode()
         terms = []
         first = 0
-        for name in model.split("+"):
+        for term in model.split("+"):
+            # Trailing digits repeat a lobe ("lafortune3": three), as model strings allow.
+            name, repeat = re.fullmatch(r"(.*?)(\d*)", term).groups()
             if name not in LOBE_FAMILIES:
                 raise ValueError(f"{self.path}: the GPU shaders have no '{name}' lobe yet (they have {', '.join(LOBE_FAMILIES)})")
             family, count = LOBE_FAMILIES[name]
-            terms.append((family, first))
-            first += count
+            for _ in range(int(repeat or 1)):
+                terms.append((family, first))
+                first += count
         params = self._array("PRMS", "<f8")
         if len(params) != first:
             raise ValueError(f"{self.path}: PRMS does not fit the model '{model}'")
