@@ -112,7 +112,7 @@ TEST_CASE("selection keeps the cheapest candidate inside the budget and reports 
     CHECK_THROWS_AS(select_representation(source, o), ValueError);
 }
 
-TEST_CASE("a size budget keeps the most accurate candidate within it; with an error budget, the smallest within both", "[select]") {
+TEST_CASE("a size budget keeps the most accurate candidate within it, with an error budget too the smallest within both", "[select]") {
     const CoatedDiffuse source;
     SelectOptions o;
     o.metric = SceneMetric::Cos;
