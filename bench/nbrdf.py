@@ -65,17 +65,22 @@ def nbrdf_bytes(weights, name):
     return sum(weights[f"{name}/{k}"].size for k in ("W1", "b1", "W2", "b2", "W3", "b3")) * 4
 
 
+def fitted(files, names):
+    """(name, loaded file) of each file the weights have a network of; the others named on stderr."""
+    for path in files:
+        name = path.name.removesuffix("_rgb.bsdf").removesuffix(".bsdf")
+        if name not in names:
+            print(f"{name}: no Neural-BRDF fit, skipped", file=sys.stderr)
+            continue
+        yield name, brdfz.load(path)
+
+
 def sized(args, weights, names):
     """--sized: --auto --max-bytes (the network's bytes) against the network on the same samples."""
     header = ["file", "half", "nbrdf_bytes", "sized_bytes", "nbrdf_dirs", "sized_dirs", "nbrdf_grid", "sized_grid", "sized_spec"]
     print(" ".join(f"{h:>12}" for h in header[:-1]), header[-1])
     rows = []
-    for path in args.files:
-        name = path.name.removesuffix("_rgb.bsdf").removesuffix(".bsdf")
-        if name not in names:
-            print(f"{name}: no Neural-BRDF fit, skipped", file=sys.stderr)
-            continue
-        ref = brdfz.load(path)
+    for name, ref in fitted(args.files, names):
         budget = nbrdf_bytes(weights, name)
         picked = brdfz.compress(ref, auto=True, max_bytes=budget, metric="cos", over="directions",
                                 directions=args.directions, threads=args.threads, report=True)
@@ -127,12 +132,7 @@ def main():
         "auto_spec", "k16_spec"]
     first_error = header.index("nbrdf_grid")
     print(" ".join(f"{h:>12}" for h in header[:-1]), header[-1])
-    for path in args.files:
-        name = path.name.removesuffix("_rgb.bsdf").removesuffix(".bsdf")
-        if name not in names:
-            print(f"{name}: no Neural-BRDF fit, skipped", file=sys.stderr)
-            continue
-        ref = brdfz.load(path)
+    for name, ref in fitted(args.files, names):
         small = brdfz.compress(ref, args.small, threads=args.threads)
         try:
             picked = brdfz.compress(ref, auto=True, max_error=args.budget, metric="cos", over="directions",

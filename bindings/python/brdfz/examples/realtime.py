@@ -31,7 +31,7 @@ import numpy as np
 
 import brdfz
 from brdfz import report
-from brdfz.gpu import BackendUnavailable, Layout, SlangError, export, slang
+from brdfz.gpu import BackendUnavailable, Layout, SlangError, export, slang, wgpu_backend
 
 DEFAULT_REPR = "svd:rank=10,space=cos,colour=shared,res=25x20x14,dwarp=0.9,fit=lsq,symmetry=bilateral,dtype=f16"
 MIN_PSNR = 40.0
@@ -106,13 +106,7 @@ class SphereRenderer:
     includes from `shaders` (the folder holding brdfz.slang)."""
 
     def __init__(self, shaders=slang.SHADERS):
-        try:
-            import wgpu
-        except ImportError as e:
-            raise BackendUnavailable("wgpu is not installed (pip install wgpu)") from e
-        adapter = wgpu.gpu.request_adapter_sync(power_preference="high-performance")
-        if adapter is None:
-            raise BackendUnavailable("wgpu found no adapter (no GPU and no software Vulkan driver)")
+        wgpu, adapter = wgpu_backend.start()
         self.wgpu = wgpu
         self.adapter = adapter.info.get("device", "?")
         self.software = adapter.info.get("adapter_type", "") == "CPU"

@@ -7,22 +7,29 @@ from . import slang
 from .backend import ENTRIES, WORKGROUP, Backend, BackendUnavailable
 
 
+def start():
+    """(the wgpu module, its adapter): a GPU, or Mesa's lavapipe where there is none; BackendUnavailable
+    without either."""
+    try:
+        import wgpu
+    except ImportError as e:
+        raise BackendUnavailable("wgpu is not installed (pip install wgpu)") from e
+    found = wgpu.gpu.request_adapter_sync(power_preference="high-performance")
+    if found is None:
+        raise BackendUnavailable("wgpu found no adapter (no GPU and no software Vulkan driver)")
+    return wgpu, found
+
+
 class WgpuBackend(Backend):
     name = "wgpu"
 
     def __init__(self):
-        try:
-            import wgpu
-        except ImportError as e:
-            raise BackendUnavailable("wgpu is not installed (pip install wgpu)") from e
-        adapter = wgpu.gpu.request_adapter_sync(power_preference="high-performance")
-        if adapter is None:
-            raise BackendUnavailable("wgpu found no adapter (no GPU and no software Vulkan driver)")
-        self.adapter = adapter.info.get("device", "?")
+        wgpu, found = start()
+        self.adapter = found.info.get("device", "?")
         self.wgpu = wgpu
-        self.limit = adapter.limits["max-storage-buffer-binding-size"]
-        self.device = adapter.request_device_sync(
-            required_limits={"max-storage-buffer-binding-size": self.limit, "max-buffer-size": adapter.limits["max-buffer-size"]})
+        self.limit = found.limits["max-storage-buffer-binding-size"]
+        self.device = found.request_device_sync(
+            required_limits={"max-storage-buffer-binding-size": self.limit, "max-buffer-size": found.limits["max-buffer-size"]})
         read_only = {"buffer": {"type": wgpu.BufferBindingType.read_only_storage}}
         entries = [{"binding": b, "visibility": wgpu.ShaderStage.COMPUTE, **read_only} for b in (0, 1, 2, 3, 5)]
         entries.append({"binding": 4, "visibility": wgpu.ShaderStage.COMPUTE,

@@ -22,8 +22,8 @@
 
 namespace brdfz {
 
-// The defaults: weights of low variance up to grazing views within 16 KiB of tables; bench/README.md
-// names the files they were chosen on and those they are judged on.
+// The defaults keep the weights' variance low up to grazing views with tables of at most 16 KiB,
+// chosen on half of the shared files and judged on the other half (bench/README.md names both).
 struct CompactSamplerOptions {
     int slices = 12;              // view elevations, uniform in cosθo over [0°, kMaxThetaODeg], ≥ 2
     int rows = 32;                // s rows, ≥ 1
