@@ -6,7 +6,8 @@
 //   memory       heap bytes (mallinfo2) held by the loaded material after it has sampled
 //   ns/call      one call at a time and in batches of 2^16, the library's (double) against the runtime's
 //                (float32), interleaved rep by rep, as the median of the ratios library/runtime (> 1:
-//                the runtime is faster), for eval, pdf and sample
+//                the runtime is faster), for eval, pdf and sample; the *_f64 columns give the runtime's
+//                double calls the library's unit double directions, which the float calls normalise first
 //   runtime_bench [--reps N] [--spec SPEC]... FILES...
 // Prints one CSV row per (file, spec).
 #include <malloc.h>
@@ -132,7 +133,8 @@ int main(int argc, char** argv) {
     const Inputs in = inputs(n);
     std::printf("file,spec,bytes,sampler_bytes,brdfz_bytes,brdfzrt_bytes,load_ms,open_ms,first_sample_us,first_allocations,"
                 "first_threads,memory_bytes,eval_one_ns,eval_one_ratio,pdf_one_ns,pdf_one_ratio,sample_one_ns,"
-                "sample_one_ratio,eval_batch_ns,eval_batch_ratio,sample_batch_ns,sample_batch_ratio\n");
+                "sample_one_ratio,eval_batch_ns,eval_batch_ratio,sample_batch_ns,sample_batch_ratio,eval_one_f64_ns,"
+                "eval_one_f64_ratio,pdf_one_f64_ns,pdf_one_f64_ratio,sample_one_f64_ns,sample_one_f64_ratio\n");
     for (const std::string& file : files) {
         const Loaded source = load(file);
         for (const std::string& spec : specs) {
@@ -165,7 +167,8 @@ int main(int argc, char** argv) {
             std::string error;
             const rt::Material m = rt::Material::open(flat, &error);
             const Brdf& b = *c.brdf;
-            std::vector<double> r_eval, r_pdf, r_sample, r_beval, r_bsample, t_eval, t_pdf, t_sample, t_beval, t_bsample;
+            std::vector<double> r_eval, r_pdf, r_sample, r_beval, r_bsample, r_eval64, r_pdf64, r_sample64, t_eval, t_pdf,
+                t_sample, t_beval, t_bsample, t_eval64, t_pdf64, t_sample64;
             std::vector<Rgb> f(n);
             std::vector<BrdfSample> drawn(n);
             std::vector<rt::Rgb32> rf(n);
@@ -174,28 +177,38 @@ int main(int argc, char** argv) {
             for (int r = 0; r < reps; ++r) {
                 const double le = per_call([&] { for (std::size_t k = 0; k < single; ++k) sink += b.eval(in.wi[k], in.wo[k])[1]; }, single);
                 const double re = per_call([&] { for (std::size_t k = 0; k < single; ++k) sink += m.eval(in.fi[k], in.fo[k]).g; }, single);
+                const double le2 = per_call([&] { for (std::size_t k = 0; k < single; ++k) sink += b.eval(in.wi[k], in.wo[k])[1]; }, single);
+                const double re64 = per_call([&] { for (std::size_t k = 0; k < single; ++k) sink += m.eval(in.wi[k], in.wo[k])[1]; }, single);
                 const double lp = per_call([&] { for (std::size_t k = 0; k < single; ++k) sink += b.pdf(in.wo[k], in.wi[k]); }, single);
                 const double rp = per_call([&] { for (std::size_t k = 0; k < single; ++k) sink += m.pdf(in.fo[k], in.fi[k]); }, single);
+                const double lp2 = per_call([&] { for (std::size_t k = 0; k < single; ++k) sink += b.pdf(in.wo[k], in.wi[k]); }, single);
+                const double rp64 = per_call([&] { for (std::size_t k = 0; k < single; ++k) sink += m.pdf(in.wo[k], in.wi[k]); }, single);
                 const double ls = per_call([&] { for (std::size_t k = 0; k < single; ++k) sink += b.sample(in.wo[k], in.u[k][0], in.u[k][1]).pdf; }, single);
                 const double rs1 = per_call([&] { for (std::size_t k = 0; k < single; ++k) sink += m.sample(in.fo[k], in.fu[2 * k], in.fu[2 * k + 1]).pdf; }, single);
+                const double ls2 = per_call([&] { for (std::size_t k = 0; k < single; ++k) sink += b.sample(in.wo[k], in.u[k][0], in.u[k][1]).pdf; }, single);
+                const double rs64 = per_call([&] { for (std::size_t k = 0; k < single; ++k) sink += m.sample(in.wo[k], in.u[k][0], in.u[k][1]).pdf; }, single);
                 const double lbe = per_call([&] { b.eval(std::span<const Vec3>(in.wi), std::span<const Vec3>(in.wo), std::span(f)); }, n);
                 const double rbe = per_call([&] { m.eval(in.fi.data(), in.fo.data(), rf.data(), n); }, n);
                 const double lbs = per_call([&] { b.sample(std::span<const Vec3>(in.wo), std::span<const std::array<double, 2>>(in.u), std::span(drawn)); }, n);
                 const double rbs = per_call([&] { m.sample(in.fo.data(), in.fu.data(), rs.data(), n); }, n);
                 r_eval.push_back(le / re), r_pdf.push_back(lp / rp), r_sample.push_back(ls / rs1);
-                r_beval.push_back(lbe / rbe), r_bsample.push_back(lbs / rbs);
+                r_beval.push_back(lbe / rbe), r_bsample.push_back(lbs / rbs), r_eval64.push_back(le2 / re64);
+                r_pdf64.push_back(lp2 / rp64), r_sample64.push_back(ls2 / rs64);
                 t_eval.push_back(re), t_pdf.push_back(rp), t_sample.push_back(rs1), t_beval.push_back(rbe), t_bsample.push_back(rbs);
+                t_eval64.push_back(re64), t_pdf64.push_back(rp64), t_sample64.push_back(rs64);
                 sink += f[r][0] + drawn[r].pdf + rf[r].r + rs[r].pdf;
             }
             const std::string name = file.substr(file.find_last_of('/') + 1);
-            std::printf("%s,\"%s\",%zu,%zu,%ju,%ju,%.3f,%.3f,%.1f,%zu,%d,%zu,%.1f,%.2f,%.1f,%.2f,%.1f,%.2f,%.1f,%.2f,%.1f,%.2f\n",
+            std::printf("%s,\"%s\",%zu,%zu,%ju,%ju,%.3f,%.3f,%.1f,%zu,%d,%zu,%.1f,%.2f,%.1f,%.2f,%.1f,%.2f,%.1f,%.2f,%.1f,%.2f,%.1f,%.2f,%.1f,%.2f,%.1f,%.2f\n",
                         name.c_str(), spec.c_str(), b.nbytes(), sampler_bytes(*c.brdf),
                         static_cast<std::uintmax_t>(std::filesystem::file_size(stored)),
                         static_cast<std::uintmax_t>(std::filesystem::file_size(flat)), 1e3 * bench::median(load_s),
                         1e3 * bench::median(open_s), 1e6 * bench::median(first_s), first_alloc, first_threads, memory,
                         1e9 * bench::median(t_eval), bench::median(r_eval), 1e9 * bench::median(t_pdf), bench::median(r_pdf),
                         1e9 * bench::median(t_sample), bench::median(r_sample), 1e9 * bench::median(t_beval),
-                        bench::median(r_beval), 1e9 * bench::median(t_bsample), bench::median(r_bsample));
+                        bench::median(r_beval), 1e9 * bench::median(t_bsample), bench::median(r_bsample),
+                        1e9 * bench::median(t_eval64), bench::median(r_eval64), 1e9 * bench::median(t_pdf64),
+                        bench::median(r_pdf64), 1e9 * bench::median(t_sample64), bench::median(r_sample64));
             std::fprintf(stderr, "[%g]\n", sink);
             std::fflush(stdout);
         }

@@ -45,9 +45,9 @@ struct Object {
     bool half = false;
     std::array<float, 3> half_scale{};
     const float* lut = nullptr;
-    // Factorisations: float copies of float16 factors are kept in `widened`.
+    // Factorisations: the view's padded float rows and mix live in `factor_data`.
     k::FactorView factors;
-    std::vector<float> widened;
+    std::vector<float> factor_data;
     // φh stacks: slices [first, first + count) of Data::slices.
     bool bilateral = false;
     std::size_t first = 0, count = 0;
@@ -196,50 +196,59 @@ void read_factored(const Sections& s, Object& o) {
     if (p[0] != L::kLayoutHxDP && p[0] != L::kLayoutHDxP) fail(s.where(L::kFactorParams) + ": unknown layout");
     if (p[1] < L::kSpaceLinear || p[1] > L::kSpaceCbrt) fail(s.where(L::kFactorParams) + ": unknown space");
     if (p[2] != L::kColourSeparate && p[2] != L::kColourShared) fail(s.where(L::kFactorParams) + ": unknown colour");
-    f.layout = p[0], f.space = p[1], f.shared = p[2] == L::kColourShared;
+    f.layout = p[0], f.space = p[1];
+    const bool shared = p[2] == L::kColourShared;
     const std::uint64_t rows = f.layout == L::kLayoutHxDP ? o.grid.n_theta_h : std::uint64_t(o.grid.n_theta_h) * o.grid.n_theta_d;
     const std::uint64_t cols = f.layout == L::kLayoutHxDP ? std::uint64_t(o.grid.n_theta_d) * o.grid.n_phi_d : o.grid.n_phi_d;
     if (p[3] < 1 || static_cast<std::uint64_t>(p[3]) > std::min(rows, cols)) fail(s.where(L::kFactorParams) + ": rank out of range");
-    f.rank = p[3];
-    const std::uint64_t m = static_cast<std::uint64_t>(f.m());
-    // Float16 factors are widened to float once: evaluation reads floats, as the library's does.
-    const auto factor = [&](std::uint32_t tag, std::uint64_t n, std::size_t at) -> const float* {
-        const Section* x = s.find(tag);
-        if (x && x->dtype == L::DType::F16) {
-            const std::uint8_t* h = s.get<std::uint8_t>(tag, L::DType::F16, n);
-            for (std::uint64_t i = 0; i < n; ++i) o.widened[at + i] = k::half_to_float(read_le<std::uint16_t>(h + 2 * i));
-            return nullptr;
-        }
-        return s.get<float>(tag, L::DType::F32, n);
+    const int rank = p[3];
+    const std::uint64_t m = shared ? rank : 3 * static_cast<std::uint64_t>(rank);
+    const bool grouped = !shared && (rank == 3 || rank == 4);
+    // Component j's column in the padded rows (see FactorView).
+    const auto column = [&](std::uint64_t j) { return grouped ? 4 * (j / rank) + j % rank : j; };
+    // Each factor's entries (float16 or float), their sizes checked before anything is allocated.
+    struct Source {
+        const std::uint8_t* half;
+        const float* single;
     };
-    const Section* us = s.find(L::kFactorU);
-    const Section* vs = s.find(L::kFactorV);
-    o.widened.assign((us && us->dtype == L::DType::F16 ? rows * m : 0) + (vs && vs->dtype == L::DType::F16 ? cols * m : 0), 0.0f);
-    std::size_t used = 0;
-    f.u = factor(L::kFactorU, rows * m, 0);
-    if (!f.u) f.u = o.widened.data(), used = rows * m;
-    f.v = factor(L::kFactorV, cols * m, used);
-    if (!f.v) f.v = o.widened.data() + used;
-    if (f.shared) f.colour = s.get<float>(L::kFactorColour, L::DType::F32, 3 * static_cast<std::uint64_t>(f.rank));
+    const auto source = [&](std::uint32_t tag, std::uint64_t n) -> Source {
+        const Section* x = s.find(tag);
+        if (x && x->dtype == L::DType::F16) return {s.get<std::uint8_t>(tag, L::DType::F16, n * m), nullptr};
+        return {nullptr, s.get<float>(tag, L::DType::F32, n * m)};
+    };
+    const Source us = source(L::kFactorU, rows), vs = source(L::kFactorV, cols);
+    f.width = grouped ? 12 : (m + 3) / 4 * 4;
+    const std::uint64_t w = f.width;
+    o.factor_data.assign((rows + cols + 3) * w, 0.0f);
+    float* const u = o.factor_data.data();
+    float* const v = u + rows * w;
+    float* const mix = v + cols * w;
+    // The entries, float16 widened to float, in their padded columns. Every reconstruction is bounded by
+    // the components' largest magnitudes: within a quarter of the float range, as the library requires,
+    // no partial sum overflows.
+    const auto widen = [&](const Source& from, std::uint64_t n, float* out, std::vector<double>& top) {
+        top.assign(m, 0.0);
+        for (std::uint64_t i = 0; i < n * m; ++i) {
+            const float e = from.half ? k::half_to_float(read_le<std::uint16_t>(from.half + 2 * i)) : from.single[i];
+            if (!std::isfinite(e)) fail("a factor entry is not finite");
+            top[i % m] = std::max(top[i % m], std::fabs(double{e}));
+            out[i / m * w + column(i % m)] = e;
+        }
+    };
+    std::vector<double> top_u, top_v;
+    widen(us, rows, u, top_u);
+    widen(vs, cols, v, top_v);
+    f.u = u, f.v = v, f.mix = mix;
+    const float* colour = shared ? s.get<float>(L::kFactorColour, L::DType::F32, 3 * static_cast<std::uint64_t>(rank)) : nullptr;
     const float* top = s.get<float>(L::kFactorMax, L::DType::F32, 3);
-    // Every reconstruction is bounded by the components' largest magnitudes: within a quarter of the
-    // float range, as the library requires, no partial sum overflows.
-    std::vector<double> top_u(m, 0.0), top_v(m, 0.0);
-    for (std::uint64_t i = 0; i < rows * m; ++i) {
-        if (!std::isfinite(f.u[i])) fail("a factor entry is not finite");
-        top_u[i % m] = std::max(top_u[i % m], std::fabs(double{f.u[i]}));
-    }
-    for (std::uint64_t i = 0; i < cols * m; ++i) {
-        if (!std::isfinite(f.v[i])) fail("a factor entry is not finite");
-        top_v[i % m] = std::max(top_v[i % m], std::fabs(double{f.v[i]}));
-    }
     for (int c = 0; c < 3; ++c) {
         double bound = 0.0;
-        for (int j = 0; j < f.rank; ++j) {
-            const double w = f.shared ? f.colour[c * f.rank + j] : 1.0;
-            if (!std::isfinite(w)) fail("a colour weight is not finite");
-            const std::size_t at = f.shared ? j : static_cast<std::size_t>(c) * f.rank + j;
-            bound += std::fabs(w) * top_u[at] * top_v[at];
+        for (int j = 0; j < rank; ++j) {
+            const float weight = shared ? colour[c * rank + j] : 1.0f;
+            if (!std::isfinite(weight)) fail("a colour weight is not finite");
+            const std::uint64_t at = shared ? j : static_cast<std::uint64_t>(c) * rank + j;
+            bound += std::fabs(double{weight}) * top_u[at] * top_v[at];
+            mix[c * w + column(at)] = weight;
         }
         if (!(bound <= 0.25 * std::numeric_limits<float>::max())) fail("the factors reconstruct values beyond the float range");
         if (!(top[c] >= 0.0f)) fail(s.where(L::kFactorMax) + ": a ceiling is NaN or negative");

@@ -11,6 +11,7 @@
 
 #include <algorithm>
 #include <cstddef>
+#include <cstring>
 
 #include "brdfz/runtime/kernels/grid.h"
 #include "brdfz/runtime/kernels/math.h"
@@ -22,56 +23,57 @@ struct FactorView {
     Grid grid;
     int layout = layout::kLayoutHxDP;
     int space = layout::kSpaceLog;
-    bool shared = false;       // one U and V for all channels, with colour weights
-    int rank = 1;
-    const float* u = nullptr;  // rows × m, m = rank (shared) or 3·rank (separate: channel c's from c·rank)
-    const float* v = nullptr;  // columns × m
-    const float* colour = nullptr;  // 3 × rank (shared)
-    float ceiling[3] = {0, 0, 0};   // the data's largest value per channel, in the transform space
-    int m() const { return shared ? rank : 3 * rank; }
+    // Rows of U and V `width` floats apart, a multiple of 4 with zeros beyond the components, and each
+    // channel's weight of every column in `mix` (3 × width): the colour weights of shared factors; for
+    // separate ones 1 on the channel's own components (at ch·rank + j, or at 4·ch + j for rank 3 and 4,
+    // the core's grouped rows) and 0 elsewhere.
+    std::size_t width = 4;
+    const float* u = nullptr;
+    const float* v = nullptr;
+    const float* mix = nullptr;
+    float ceiling[3] = {0, 0, 0};  // the data's largest value per channel, in the transform space
 };
+
+// Four floats in one SSE2 or NEON register where the compiler has vector types (GCC, Clang), an array
+// elsewhere: written lane by lane, compilers vectorise the blends across steps instead, with shuffles.
+#if defined(__GNUC__)
+using Float4 = float __attribute__((vector_size(16)));
+#else
+struct Float4 {
+    float lane[4];
+    float operator[](int l) const { return lane[l]; }
+    friend Float4 operator+(Float4 a, Float4 b) { return {{a.lane[0] + b.lane[0], a.lane[1] + b.lane[1], a.lane[2] + b.lane[2], a.lane[3] + b.lane[3]}}; }
+    friend Float4 operator*(Float4 a, Float4 b) { return {{a.lane[0] * b.lane[0], a.lane[1] * b.lane[1], a.lane[2] * b.lane[2], a.lane[3] * b.lane[3]}}; }
+};
+#endif
+inline Float4 load4(const float* p) {
+    Float4 v;
+    std::memcpy(&v, p, sizeof v);
+    return v;
+}
+inline Float4 splat4(float x) { return Float4{x, x, x, x}; }
 
 // The channel sums y[3] of the factor products at the blend's rows and columns: NR rows of U and NC of V
 // (2 and 4 in the layout h_dp, 4 and 2 in hd_p), fixed at compile time so that the blends unroll.
+// Four columns a step, each channel's four sums kept apart and added pairwise at the end; padded
+// columns add exact zeros.
 template <int NR, int NC>
 inline void factored_sums(const FactorView& f, const int* rows, const float* rw, const int* cols, const float* cw, float y[3]) {
-    const int m = f.m();
-    // Component j's product: the blend of its U rows times the blend of its V rows (0 in the padding
-    // the core's rows have beyond m).
-    const auto product = [&](int j) {
-        if (j >= m) return 0.0f;
-        float a = rw[0] * f.u[static_cast<std::size_t>(rows[0]) * m + j];
-        float b = cw[0] * f.v[static_cast<std::size_t>(cols[0]) * m + j];
-        for (int r = 1; r < NR; ++r) a += rw[r] * f.u[static_cast<std::size_t>(rows[r]) * m + j];
-        for (int q = 1; q < NC; ++q) b += cw[q] * f.v[static_cast<std::size_t>(cols[q]) * m + j];
-        return a * b;
-    };
-    if (!f.shared && (f.rank == 3 || f.rank == 4)) {
-        // Each channel's components in a lane group of their own (the core's grouped rows).
-        for (int ch = 0; ch < 3; ++ch) {
-            float g[4];
-            for (int l = 0; l < 4; ++l) g[l] = l < f.rank ? product(ch * f.rank + l) : 0.0f;
-            y[ch] = (g[0] + g[1]) + (g[2] + g[3]);
-        }
-        return;
+    const std::size_t w = f.width;
+    const float* u[NR];
+    const float* v[NC];
+    Float4 ru[NR], cv[NC];
+    for (int r = 0; r < NR; ++r) u[r] = f.u + static_cast<std::size_t>(rows[r]) * w, ru[r] = splat4(rw[r]);
+    for (int q = 0; q < NC; ++q) v[q] = f.v + static_cast<std::size_t>(cols[q]) * w, cv[q] = splat4(cw[q]);
+    Float4 acc[3] = {splat4(0.0f), splat4(0.0f), splat4(0.0f)};
+    for (std::size_t j = 0; j < w; j += 4) {
+        Float4 a = ru[0] * load4(u[0] + j), b = cv[0] * load4(v[0] + j);
+        for (int r = 1; r < NR; ++r) a = a + ru[r] * load4(u[r] + j);
+        for (int q = 1; q < NC; ++q) b = b + cv[q] * load4(v[q] + j);
+        const Float4 p = a * b;
+        for (int ch = 0; ch < 3; ++ch) acc[ch] = acc[ch] + load4(f.mix + ch * w + j) * p;
     }
-    // Channel ch's weight of component j: its colour weight, or 1 for its own channel's components
-    // (separate factors: channel ch's are j in [ch·rank, (ch + 1)·rank)); 0 in the padding.
-    const auto mix = [&](int ch, int j) {
-        if (j >= m) return 0.0f;
-        if (f.shared) return f.colour[ch * f.rank + j];
-        return j >= ch * f.rank && j < (ch + 1) * f.rank ? 1.0f : 0.0f;
-    };
-    // Lane l of channel ch sums components j ≡ l (mod 4) in order; twelve named sums rather than an
-    // array indexed in the loop, which compilers keep in memory (a store-to-load chain per sum).
-    float a00 = 0, a01 = 0, a02 = 0, a03 = 0, a10 = 0, a11 = 0, a12 = 0, a13 = 0, a20 = 0, a21 = 0, a22 = 0, a23 = 0;
-    for (int j0 = 0; j0 < m; j0 += 4) {
-        const float p0 = product(j0), p1 = product(j0 + 1), p2 = product(j0 + 2), p3 = product(j0 + 3);
-        a00 += mix(0, j0) * p0, a01 += mix(0, j0 + 1) * p1, a02 += mix(0, j0 + 2) * p2, a03 += mix(0, j0 + 3) * p3;
-        a10 += mix(1, j0) * p0, a11 += mix(1, j0 + 1) * p1, a12 += mix(1, j0 + 2) * p2, a13 += mix(1, j0 + 3) * p3;
-        a20 += mix(2, j0) * p0, a21 += mix(2, j0 + 1) * p1, a22 += mix(2, j0 + 2) * p2, a23 += mix(2, j0 + 3) * p3;
-    }
-    y[0] = (a00 + a01) + (a02 + a03), y[1] = (a10 + a11) + (a12 + a13), y[2] = (a20 + a21) + (a22 + a23);
+    for (int ch = 0; ch < 3; ++ch) y[ch] = (acc[ch][0] + acc[ch][1]) + (acc[ch][2] + acc[ch][3]);
 }
 
 // f for a pair above the horizon.
