@@ -31,12 +31,16 @@ SPECS = {
     "lobes_dielectric_aniso": "analytic:ggx_dielectric+ggx_aniso,starts=2",
     "lobes_phong_ward": "analytic:blinn_phong+ward,starts=2",
     "lobes_lafortune": "analytic:lambert+lafortune2,starts=2",
+    "lobes_beckmann": "analytic:lambert+beckmann_dielectric,starts=2",
+    "lobes_ashikhmin_shirley": "analytic:ashikhmin_shirley,starts=2",
 }
 # Models drawn by their lobes' own samplers (sampler=lobes) rather than the compact sampler.
 LOBE_SAMPLED = {
     "lobes_sampled_phong": "analytic:lambert+blinn_phong,starts=2,sampler=lobes",
     "lobes_sampled_ward": "analytic:lambert+ward,starts=2,sampler=lobes",
     "lobes_sampled_lafortune": "analytic:lafortune3,starts=2,sampler=lobes",
+    "lobes_sampled_beckmann": "analytic:lambert+beckmann,starts=2,sampler=lobes",
+    "lobes_sampled_ashikhmin_shirley": "analytic:ashikhmin_shirley,starts=2,sampler=lobes",
 }
 
 
@@ -107,12 +111,11 @@ def test_command_line(gpu, exported, tmp_path):
                         capture_output=True, text=True, timeout=120)
     assert ok.returncode == 0, ok.stderr
     assert "eval   worst relative error" in ok.stdout and "ok: worst" in ok.stdout
-    # A lobe family the shaders do not have is refused with a reason, not compared.
-    brdfz = import_brdfz()
-    model = tmp_path / "beckmann.brdfzrt"
-    brdfz.export(brdfz.load(RGL), model, repr="analytic:beckmann,starts=1")
+    # A file that is not a material is refused with a reason, not compared.
+    model = tmp_path / "broken.brdfzrt"
+    model.write_bytes(exported["nmf"].read_bytes()[:100])
     refused = subprocess.run([sys.executable, "-m", "brdfz.gpu", "check", str(model)], capture_output=True, text=True, timeout=120)
-    assert refused.returncode == 2 and "have no 'beckmann' lobe" in refused.stderr
+    assert refused.returncode == 2 and str(model) in refused.stderr and refused.stderr.count("\n") == 1, refused.stderr
 
 
 def test_webgl_reports_console_errors(gpu, exported):
@@ -128,12 +131,11 @@ def test_webgl_reports_console_errors(gpu, exported):
 
 @pytest.mark.parametrize("name", LOBE_SAMPLED)
 def test_lobe_samplers(gpu, exported, name):
-    """Blinn-Phong, Ward and Lafortune lobes drawn by their own samplers: eval within the tolerance,
-    every draw's pdf and weight the backend's own, the library's draws, χ² of the draws. The pdf against
-    the library holds on all but a few pairs in 10^4: grazing pairs of nearly opposite azimuth, where
-    the density folded from below the horizon (wo plus wi mirrored, a cancelling sum) moves by 6e-4 when
-    the float input's length, 1 ± 3e-8, is normalised in double by the library and not by the shader
-    (which keeps a draw's bits); at the mirror direction that fold is an integrable spike."""
+    """Lobes drawn by their own samplers: eval and pdf within the tolerance, every draw's pdf and weight
+    the backend's own, the library's draws, χ² of the draws. Lafortune's pdf against the library holds on
+    all but a few pairs in 10^4: grazing pairs of nearly opposite azimuth, where the density folded from
+    below the horizon (its lobe axis at wi mirrored) moves by up to 1.5e-4 when the float input's length,
+    1 ± 3e-8, is normalised in double by the library and not by the shader (which keeps a draw's bits)."""
     if gpu.name != "wgpu":
         pytest.skip("on one backend: the shader code is the same on every backend (test_shaders_match_the_library)")
     import numpy as np
@@ -142,18 +144,20 @@ def test_lobe_samplers(gpu, exported, name):
     from brdfz.gpu.check import chi2, relative_error
 
     r = check(exported[name], gpu, n=PAIRS)
-    assert r["eval"]["worst"] <= TOLERANCE, r
-    assert r["pdf"]["p99"] <= TOLERANCE, r
     s = r["sample"]
     assert s["pdf_vs_own_pdf"] <= 1e-6 and s["weight_vs_own_eval"] <= 1e-6, r
     assert s["same_draw"] > 0.999 and s["drawn"] > 0.99 * PAIRS, r
-    brdfz = import_brdfz()
-    lib = brdfz.load(exported[name])
-    from brdfz.gpu.check import pairs
+    if name != "lobes_sampled_lafortune":
+        assert r["ok"], r
+    else:
+        assert r["eval"]["worst"] <= TOLERANCE and r["pdf"]["p99"] <= TOLERANCE, r
+        brdfz = import_brdfz()
+        lib = brdfz.load(exported[name])
+        from brdfz.gpu.check import pairs
 
-    wi, wo = pairs(PAIRS)
-    err = relative_error(gpu.bind(Layout(exported[name])).pdf(wo, wi), lib.pdf(wo.astype(np.float64), wi.astype(np.float64)))
-    assert np.mean(err > TOLERANCE) < 5e-4, np.sort(err)[-10:]
+        wi, wo = pairs(PAIRS)
+        err = relative_error(gpu.bind(Layout(exported[name])).pdf(wo, wi), lib.pdf(wo.astype(np.float64), wi.astype(np.float64)))
+        assert np.mean(err > TOLERANCE) < 5e-4, np.sort(err)[-10:]
     _, _, p = chi2(exported[name], gpu, theta_o=45.0)
     assert p > 1e-3, p
 

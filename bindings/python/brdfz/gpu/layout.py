@@ -16,9 +16,10 @@ KIND_NAMES = {1: "table", 2: "factorisation", 3: "analytic", 4: "φh stack"}
 GPU_KINDS = (1, 2, 3, 4)
 
 # Lobe families by their id (the order of lib/runtime/include/brdfz/runtime/kernels/lobes/families.h)
-# and their parameter counts, for the families the shaders have (lobes.slang).
+# and their parameter counts: every family, as lobes.slang has them.
 LOBE_FAMILIES = {"lambert": (0, 3), "blinn_phong": (1, 4), "ward": (2, 4), "lafortune": (14, 6), "ggx": (3, 5), "ggx_dielectric": (4, 5), "ggx_conductor": (5, 10),
-                 "ggx_sep": (6, 5), "ggx_dielectric_sep": (7, 5), "ggx_conductor_sep": (8, 10), "ggx_aniso": (12, 6)}
+                 "ggx_sep": (6, 5), "ggx_dielectric_sep": (7, 5), "ggx_conductor_sep": (8, 10), "beckmann": (9, 5),
+                 "beckmann_dielectric": (10, 5), "beckmann_conductor": (11, 10), "ggx_aniso": (12, 6), "ashikhmin_shirley": (13, 8)}
 ALBEDO_NODES = 16
 
 
@@ -54,6 +55,8 @@ class Layout:
         self.kind = kind
         if kind not in GPU_KINDS:
             raise ValueError(f"{self.path}: the GPU shaders do not evaluate {KIND_NAMES.get(kind, kind)} layouts")
+        if 64 + 32 * count > len(data):
+            raise ValueError(f"{path}: truncated ({len(data)} bytes hold no table of {count} sections)")
         objects = {}
         for i in range(count):
             tag, dtype, offset, n, obj = struct.unpack_from("<IIQQI", data, 64 + 32 * i)
@@ -153,7 +156,7 @@ class Layout:
             # Trailing digits repeat a lobe ("lafortune3": three), as model strings allow.
             name, repeat = re.fullmatch(r"(.*?)(\d*)", term).groups()
             if name not in LOBE_FAMILIES:
-                raise ValueError(f"{self.path}: the GPU shaders have no '{name}' lobe yet (they have {', '.join(LOBE_FAMILIES)})")
+                raise ValueError(f"{self.path}: unknown lobe family '{name}' (the shaders have {', '.join(LOBE_FAMILIES)})")
             family, count = LOBE_FAMILIES[name]
             for _ in range(int(repeat or 1)):
                 terms.append((family, first))
