@@ -96,6 +96,25 @@ def test_kernels_are_the_checked_ones(exports, target):
     assert len(slots) == 6, d
 
 
+@pytest.mark.parametrize("target", TARGETS)
+def test_module_is_the_tested_one(exports, target):
+    """Per-shading-point functions for every target but GLSL ES: the module file is brdfz.gpu.module's
+    (test_gpu_module.py runs it inside a renderer's shaders), documented with the functions it holds."""
+    from brdfz.gpu.module import MODULE_TARGETS, module
+
+    folder, d = exports[target]
+    note = (folder / "INTEGRATION.md").read_text()
+    if target == "essl":
+        assert d["module"] is None and d["functions"] is None
+        return
+    assert d["functions"] == ["float3 brdfz_eval(float3 wi, float3 wo)", "float brdfz_pdf(float3 wo, float3 wi)",
+                              "BrdfzSample brdfz_sample(float3 wo, float2 u)"]
+    assert d["module"] in d["files"] and (folder / d["module"]).is_file()
+    if target in MODULE_TARGETS:
+        assert (folder / d["module"]).read_bytes() == module(target)
+        assert "## Per shading point" in note and d["module"] in note
+
+
 def test_essl_carries_webgl2_passes(exports):
     """GLSL ES: the 3.10 compute kernels and WebGL2's 3.00 render passes (what the webgl backend runs
     against the library), with the textures' shapes the passes read."""
@@ -127,7 +146,7 @@ def test_slang_export_is_the_source(exports):
     theirs = slang.compile_entry(slang.SHADERS / "kernels.slang", "brdfz_sample_kernel", "wgsl")
     # The same code up to the file paths Slang writes into its output.
     assert ours.replace(os.fsencode(folder / "shaders"), b"").count(b"\n") == theirs.count(b"\n")
-    assert not (folder / "shaders" / "check.slang").exists()
+    assert not (folder / "shaders" / "check.slang").exists() and not (folder / "shaders" / "module.slang").exists()
 
 
 def _pairs(n=4096, seed=3):

@@ -99,11 +99,12 @@ def nvrtc():
     return ctypes.CDLL(sorted(found)[0])
 
 
-def test_cuda_compiles_to_ptx(compile_entry):
+def compile_cuda(source: bytes) -> bytes:
+    """PTX of a CUDA source by NVRTC (skips without it); fails with NVRTC's log."""
     lib = nvrtc()
-    for entry in ENTRIES:
-        program = ctypes.c_void_p()
-        assert lib.nvrtcCreateProgram(ctypes.byref(program), compile_entry(entry, "cuda"), b"brdfz.cu", 0, None, None) == 0
+    program = ctypes.c_void_p()
+    assert lib.nvrtcCreateProgram(ctypes.byref(program), source, b"brdfz.cu", 0, None, None) == 0
+    try:
         # Slang's CUDA prelude folds infinities in constants (warning 222): not the shaders' code.
         options = [b"--gpu-architecture=compute_75", b"-std=c++17", b"-diag-suppress=222"]
         status = lib.nvrtcCompileProgram(program, len(options), (ctypes.c_char_p * len(options))(*options))
@@ -115,5 +116,11 @@ def test_cuda_compiles_to_ptx(compile_entry):
         lib.nvrtcGetPTXSize(program, ctypes.byref(size))
         ptx = ctypes.create_string_buffer(size.value)
         lib.nvrtcGetPTX(program, ptx)
-        assert f".entry {entry}" in ptx.value.decode(), entry
+        return ptx.value
+    finally:
         lib.nvrtcDestroyProgram(ctypes.byref(program))
+
+
+def test_cuda_compiles_to_ptx(compile_entry):
+    for entry in ENTRIES:
+        assert f".entry {entry}".encode() in compile_cuda(compile_entry(entry, "cuda")), entry

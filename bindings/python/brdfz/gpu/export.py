@@ -4,8 +4,10 @@
                     copies of its float64 arrays (brdfz.gpu.Layout's data), read as 32-bit words
   descriptors.bin   binding 1: BrdfzDesc records (bindings/gpu/shaders/desc.slang), the root's first
   the shader module the target names: the kernels brdfz_eval_kernel, brdfz_pdf_kernel and
-                    brdfz_sample_kernel (kernels.slang), one file each; for `slang` the source itself,
-                    whose functions brdfz_eval, brdfz_pdf and brdfz_sample a renderer's Slang code calls;
+                    brdfz_sample_kernel (kernels.slang), one file each; brdfz_module.* (glsl, hlsl,
+                    wgsl, cuda, metal: brdfz.gpu.module) with the functions brdfz_eval, brdfz_pdf and
+                    brdfz_sample a renderer's own shaders call per shading point; for `slang` the source
+                    itself, whose functions those are;
                     for `essl` also WebGL2's render passes (webgl.slang: GLSL ES 3.00, which has no
                     compute shaders), which read the same two files as R32UI textures
   brdfz.json        the descriptor: bindings per target, formats, sizes, the spec and its measured error
@@ -26,6 +28,8 @@ import numpy as np
 
 from . import slang
 from .layout import Layout, desc_dtype
+from .module import EXTENSIONS as MODULE_EXTENSIONS
+from .module import MODULE_TARGETS, module
 from .targets import WEBGL_ENTRIES, emit
 
 KERNELS = ("brdfz_eval_kernel", "brdfz_pdf_kernel", "brdfz_sample_kernel")
@@ -47,6 +51,8 @@ WEBGL_PASSES = {
 }
 NAMES = {"brdfz_data": "material", "brdfz_desc": "descriptors", "brdfz_in_a": "a", "brdfz_in_b": "b",
          "brdfz_out": "out", "brdfz_count": "count"}
+FUNCTIONS = ["float3 brdfz_eval(float3 wi, float3 wo)", "float brdfz_pdf(float3 wo, float3 wi)",
+             "BrdfzSample brdfz_sample(float3 wo, float2 u)"]
 CONVENTIONS = ("local frame with the normal +z; wi and wo unit vectors pointing away from the surface (non-unit "
                "ones are normalised); eval is f_r without the cosine, in linear RGB, 1/sr; pdf per unit solid angle "
                "of wi; below the horizon eval and pdf are 0 and a draw fails with pdf 0")
@@ -212,7 +218,39 @@ renderer's layout needs the slots. `shaders/kernels.slang` holds the three kerne
 export.
 """,
     }
-    return common + "\n" + notes[target]
+    return common + "\n" + notes[target] + (f"\n{_per_shading_point(target)}" if target in MODULE_TARGETS else "")
+
+
+def _per_shading_point(target: str) -> str:
+    """INTEGRATION.md's section on the module a renderer's own shaders include."""
+    name = f"brdfz_module.{MODULE_EXTENSIONS[target]}"
+    how = {
+        "glsl": f"""Paste or `#include` (GL_GOOGLE_include_directive) `{name}` right after the shader's own `#version 450`
+(or later) line, before its other declarations: it declares the material's two storage buffers at the
+bindings above and the functions.""",
+        "hlsl": f"""`#include "{name}"`: it declares the material's two buffers at the registers above and the
+functions.""",
+        "wgsl": f"""WGSL has no includes: prepend `{name}` to the shader's source. It declares the material's two
+storage buffers (group 0, the bindings above) and the functions.""",
+        "cuda": f"""`#include "{name}"` in one translation unit (it defines `SLANG_globalParams`, filled as for the
+kernels, with the material's two buffers) and call the `__device__` functions from your kernels.""",
+        "metal": f"""`#include "{name}"`. Each function takes a last argument, a `BrdfzContext thread*` whose
+`brdfz_data_0` and `brdfz_desc_0` point at the material's two buffers: fill one from your kernel's
+`device` arguments and pass its address.""",
+    }[target]
+    return f"""## Per shading point: brdfz_eval, brdfz_pdf, brdfz_sample
+
+{how} Per shading point, in brdfz's conventions:
+
+```
+float3 brdfz_eval(float3 wi, float3 wo)          // f without the cosine
+float  brdfz_pdf(float3 wo, float3 wi)           // per unit solid angle of wi
+BrdfzSample brdfz_sample(float3 wo, float2 u)    // {{wi, pdf == brdfz_pdf(wo, wi), weight = f·cosθi/pdf}}
+```
+
+(in the language's own vector types). The module's other names end in `_` and a number (Slang's); keep
+your own names free of that pattern.
+"""
 
 
 def export(source, out_dir, target: str = "slang", *, repr=None, reference=None, error_pairs: int = 1 << 16,
@@ -254,7 +292,7 @@ def export(source, out_dir, target: str = "slang", *, repr=None, reference=None,
         if target == "slang":
             (tmp / "shaders").mkdir()
             for f in sorted(slang.SHADERS.glob("*.slang")):
-                if f.name != "check.slang":
+                if f.name not in ("check.slang", "module.slang"):  # the checks' and the exporter's own
                     shutil.copyfile(f, tmp / "shaders" / f.name)
                     files.append(f"shaders/{f.name}")
         else:
@@ -264,6 +302,10 @@ def export(source, out_dir, target: str = "slang", *, repr=None, reference=None,
                 (tmp / name).write_bytes(code)
                 files.append(name)
                 slots.update(_slots(target, code.decode()))
+            if target in MODULE_TARGETS:
+                name = f"brdfz_module.{MODULE_EXTENSIONS[target]}"
+                (tmp / name).write_bytes(module(target))
+                files.append(name)
         error = _measured_error(path, brdf, reference, error_pairs)
         dtype = desc_dtype()
         descriptor = {
@@ -289,8 +331,9 @@ def export(source, out_dir, target: str = "slang", *, repr=None, reference=None,
                          "a": IO[entry][0], "b": IO[entry][1], "out": IO[entry][2]} for entry in KERNELS],
             "io_slots": {NAMES[k]: v for k, v in slots.items() if k not in ("brdfz_data", "brdfz_desc")} if slots else
                         {"a": 2, "b": 3, "out": 4, "count": 5},
-            "functions": ["float3 brdfz_eval(float3 wi, float3 wo)", "float brdfz_pdf(float3 wo, float3 wi)",
-                          "BrdfzSample brdfz_sample(float3 wo, float2 u)"] if target == "slang" else None,
+            "module": "shaders/brdfz.slang" if target == "slang" else
+                      f"brdfz_module.{MODULE_EXTENSIONS[target]}" if target in MODULE_TARGETS else None,
+            "functions": FUNCTIONS if target == "slang" or target in MODULE_TARGETS else None,
             "files": ["material.bin", "descriptors.bin", *files, "brdfz.json", "INTEGRATION.md"],
             "integration": "INTEGRATION.md",
         }

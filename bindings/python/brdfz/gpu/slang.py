@@ -46,10 +46,11 @@ def _api():
 
 
 @functools.lru_cache(maxsize=None)
-def compile_entry(source: str, entry: str, target: str, stage: str = "compute", include: tuple = ()) -> bytes:
+def compile_entry(source: str, entry: str, target: str, stage: str = "compute", include: tuple = (), options: tuple = ()) -> bytes:
     """The entry point `entry` of the Slang file `source` (a path; its folder, then the folders of
-    `include`, are searched for includes) in `target` (TARGETS): source code as UTF-8, or SPIR-V words.
-    Warnings are errors, so that a translation that Slang doubts fails here rather than on a user's GPU."""
+    `include`, are searched for includes) in `target` (TARGETS), with slangc's `options` besides:
+    source code as UTF-8, or SPIR-V words. Warnings are errors, so that a translation that Slang doubts
+    fails here rather than on a user's GPU."""
     lib, session = _api()
     if target not in TARGETS:
         raise ValueError(f"unknown target '{target}' (one of {', '.join(TARGETS)})")
@@ -57,7 +58,7 @@ def compile_entry(source: str, entry: str, target: str, stage: str = "compute", 
     try:
         folders = [os.fspath(Path(source).parent), *map(os.fspath, include)]
         args = [os.fspath(source), *[a for f in folders for a in ("-I", f)], "-target", TARGETS[target],
-                "-entry", entry, "-stage", stage, "-warnings-as-errors", "all"]
+                "-entry", entry, "-stage", stage, "-warnings-as-errors", "all", *options]
         argv = (ctypes.c_char_p * len(args))(*[a.encode() for a in args])
         failed = lib.spProcessCommandLineArguments(request, argv, len(args)) != 0 or lib.spCompile(request) != 0
         diagnostics = (lib.spGetDiagnosticOutput(request) or b"").decode(errors="replace").strip()
