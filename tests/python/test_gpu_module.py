@@ -1,7 +1,8 @@
 """The per-shading-point module (brdfz.gpu.module, `brdfz export`'s brdfz_module.*) as a renderer uses
 it: its own shader includes the module and calls brdfz_eval, brdfz_pdf and brdfz_sample. In GLSL on
 OpenGL (llvmpipe) and in WGSL on wgpu (lavapipe), such shaders give the exported kernels' results on a
-real material's compact representations; HLSL compiles to valid SPIR-V (glslang), CUDA to PTX (NVRTC);
+real material's compact representations; GLSL ES 3.10 and HLSL compile to valid SPIR-V (glslang), CUDA
+to PTX (NVRTC);
 Metal has no compiler here, so only its names are checked."""
 
 import re
@@ -112,7 +113,7 @@ def same_results(renderer, kernels, layout):
     assert np.count_nonzero(kernels.pdf(wo, wi)) > PAIRS // 2
 
 
-@pytest.mark.parametrize("target", ["glsl", "hlsl", "wgsl", "cuda", "metal"])
+@pytest.mark.parametrize("target", ["glsl", "essl", "hlsl", "wgsl", "cuda", "metal"])
 def test_module_names_its_functions(gpu_module, target):
     code = gpu_module.module(target).decode()
     for name in ("brdfz_eval", "brdfz_pdf", "brdfz_sample"):
@@ -120,7 +121,7 @@ def test_module_names_its_functions(gpu_module, target):
     assert re.search(r"struct BrdfzSample\s*\{[^}]*\bwi\b[^}]*\bpdf\b[^}]*\bweight\b", code)
     assert "brdfz_module" not in code and "#line" not in code and "/work" not in code and "#version" not in code
     with pytest.raises(ValueError, match="no per-shading-point module"):
-        gpu_module.module("essl")
+        gpu_module.module("spirv")
 
 
 def test_glsl_module_in_a_renderer_shader(gpu_module, materials):
@@ -153,15 +154,9 @@ def test_wgsl_module_in_a_renderer_shader(gpu_module, materials):
         same_results(renderer, kernels, Layout(path))
 
 
-def test_hlsl_module_compiles_in_a_renderer_shader(gpu_module, tmp_path):
-    import shutil
-    import subprocess
-
-    glslang, spirv_val = shutil.which("glslangValidator"), shutil.which("spirv-val")
-    if not glslang or not spirv_val:
-        pytest.skip("glslang-tools and spirv-tools are not installed (scripts/setup-deps installs them)")
-    source = tmp_path / "renderer.hlsl"
-    source.write_text(gpu_module.module("hlsl").decode() + """
+# A renderer's compute shader that calls all three, per language glslang reads: (source, glslang's options).
+RENDERERS = {
+    "hlsl": ("""
 RWStructuredBuffer<float> renderer_out : register(u1);
 [numthreads(64, 1, 1)]
 void main(uint3 id : SV_DispatchThreadID) {
@@ -169,9 +164,32 @@ void main(uint3 id : SV_DispatchThreadID) {
     const BrdfzSample s = brdfz_sample(w, float2(0.25, 0.5));
     renderer_out[id.x] = brdfz_eval(s.wi, w).x + brdfz_pdf(w, s.wi) + s.pdf + s.weight.y;
 }
-""")
+""", ["-D", "-S", "comp", "-e", "main"]),
+    "essl": ("""
+layout(std430, binding = 2) buffer RendererOut { float o[]; };
+layout(local_size_x = 64) in;
+void main() {
+    vec3 w = normalize(vec3(0.3, 0.4, 0.8));
+    BrdfzSample s = brdfz_sample(w, vec2(0.25, 0.5));
+    o[gl_GlobalInvocationID.x] = brdfz_eval(s.wi, w).x + brdfz_pdf(w, s.wi) + s.pdf + s.weight.y;
+}
+""", ["-S", "comp"]),
+}
+
+
+@pytest.mark.parametrize("target", RENDERERS)
+def test_module_compiles_in_a_renderer_shader(gpu_module, target, tmp_path):
+    import shutil
+    import subprocess
+
+    glslang, spirv_val = shutil.which("glslangValidator"), shutil.which("spirv-val")
+    if not glslang or not spirv_val:
+        pytest.skip("glslang-tools and spirv-tools are not installed (scripts/setup-deps installs them)")
+    main, options = RENDERERS[target]
+    source = tmp_path / f"renderer.{target}"
+    source.write_text(("#version 310 es\n" if target == "essl" else "") + gpu_module.module(target).decode() + main)
     spv = tmp_path / "renderer.spv"
-    r = subprocess.run([glslang, "-D", "-V", "-S", "comp", "-e", "main", str(source), "-o", str(spv)], capture_output=True, text=True)
+    r = subprocess.run([glslang, "-V", *options, str(source), "-o", str(spv)], capture_output=True, text=True)
     assert r.returncode == 0, r.stdout + r.stderr
     r = subprocess.run([spirv_val, str(spv)], capture_output=True, text=True)
     assert r.returncode == 0, r.stdout + r.stderr

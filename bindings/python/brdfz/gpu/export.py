@@ -4,8 +4,8 @@
                     copies of its float64 arrays (brdfz.gpu.Layout's data), read as 32-bit words
   descriptors.bin   binding 1: BrdfzDesc records (bindings/gpu/shaders/desc.slang), the root's first
   the shader module the target names: the kernels brdfz_eval_kernel, brdfz_pdf_kernel and
-                    brdfz_sample_kernel (kernels.slang), one file each; brdfz_module.* (glsl, hlsl,
-                    wgsl, cuda, metal: brdfz.gpu.module) with the functions brdfz_eval, brdfz_pdf and
+                    brdfz_sample_kernel (kernels.slang), one file each; brdfz_module.* (glsl, essl,
+                    hlsl, wgsl, cuda, metal: brdfz.gpu.module) with the functions brdfz_eval, brdfz_pdf and
                     brdfz_sample a renderer's own shaders call per shading point; for `slang` the source
                     itself, whose functions those are;
                     for `essl` also WebGL2's render passes (webgl.slang: GLSL ES 3.00, which has no
@@ -228,6 +228,11 @@ def _per_shading_point(target: str) -> str:
         "glsl": f"""Paste or `#include` (GL_GOOGLE_include_directive) `{name}` right after the shader's own `#version 450`
 (or later) line, before its other declarations: it declares the material's two storage buffers at the
 bindings above and the functions.""",
+        "essl": f"""Paste `{name}` right after the shader's own `#version 310 es` line (and, in a fragment shader,
+`precision highp float;`), before its other declarations: it declares the material's two storage
+buffers (bindings 0 and 1) and the functions. OpenGL ES 3.1 has storage buffers in compute shaders, and
+in fragment shaders where `GL_MAX_FRAGMENT_SHADER_STORAGE_BLOCKS` allows; WebGL2 has none (use its
+passes above).""",
         "hlsl": f"""`#include "{name}"`: it declares the material's two buffers at the registers above and the
 functions.""",
         "wgsl": f"""WGSL has no includes: prepend `{name}` to the shader's source. It declares the material's two
