@@ -65,3 +65,18 @@ def import_brdfz():
 
         return brdfz
     return pytest.importorskip("brdfz", reason="the brdfz Python package is not built (BRDFZ_BUILD_PYTHON=ON)")
+
+
+def exported_layouts(tmp_path_factory, source, specs, folder):
+    """{name: .brdfzrt path} of `source` (a real file; skips when ../shared is missing) exported as each
+    spec of `specs` ({name: spec}) into a fresh temporary `folder`."""
+    brdfz = import_brdfz()
+    if not source.exists():
+        pytest.skip(f"../shared is missing ({source})")
+    out = tmp_path_factory.mktemp(folder)
+    loaded = brdfz.load(source)
+    paths = {name: out / f"{name}.brdfzrt" for name in specs}
+    for name, spec in specs.items():
+        brdfz.export(loaded, paths[name], repr=spec)
+    return paths
+

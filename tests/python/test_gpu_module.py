@@ -10,7 +10,7 @@ import re
 import numpy as np
 import pytest
 
-from conftest import SHARED, import_brdfz
+from conftest import SHARED, exported_layouts, import_brdfz
 
 RGL = SHARED / "data" / "rgl" / "satin_purple_rgb.bsdf"
 PAIRS = 4096
@@ -82,16 +82,7 @@ def gpu_module():
 
 @pytest.fixture(scope="module")
 def materials(tmp_path_factory):
-    brdfz = import_brdfz()
-    if not RGL.exists():
-        pytest.skip(f"../shared is missing ({RGL})")
-    out = tmp_path_factory.mktemp("module")
-    source = brdfz.load(RGL)
-    paths = {}
-    for name, spec in SPECS.items():
-        paths[name] = out / f"{name}.brdfzrt"
-        brdfz.export(source, paths[name], repr=spec)
-    return paths
+    return exported_layouts(tmp_path_factory, RGL, SPECS, "module")
 
 
 def inputs():
@@ -119,37 +110,37 @@ def test_module_names_its_functions(gpu_module, target):
     for name in ("brdfz_eval", "brdfz_pdf", "brdfz_sample"):
         assert re.search(rf"\b{name}\s*\(", code), name
     assert re.search(r"struct BrdfzSample\s*\{[^}]*\bwi\b[^}]*\bpdf\b[^}]*\bweight\b", code)
-    assert "brdfz_module" not in code and "#line" not in code and "/work" not in code and "#version" not in code
+    from brdfz.gpu import slang
+
+    assert "brdfz_module" not in code and "#line" not in code and "#version" not in code
+    assert str(slang.SHADERS) not in code and str(slang.SHADERS.parent) not in code
     with pytest.raises(ValueError, match="no per-shading-point module"):
         gpu_module.module("spirv")
 
 
-def test_glsl_module_in_a_renderer_shader(gpu_module, materials):
-    from brdfz.gpu import BackendUnavailable, Layout, backend
-
-    try:
-        kernels, renderer = backend("gl"), backend("gl")
-    except BackendUnavailable as e:
-        pytest.skip(str(e))
-    code = gpu_module.module("glsl").decode()
+def install_glsl(renderer, code):
     renderer.shaders = {entry: renderer.ctx.compute_shader("#version 450\n" + code + GLSL_MAIN.replace("BODY", body))
                         for entry, body in GLSL_BODIES.items()}
-    for path in materials.values():
-        same_results(renderer, kernels, Layout(path))
 
 
-def test_wgsl_module_in_a_renderer_shader(gpu_module, materials):
-    from brdfz.gpu import BackendUnavailable, Layout, backend
-
-    try:
-        kernels, renderer = backend("wgpu"), backend("wgpu")
-    except BackendUnavailable as e:
-        pytest.skip(str(e))
-    code = gpu_module.module("wgsl").decode()
+def install_wgsl(renderer, code):
     layout = renderer.device.create_pipeline_layout(bind_group_layouts=[renderer.group_layout])
     for entry, body in WGSL_BODIES.items():
         shader = renderer.device.create_shader_module(code=code + WGSL_MAIN.replace("ENTRY", entry).replace("BODY", body))
         renderer.pipelines[entry] = renderer.device.create_compute_pipeline(layout=layout, compute={"module": shader, "entry_point": entry})
+
+
+@pytest.mark.parametrize("target, backend_name, install", [("glsl", "gl", install_glsl), ("wgsl", "wgpu", install_wgsl)])
+def test_module_in_a_renderer_shader(gpu_module, materials, target, backend_name, install):
+    """A backend whose kernels are the renderer's shaders around the module, against one with the
+    exported kernels."""
+    from brdfz.gpu import BackendUnavailable, Layout, backend
+
+    try:
+        kernels, renderer = backend(backend_name), backend(backend_name)
+    except BackendUnavailable as e:
+        pytest.skip(str(e))
+    install(renderer, gpu_module.module(target).decode())
     for path in materials.values():
         same_results(renderer, kernels, Layout(path))
 

@@ -7,7 +7,7 @@ and symmetry, svd and nmf factors, lobe mixtures, φh stacks) with their sampler
 
 import pytest
 
-from conftest import SHARED, import_brdfz
+from conftest import SHARED, exported_layouts, import_brdfz
 
 RGL = SHARED / "data" / "rgl" / "satin_purple_rgb.bsdf"
 PAIRS = 20_000
@@ -59,16 +59,7 @@ def gpu(request):
 
 @pytest.fixture(scope="module")
 def exported(tmp_path_factory):
-    brdfz = import_brdfz()
-    if not RGL.exists():
-        pytest.skip(f"../shared is missing ({RGL})")
-    out = tmp_path_factory.mktemp("gpu")
-    source = brdfz.load(RGL)
-    paths = {}
-    for name, spec in {**SPECS, **LOBE_SAMPLED}.items():
-        paths[name] = out / f"{name}.brdfzrt"
-        brdfz.export(source, paths[name], repr=spec)
-    return paths
+    return exported_layouts(tmp_path_factory, RGL, {**SPECS, **LOBE_SAMPLED}, "gpu")
 
 
 @pytest.mark.parametrize("name", SPECS)
