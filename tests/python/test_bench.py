@@ -194,3 +194,24 @@ def test_stability_study(cli, rgl_files, tmp_path):
     assert stability.run(program, [rgl_files[0]], out, specs=specs, synthetic=["diffuse"],
                          engine=batch.Engine(workers=1), charts=False) == rows[:4]
     assert {p: p.stat().st_mtime_ns for p in (out / "parts").rglob("*.json")} == records
+
+
+def test_summary_agrees_with_its_budget_choices(tmp_path):
+    """summary.md's smallest settings within 2 % and 5 % take the budget choices into account: it never
+    says "none" within an error where its own choice table holds a setting within it."""
+    from brdfz import report
+
+    def row(spec, size, err):
+        return {"material": "paint", "spec": spec, "status": "ok", "bytes": str(size), "ratio": "1", "cos_rmse_rel": str(err),
+                "log_rmse": "0.1", "eval_rate": "1e7", "build_seconds": "1", "error": ""}
+
+    rows = [row("tabular:res=16x16x32", 98304, 0.09), row("svd:rank=1", 900, 0.2)]
+    auto = [dict.fromkeys(report.AUTO_COLUMNS, "") | {"material": "paint", "budget": "0.05", "chosen": "svd:rank=4,space=log",
+                                                    "bytes": "5000", "cos_rmse_rel": "0.034", "tried": "9"}]
+    summary = report.write_summary(tmp_path, "t", rows, [], source="test", table="sweep.csv", auto=auto,
+                                   auto_heading="choices").read_text()
+    line = next(l for l in summary.splitlines() if l.startswith("| paint |"))
+    assert line == "| paint | none |  | `svd:rank=4,space=log` (budget choice) | 5,000 |", line
+    # Without the choices, the measured rows alone: none within either.
+    alone = report.write_summary(tmp_path, "t", rows, [], source="test", table="sweep.csv").read_text()
+    assert "| paint | none |  | none |  |" in alone
