@@ -22,8 +22,7 @@
 
 namespace brdfz {
 
-// The defaults keep the weights' variance low up to grazing views with tables of at most 16 KiB,
-// chosen on half of the shared files and judged on the other half (bench/README.md names both).
+// The defaults keep the weights' variance low up to grazing views while the tables stay within 16 KiB.
 struct CompactSamplerOptions {
     int slices = 12;              // view elevations, uniform in cosθo over [0°, kMaxThetaODeg], ≥ 2
     int rows = 32;                // s rows, ≥ 1
