@@ -362,7 +362,8 @@ void bind_brdf(py::module_& m) {
           py::arg("phi_h") = 0.0,
           "direction pairs (wi, wo) at Rusinkiewicz angles (radians, broadcast), each (..., 3); to_half_diff's inverse");
     m.def("simd", &simd_name,
-          "the instruction set Brdf's batch calls run with on this CPU: 'avx512', 'avx2' or 'sse2' (chosen at import)");
+          "the instruction set Brdf's batch calls run with on this CPU: 'avx512', 'avx2' or 'sse2' (x86-64, chosen at "
+          "import), 'neon' (ARM64)");
     py::class_<Brdf, BrdfPtr>(m, "Brdf", "A measured or compressed BRDF (brdf.h: normal +z, wi and wo pointing away)")
         .def("eval", &eval<false>, py::arg("wi"), py::arg("wo"),
              "f_r (1/sr, no cosine) at direction pairs: wi, wo of shape (..., 3) (arrays, lists or tuples), broadcast "

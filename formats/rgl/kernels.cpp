@@ -567,8 +567,8 @@ template <int W>
 [[gnu::flatten]] void eval_sse2(const KernelTables& t, const Vec3* wi, const Vec3* wo, Rgb* out, std::size_t n) {
     eval_passes<2>(t, wi, wo, out, n);
 }
-[[gnu::flatten, gnu::target("avx2")]] void eval_avx2(const KernelTables& t, const Vec3* wi, const Vec3* wo, Rgb* out,
-                                                      std::size_t n) {
+[[gnu::flatten, BRDFZ_AVX2]] void eval_avx2(const KernelTables& t, const Vec3* wi, const Vec3* wo, Rgb* out,
+                                            std::size_t n) {
     eval_passes<4>(t, wi, wo, out, n);
 }
 [[gnu::flatten, BRDFZ_AVX512]] void eval_avx512(const KernelTables& t, const Vec3* wi, const Vec3* wo, Rgb* out,
@@ -582,8 +582,8 @@ template <int W>
 [[gnu::flatten]] void pdf_sse2(const KernelTables& t, const Vec3* wo, const Vec3* wi, double* out, std::size_t n) {
     pdf_passes<2>(t, wo, wi, out, n);
 }
-[[gnu::flatten, gnu::target("avx2")]] void pdf_avx2(const KernelTables& t, const Vec3* wo, const Vec3* wi, double* out,
-                                                     std::size_t n) {
+[[gnu::flatten, BRDFZ_AVX2]] void pdf_avx2(const KernelTables& t, const Vec3* wo, const Vec3* wi, double* out,
+                                           std::size_t n) {
     pdf_passes<4>(t, wo, wi, out, n);
 }
 [[gnu::flatten, BRDFZ_AVX512]] void pdf_avx512(const KernelTables& t, const Vec3* wo, const Vec3* wi, double* out,
@@ -599,8 +599,8 @@ template <int W>
                                   BrdfSample* out, std::size_t n) {
     sample_passes<2>(t, wo, u, out, n);
 }
-[[gnu::flatten, gnu::target("avx2")]] void sample_avx2(const KernelTables& t, const Vec3* wo,
-                                                        const std::array<double, 2>* u, BrdfSample* out, std::size_t n) {
+[[gnu::flatten, BRDFZ_AVX2]] void sample_avx2(const KernelTables& t, const Vec3* wo,
+                                              const std::array<double, 2>* u, BrdfSample* out, std::size_t n) {
     sample_passes<4>(t, wo, u, out, n);
 }
 [[gnu::flatten, BRDFZ_AVX512]] void sample_avx512(const KernelTables& t, const Vec3* wo, const std::array<double, 2>* u,
@@ -612,8 +612,7 @@ template <int W>
 template <typename F>
 F* pick(Simd simd, std::size_t n, F* one, F* sse2, F* avx2, F* avx512) {
     const std::size_t lanes = simd == Simd::Avx512 ? 8 : simd == Simd::Avx2Fma ? 4 : 2;
-    if (n < lanes) return one;
-    return simd == Simd::Avx512 ? avx512 : simd == Simd::Avx2Fma ? avx2 : sse2;
+    return n < lanes ? one : ::brdfz::detail::build_for(simd, sse2, avx2, avx512);
 }
 
 }  // namespace

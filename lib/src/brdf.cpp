@@ -16,7 +16,13 @@ const char* simd_name() {
     switch (detail::simd_level()) {
         case detail::Simd::Avx512: return "avx512";
         case detail::Simd::Avx2Fma: return "avx2";
+#if BRDFZ_X86
         default: return "sse2";
+#elif defined(__aarch64__)
+        default: return "neon";
+#else
+        default: return "baseline";
+#endif
     }
 }
 

@@ -478,7 +478,7 @@ def select_representation(brdf: Brdf, max_error: typing.SupportsFloat | typing.S
     """
 def simd() -> str:
     """
-    the instruction set Brdf's batch calls run with on this CPU: 'avx512', 'avx2' or 'sse2' (chosen at import)
+    the instruction set Brdf's batch calls run with on this CPU: 'avx512', 'avx2' or 'sse2' (x86-64, chosen at import), 'neon' (ARM64)
     """
 def tabulate(brdf: Brdf, res: tuple[typing.SupportsInt | typing.SupportsIndex, typing.SupportsInt | typing.SupportsIndex, typing.SupportsInt | typing.SupportsIndex] = (90, 90, 180), *, lookup: str = 'linear', negative: str = 'clamp', symmetry: str = 'reciprocal', threads: typing.SupportsInt | typing.SupportsIndex = 0, progress: typing.Any = None) -> Brdf:
     """

@@ -181,14 +181,14 @@ template <typename Values>
     return eval_one<false>(g, values, lookup, wi, wo);
 }
 template <typename Values>
-[[gnu::flatten, gnu::target("avx2")]] Rgb eval_one_avx2(const GridSpec& g, const Values& values, Lookup lookup,
-                                                        const Vec3& wi, const Vec3& wo) {
+[[gnu::flatten, BRDFZ_AVX2]] Rgb eval_one_avx2(const GridSpec& g, const Values& values, Lookup lookup,
+                                               const Vec3& wi, const Vec3& wo) {
     return eval_one<true>(g, values, lookup, wi, wo);
 }
 
 template <typename Values>
 Rgb eval_table(const GridSpec& g, const Values& values, Lookup lookup, const Vec3& wi, const Vec3& wo) {
-    return (simd_level() >= Simd::Avx2Fma ? eval_one_avx2<Values> : eval_one_sse2<Values>)(g, values, lookup, wi, wo);
+    return build_for(simd_level(), eval_one_sse2<Values>, eval_one_avx2<Values>)(g, values, lookup, wi, wo);
 }
 
 // Batch kernels (eval_table_batch, and sample_table_batch's weights) work in blocks of pairs, in passes
@@ -290,17 +290,17 @@ template <typename Values>
     eval_table_passes<false>(g, values, lookup, wi, wo, out, n);
 }
 template <typename Values>
-[[gnu::flatten, gnu::target("avx2")]] void eval_table_batch_avx2(const GridSpec& g, const Values& values,
-                                                                 Lookup lookup, const Vec3* wi, const Vec3* wo,
-                                                                 Rgb* out, std::size_t n) {
+[[gnu::flatten, BRDFZ_AVX2]] void eval_table_batch_avx2(const GridSpec& g, const Values& values,
+                                                        Lookup lookup, const Vec3* wi, const Vec3* wo,
+                                                        Rgb* out, std::size_t n) {
     eval_table_passes<true>(g, values, lookup, wi, wo, out, n);
 }
 
 template <typename Values>
 void eval_table_batch(const GridSpec& g, const Values& values, Lookup lookup, const Vec3* wi, const Vec3* wo,
                       Rgb* out, std::size_t n) {
-    (simd_level() >= Simd::Avx2Fma ? eval_table_batch_avx2<Values> : eval_table_batch_sse2<Values>)(
-        g, values, lookup, wi, wo, out, n);
+    const auto kernel = build_for(simd_level(), eval_table_batch_sse2<Values>, eval_table_batch_avx2<Values>);
+    kernel(g, values, lookup, wi, wo, out, n);
 }
 
 }  // namespace brdfz::detail

@@ -77,17 +77,17 @@ template <typename Values>
     return sample_one<false>(g, values, lookup, sampler, wo, u1, u2);
 }
 template <typename Values>
-[[gnu::flatten, gnu::target("avx2")]] BrdfSample sample_one_avx2(const GridSpec& g, const Values& values,
-                                                                 Lookup lookup, const HalfVectorSampler& sampler,
-                                                                 const Vec3& wo, double u1, double u2) {
+[[gnu::flatten, BRDFZ_AVX2]] BrdfSample sample_one_avx2(const GridSpec& g, const Values& values,
+                                                        Lookup lookup, const HalfVectorSampler& sampler,
+                                                        const Vec3& wo, double u1, double u2) {
     return sample_one<true>(g, values, lookup, sampler, wo, u1, u2);
 }
 
 template <typename Values>
 BrdfSample sample_table(const GridSpec& g, const Values& values, Lookup lookup, const HalfVectorSampler& sampler,
                         const Vec3& wo, double u1, double u2) {
-    return (simd_level() >= Simd::Avx2Fma ? sample_one_avx2<Values> : sample_one_sse2<Values>)(g, values, lookup,
-                                                                                               sampler, wo, u1, u2);
+    const auto kernel = build_for(simd_level(), sample_one_sse2<Values>, sample_one_avx2<Values>);
+    return kernel(g, values, lookup, sampler, wo, u1, u2);
 }
 
 // Brdf::sample_batch: blocks of draws in passes, as eval_table_batch does for pairs: (1) the draws
@@ -134,18 +134,18 @@ template <typename Values>
     sample_table_passes<false>(g, values, lookup, sampler, wo, u, out, n);
 }
 template <typename Values>
-[[gnu::flatten, gnu::target("avx2")]] void sample_table_batch_avx2(const GridSpec& g, const Values& values,
-                                                                   Lookup lookup, const HalfVectorSampler& sampler,
-                                                                   const Vec3* wo, const std::array<double, 2>* u,
-                                                                   BrdfSample* out, std::size_t n) {
+[[gnu::flatten, BRDFZ_AVX2]] void sample_table_batch_avx2(const GridSpec& g, const Values& values,
+                                                          Lookup lookup, const HalfVectorSampler& sampler,
+                                                          const Vec3* wo, const std::array<double, 2>* u,
+                                                          BrdfSample* out, std::size_t n) {
     sample_table_passes<true>(g, values, lookup, sampler, wo, u, out, n);
 }
 
 template <typename Values>
 void sample_table_batch(const GridSpec& g, const Values& values, Lookup lookup, const HalfVectorSampler& sampler,
                         const Vec3* wo, const std::array<double, 2>* u, BrdfSample* out, std::size_t n) {
-    (simd_level() >= Simd::Avx2Fma ? sample_table_batch_avx2<Values> : sample_table_batch_sse2<Values>)(
-        g, values, lookup, sampler, wo, u, out, n);
+    const auto kernel = build_for(simd_level(), sample_table_batch_sse2<Values>, sample_table_batch_avx2<Values>);
+    kernel(g, values, lookup, sampler, wo, u, out, n);
 }
 
 }  // namespace brdfz::detail

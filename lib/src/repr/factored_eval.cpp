@@ -201,9 +201,9 @@ template <FactorLayout L, bool Grouped>
 }
 
 template <FactorLayout L, bool Grouped>
-[[gnu::flatten, gnu::target("avx2,fma")]] void eval_pairs_avx2(const FactorView& f, FactorSpace space, const Vec3* wi,
-                                                                const Vec3* wo, Rgb* out, std::size_t n,
-                                                                std::uint64_t& clamped) {
+[[gnu::flatten, BRDFZ_AVX2_FMA]] void eval_pairs_avx2(const FactorView& f, FactorSpace space, const Vec3* wi,
+                                                      const Vec3* wo, Rgb* out, std::size_t n,
+                                                      std::uint64_t& clamped) {
     eval_pairs<8, L, Grouped>(f, space, wi, wo, out, n, clamped);
 }
 
@@ -218,12 +218,11 @@ void eval_kernel(detail::Simd simd, FactorLayout layout, const FactorView& f, Fa
                  const Vec3* wo, Rgb* out, std::size_t n, std::uint64_t& clamped) {
     constexpr FactorLayout kHxDP = FactorLayout::HxDP, kHDxP = FactorLayout::HDxP;
     const bool hxdp = layout == kHxDP;
-    if (simd == detail::Simd::Avx512)
-        (hxdp ? eval_pairs_avx512<kHxDP, Grouped> : eval_pairs_avx512<kHDxP, Grouped>)(f, space, wi, wo, out, n, clamped);
-    else if (simd == detail::Simd::Avx2Fma)
-        (hxdp ? eval_pairs_avx2<kHxDP, Grouped> : eval_pairs_avx2<kHDxP, Grouped>)(f, space, wi, wo, out, n, clamped);
-    else
-        (hxdp ? eval_pairs_sse2<kHxDP, Grouped> : eval_pairs_sse2<kHDxP, Grouped>)(f, space, wi, wo, out, n, clamped);
+    const auto kernel = hxdp ? detail::build_for(simd, eval_pairs_sse2<kHxDP, Grouped>, eval_pairs_avx2<kHxDP, Grouped>,
+                                                 eval_pairs_avx512<kHxDP, Grouped>)
+                             : detail::build_for(simd, eval_pairs_sse2<kHDxP, Grouped>, eval_pairs_avx2<kHDxP, Grouped>,
+                                                 eval_pairs_avx512<kHDxP, Grouped>);
+    kernel(f, space, wi, wo, out, n, clamped);
 }
 
 }  // namespace

@@ -285,10 +285,10 @@ Cell exact_cell(const StackView& v, int slice, double u1, double u2) {
                                       HalfVectorSampler::Draws& out) {
     draw_lanes(v, st, table, wo, u, n, out);
 }
-[[gnu::flatten, gnu::target("avx2")]] void draw_lanes_avx2(const SamplerView& v, const StackView& st,
-                                                           const detail::SinCosTable& table, const Vec3* wo,
-                                                           const std::array<double, 2>* u, std::size_t n,
-                                                           HalfVectorSampler::Draws& out) {
+[[gnu::flatten, BRDFZ_AVX2]] void draw_lanes_avx2(const SamplerView& v, const StackView& st,
+                                                  const detail::SinCosTable& table, const Vec3* wo,
+                                                  const std::array<double, 2>* u, std::size_t n,
+                                                  HalfVectorSampler::Draws& out) {
     draw_lanes(v, st, table, wo, u, n, out);
 }
 // AVX-512 has FMA: the unit is built without contraction (lib/CMakeLists.txt), so this build too gives
@@ -393,8 +393,7 @@ HalfVectorSampler::Draw HalfVectorSampler::draw(const Vec3& wo, double u1, doubl
 
 void HalfVectorSampler::draw_block(const Vec3* wo, const std::array<double, 2>* u, std::size_t n, Draws& out) const {
     const SamplerView v{options_.cosine_share, theta_o_.back(), static_cast<int>(theta_o_.size())};
-    const detail::Simd simd = detail::simd_level();
-    (simd == detail::Simd::Avx512 ? draw_lanes_avx512 : simd == detail::Simd::Avx2Fma ? draw_lanes_avx2 : draw_lanes_sse2)(
+    detail::build_for(detail::simd_level(), draw_lanes_sse2, draw_lanes_avx2, draw_lanes_avx512)(
         v, first_, detail::half_turn_sincos(), wo, u, n, out);
 }
 
