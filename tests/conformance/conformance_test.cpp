@@ -114,7 +114,7 @@ TEST_CASE("conformance: every declared key is read by its kind's builder", "[con
     }
 }
 
-TEST_CASE("conformance: every registered format", "[conformance][io]") {
+TEST_CASE("conformance: every registered format", "[conformance][io][qemu]") {
     for (const Format& f : all_formats()) {
         SECTION(f.name) {
             test::TempDir dir;

@@ -45,7 +45,7 @@ double wrap(double phi) { return std::remainder(phi, 2 * kPi); }
 
 }  // namespace
 
-TEST_CASE("ALTA projected-Δφ rows land at the right wi and wo", "[alta]") {
+TEST_CASE("ALTA projected-Δφ rows land at the right wi and wo", "[alta][qemu]") {
     test::TempDir dir;
     const fs::path p = write(dir, "proj.dat",
                              header("ISOTROPIC_TL_TV_PROJ_DPHI", 3, "#VS 0\n") +
@@ -132,7 +132,7 @@ TEST_CASE("ALTA header variants: #VS columns, comments, END HEADER", "[alta]") {
     }
 }
 
-TEST_CASE("ALTA reader: NaN, Inf, negative and below-horizon rows are counted", "[alta]") {
+TEST_CASE("ALTA reader: NaN, Inf, negative and below-horizon rows are counted", "[alta][qemu]") {
     test::TempDir dir;
     const fs::path p = write(dir, "counts.dat",
                              header("ISOTROPIC_TL_TV_PROJ_DPHI", 3) +
@@ -353,7 +353,7 @@ TEST_CASE("ALTA reader: arbitrary bytes never crash, only throw brdfz errors", "
     }
 }
 
-TEST_CASE("ALTA shared data: the CEA gray tape is retro-reflective", "[alta][data]") {
+TEST_CASE("ALTA shared data: the CEA gray tape is retro-reflective", "[alta][data][qemu]") {
     const fs::path p = fs::path(BRDFZ_SHARED_DIR) / "data" / "alta" / "retro-gray-tape.dat";
     if (!fs::exists(p)) {
         WARN("skipped: ../shared/data/alta missing");

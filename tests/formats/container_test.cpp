@@ -126,7 +126,7 @@ void reseal(const fs::path& p) {
 
 }  // namespace
 
-TEST_CASE("CRC-32C and SHA-256 match their standard check values", "[container][checksum]") {
+TEST_CASE("CRC-32C and SHA-256 match their standard check values", "[container][checksum][qemu]") {
     CHECK(container::crc32c("123456789", 9) == 0xE3069283u);
     CHECK(container::crc32c("", 0) == 0u);
 
@@ -166,7 +166,7 @@ TEST_CASE("CRC-32C and SHA-256 match their standard check values", "[container][
     CHECK(container::hex(million.finish()) == "cdc76e5c9914fb9281a1c7e284d73e67f1809a48a497200e046d39ccc7112cd0");
 }
 
-TEST_CASE("Tables round-trip through .brdfz bit for bit", "[container]") {
+TEST_CASE("Tables round-trip through .brdfz bit for bit", "[container][qemu]") {
     test::TempDir dir;
     for (const GridSpec& g : {GridSpec{7, 5, 11, BinPosition::Start}, GridSpec{90, 90, 180, BinPosition::Centre},
                               GridSpec{1, 1, 1, BinPosition::Centre}}) {
@@ -201,7 +201,8 @@ TEST_CASE("Tables round-trip through .brdfz bit for bit", "[container]") {
         CHECK(e.path().string().find(".tmp-") == std::string::npos);
 }
 
-TEST_CASE("Compact tables (float16, u8log, bivariate) round-trip through .brdfz bit for bit", "[container][compact]") {
+TEST_CASE("Compact tables (float16, u8log, bivariate) round-trip through .brdfz bit for bit",
+          "[container][compact][qemu]") {
     test::TempDir dir;
     const std::vector<Vec3> wi{normalize(Vec3{0.3, -0.2, 0.9}), normalize(Vec3{-0.7, 0.1, 0.2}), {0, 0, 1}},
         wo{normalize(Vec3{-0.1, 0.4, 0.8}), normalize(Vec3{0.6, 0.5, 0.3}), normalize(Vec3{0.9, 0, 0.1})};
@@ -361,7 +362,7 @@ TEST_CASE("Non-tabular sources are tabulated and their achieved error recorded",
     CHECK(container::write(p.string(), TabularBrdf(t), w).lossless);
 }
 
-TEST_CASE("RGL tensors round-trip through .brdfz bit for bit", "[container][rgl]") {
+TEST_CASE("RGL tensors round-trip through .brdfz bit for bit", "[container][rgl][qemu]") {
     test::TempDir dir;
     std::vector<std::unique_ptr<rgl::RglBrdf>> sources;
     sources.push_back(std::make_unique<rgl::RglBrdf>(small_tensors()));
@@ -415,7 +416,7 @@ TEST_CASE("RGL tensors round-trip through .brdfz bit for bit", "[container][rgl]
     }
 }
 
-TEST_CASE("Analytic models round-trip through .brdfz bit for bit", "[container][analytic]") {
+TEST_CASE("Analytic models round-trip through .brdfz bit for bit", "[container][analytic][qemu]") {
     test::TempDir dir;
     const fs::path p = dir.path / "model.brdfz";
     std::mt19937_64 rng(3);
@@ -479,7 +480,7 @@ TEST_CASE("Analytic models round-trip through .brdfz bit for bit", "[container][
     CHECK_THAT(read_error(p), Catch::Contains("lambert+sheen_from_the_future"));
 }
 
-TEST_CASE("A flipped byte anywhere is detected, and in a dataset the dataset is named", "[container][corrupt]") {
+TEST_CASE("A flipped byte anywhere is detected, and in a dataset the dataset is named", "[container][corrupt][qemu]") {
     test::TempDir dir;
     const fs::path good = dir.path / "good.brdfz", bad = dir.path / "bad.brdfz";
     container::write(good.string(), rgl::RglBrdf(small_tensors()));
@@ -530,7 +531,7 @@ TEST_CASE("A flipped byte anywhere is detected, and in a dataset the dataset is 
     CHECK(checked > 4096);
 }
 
-TEST_CASE("Truncated, oversized and foreign files are refused with a reason", "[container][corrupt]") {
+TEST_CASE("Truncated, oversized and foreign files are refused with a reason", "[container][corrupt][qemu]") {
     test::TempDir dir;
     const fs::path good = dir.path / "good.brdfz", bad = dir.path / "bad.brdfz";
     container::write(good.string(), TabularBrdf(random_table({5, 5, 5}, 1)));

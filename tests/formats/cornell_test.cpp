@@ -92,7 +92,7 @@ TEST_CASE("Spectral weights: a flat spectrum is exactly grey, at its level", "[c
     }
 }
 
-TEST_CASE("Spectral weights agree with Mitsuba 3's spectrum_list_to_srgb under D65", "[cornell]") {
+TEST_CASE("Spectral weights agree with Mitsuba 3's spectrum_list_to_srgb under D65", "[cornell][qemu]") {
     // Reference: mitsuba 3.9.1, scalar_rgb, spectrum_list_to_srgb(400..700 step 10, s, bounded=False,
     // d65=True), an independent integration (1 nm CIE tables, its own normalisation: a flat spectrum
     // gives (0.9953, 0.9998, 0.9949) there, exactly 1 here), hence the 1.5% tolerance.
@@ -122,7 +122,7 @@ TEST_CASE("Spectral weights reject unusable wavelengths", "[cornell]") {
     CHECK_THROWS_AS(cornell::rgb_weights(std::vector<double>{600.0, 605.0, 610.0}), ValueError);
 }
 
-TEST_CASE("Cornell reader: flat spectrum gives grey, directions land where the angles say", "[cornell]") {
+TEST_CASE("Cornell reader: flat spectrum gives grey, directions land where the angles say", "[cornell][qemu]") {
     test::TempDir dir;
     const double t30 = kPi / 6, t45 = kPi / 4;
     const fs::path p = write(dir, "grey.brdf", cornell_text(decades(), {flat(t30, 0.0, t45, kPi / 2, 0.25),
@@ -295,7 +295,7 @@ TEST_CASE("Cornell reader: arbitrary bytes never crash, only throw brdfz errors"
     }
 }
 
-TEST_CASE("Cornell shared data: 1,439 records per file, peaks in the plane of incidence", "[cornell][data]") {
+TEST_CASE("Cornell shared data: 1,439 records per file, peaks in the plane of incidence", "[cornell][data][qemu]") {
     const fs::path dir = shared_cornell();
     if (!fs::is_directory(dir)) {
         WARN("skipped: ../shared/data/cornell missing");

@@ -56,7 +56,7 @@ void plain_exr(const fs::path& p, int w, int h, const std::string& grid = "") {
 
 }  // namespace
 
-TEST_CASE("EXR mosaic round-trips a table bit for bit", "[exr]") {
+TEST_CASE("EXR mosaic round-trips a table bit for bit", "[exr][qemu]") {
     test::TempDir dir;
     for (const GridSpec& g : {GridSpec{7, 5, 11, BinPosition::Start}, GridSpec{90, 90, 180}, GridSpec{1, 1, 1}}) {
         INFO(g.str());

@@ -42,7 +42,7 @@ std::vector<double> read_doubles(const fs::path& p) {
 
 }  // namespace
 
-TEST_CASE("MERL write then read is bit-identical, invalid bins included", "[merl][io]") {
+TEST_CASE("MERL write then read is bit-identical, invalid bins included", "[merl][io][qemu]") {
     const test::TempDir dir;
     for (const GridSpec g : {GridSpec{16, 16, 32}, GridSpec{}}) {
         TabulateOptions o;
@@ -125,7 +125,7 @@ TEST_CASE("bad MERL files are rejected with the file name and the reason", "[mer
     CHECK_THROWS_AS(merl::read(dir.path.string()), IoError);
 }
 
-TEST_CASE("NaN, Inf and negative MERL values are counted and masked, not clamped", "[merl][io]") {
+TEST_CASE("NaN, Inf and negative MERL values are counted and masked, not clamped", "[merl][io][qemu]") {
     const test::TempDir dir;
     std::vector<double> v = payload(2, 2, 4, 1500.0);
     const std::size_t n = 16;

@@ -380,7 +380,7 @@ void check_random_tensors(std::size_t n) {
 
 }  // namespace
 
-TEST_CASE("rgl kernels: eval, pdf and sample within 1e-8 of the scalar path", "[rgl][kernels][light]") {
+TEST_CASE("rgl kernels: eval, pdf and sample within 1e-8 of the scalar path", "[rgl][kernels][light][qemu]") {
     check_random_tensors(20000);
     const auto files = rgl_files();
     if (files.empty()) {
@@ -390,7 +390,8 @@ TEST_CASE("rgl kernels: eval, pdf and sample within 1e-8 of the scalar path", "[
     for (std::size_t i = 0; i < files.size(); i += 5) check_against_scalar(*rgl::read(files[i].string()).brdf, 20000);
 }
 
-TEST_CASE("rgl kernels: eval, pdf and sample within 1e-8 of the scalar path on every shared file", "[rgl][kernels][heavy]") {
+TEST_CASE("rgl kernels: eval, pdf and sample within 1e-8 of the scalar path on every shared file",
+          "[rgl][kernels][heavy]") {
     const auto files = rgl_files();
     if (files.empty()) {
         WARN("skipped: ../shared/data/rgl missing");
@@ -436,8 +437,9 @@ void check_builds(const rgl::RglBrdf& b, std::size_t n) {
 
 }  // namespace
 
-TEST_CASE("rgl kernels: one call = batch, bit for bit, and every SIMD build gives the same bits", "[rgl][kernels]") {
-    if (test::simd_levels().size() < 2) WARN("this CPU has only the SSE2 build");
+TEST_CASE("rgl kernels: one call = batch, bit for bit, and every SIMD build gives the same bits",
+          "[rgl][kernels][qemu]") {
+    if (test::simd_levels().size() < 2) WARN("this CPU has only the baseline build");
     for (int n_theta : {1, 3}) check_builds(rgl::RglBrdf(random_tensors(n_theta, 5, true)), 3000);
     const auto files = rgl_files();
     if (files.empty()) {
@@ -464,7 +466,8 @@ TEST_CASE("rgl kernels: the batch sampler's chi-square on random tables and a sh
 }
 
 // The batch sampler's χ² on every shared file is rgl_test.cpp's sampler test (its draws are batches).
-TEST_CASE("rgl kernels: batch sample, pdf and eval are one call's bits on every shared file", "[rgl][kernels][sample]") {
+TEST_CASE("rgl kernels: batch sample, pdf and eval are one call's bits on every shared file",
+          "[rgl][kernels][sample][qemu]") {
     const auto files = rgl_files();
     if (files.empty()) {
         WARN("skipped: ../shared/data/rgl missing");

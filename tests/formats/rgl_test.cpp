@@ -159,7 +159,7 @@ bool all_finite(const Rgb& f) { return std::isfinite(f[0]) && std::isfinite(f[1]
 
 }  // namespace
 
-TEST_CASE("rgl: synthetic file loads and evaluates analytically", "[rgl]") {
+TEST_CASE("rgl: synthetic file loads and evaluates analytically", "[rgl][qemu]") {
     TempDir dir;
     const auto r = rgl::read(dir.write("ok.bsdf", serialize(synthetic_fields()).bytes));
     CHECK(r.description == "synthetic");
@@ -179,7 +179,7 @@ TEST_CASE("rgl: synthetic file loads and evaluates analytically", "[rgl]") {
     }
 }
 
-TEST_CASE("rgl: invalid files are rejected with FormatError or IoError", "[rgl]") {
+TEST_CASE("rgl: invalid files are rejected with FormatError or IoError", "[rgl][qemu]") {
     TempDir dir;
     const auto fields = synthetic_fields();
     const Image good = serialize(fields);
@@ -472,7 +472,7 @@ TEST_CASE("rgl: corrupted bytes never crash the reader", "[rgl]") {
     CHECK(loaded < 500);
 }
 
-TEST_CASE("rgl: shared RGL-EPFL files load and evaluate", "[rgl]") {
+TEST_CASE("rgl: shared RGL-EPFL files load and evaluate", "[rgl][qemu]") {
     const fs::path dir = fs::path(BRDFZ_SHARED_DIR) / "data" / "rgl";
     if (!fs::is_directory(dir)) {
         WARN("skipped: ../shared missing");

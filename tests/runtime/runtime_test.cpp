@@ -156,7 +156,7 @@ CoatedDiffuse coated(double alpha) {
 
 }  // namespace
 
-TEST_CASE("runtime: every gridded kind agrees with the library (synthetic material)", "[runtime]") {
+TEST_CASE("runtime: every gridded kind agrees with the library (synthetic material)", "[runtime][qemu]") {
     const test::SimdCap sse2(detail::Simd::Sse2);
     const CoatedDiffuse source = coated(0.08);
     for (const char* spec : {"tabular:res=16x16x32", "tabular:res=16x16x32,dtype=f16,symmetry=none",
@@ -171,7 +171,7 @@ TEST_CASE("runtime: every gridded kind agrees with the library (synthetic materi
     }
 }
 
-TEST_CASE("runtime: analytic models agree with the library", "[runtime][analytic]") {
+TEST_CASE("runtime: analytic models agree with the library", "[runtime][analytic][qemu]") {
     for (const char* text : {"lambert+ggx", "lambert+beckmann+ward", "lafortune3", "ggx_aniso+ashikhmin_shirley",
                              "lambert+ggx_conductor+blinn_phong+ggx_sep"}) {
         INFO(text);
@@ -303,7 +303,7 @@ TEST_CASE("runtime: bad layouts are refused with a line, never read", "[runtime]
     CHECK_THAT(rt::Material::open("/nonexistent/x.brdfzrt", &error) ? std::string() : error, Catch::Contains("/nonexistent/x.brdfzrt"));
 }
 
-TEST_CASE("runtime: directions are prepared as the library prepares them", "[runtime]") {
+TEST_CASE("runtime: directions are prepared as the library prepares them", "[runtime][qemu]") {
     const Compressed c = compress(coated(0.1), "tabular:res=16x16x32,dtype=f16");
     const rt::Material m = exported(*c.brdf);
     const Vec3 wi = normalize({0.2, 0.3, 0.8}), wo = normalize({-0.4, 0.1, 0.6});

@@ -126,7 +126,7 @@ CompactTableBrdf compact(const Table& t, TableDtype dtype, Lookup lookup = Looku
 
 }  // namespace
 
-TEST_CASE("float16 conversions are exact, round to nearest even and saturate to infinity", "[compact][f16]") {
+TEST_CASE("float16 conversions are exact, round to nearest even and saturate to infinity", "[compact][f16][qemu]") {
     for (std::uint32_t h = 0; h < 65536; ++h) {
         const double ref = half_reference(static_cast<std::uint16_t>(h));
         const float f = half_to_float(static_cast<std::uint16_t>(h));
@@ -225,7 +225,7 @@ TEST_CASE("u8log quantisation error is within half a step in log space", "[compa
     for (int ch = 0; ch < 3; ++ch) CHECK(c.codecs()[ch].scale < 0.06);
 }
 
-TEST_CASE("compact tables evaluate exactly as float32 tables of their decoded values", "[compact]") {
+TEST_CASE("compact tables evaluate exactly as float32 tables of their decoded values", "[compact][qemu]") {
     const GridSpec g{12, 10, 16};
     const Table t = wide_range_table(g, 2);
     const Pairs p = random_pairs(200000, 4);
@@ -565,7 +565,8 @@ TEST_CASE("a compact table of one real MERL table stays close to the source", "[
     check_merl_quantisation(1);
 }
 
-TEST_CASE("compact tables of real RGL data: quantisation costs little against resampling", "[compact][data][rgl][heavy]") {
+TEST_CASE("compact tables of real RGL data: quantisation costs little against resampling",
+          "[compact][data][rgl][heavy]") {
     const std::filesystem::path file = std::filesystem::path(BRDFZ_SHARED_DIR) / "data" / "rgl" / "paper_white_rgb.bsdf";
     if (!std::filesystem::exists(file)) {
         WARN("skipped: " << file.string() << " missing");
@@ -587,7 +588,8 @@ TEST_CASE("compact tables of real RGL data: quantisation costs little against re
 }
 
 
-TEST_CASE("warped θd tables of real RGL data: below the linear axis's error at the same size", "[compact][data][rgl][warp]") {
+TEST_CASE("warped θd tables of real RGL data: below the linear axis's error at the same size",
+          "[compact][data][rgl][warp]") {
     const std::filesystem::path file = test::rgl_file("satin_rosaline");
     if (!std::filesystem::exists(file)) {
         WARN("skipped: " << file.string() << " missing");

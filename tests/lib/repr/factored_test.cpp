@@ -184,7 +184,8 @@ TEST_CASE("factored: masked factorisation is unaffected by the values in invalid
     check_mask_ignores_fills(true);
 }
 
-TEST_CASE("factored: masked factorisation is unaffected by the values in invalid bins (two of the four cases)", "[factored][mask][light]") {
+TEST_CASE("factored: masked factorisation is unaffected by the values in invalid bins (two of the four cases)",
+          "[factored][mask][light]") {
     check_mask_ignores_fills(false);
 }
 
@@ -242,7 +243,8 @@ void check_bounded(const FactoredBrdf& f, const Table& t) {
 
 }  // namespace
 
-TEST_CASE("factored: bins without data do not extrapolate beyond the data (log and cbrt spaces)", "[factored][mask][heavy]") {
+TEST_CASE("factored: bins without data do not extrapolate beyond the data (log and cbrt spaces)",
+          "[factored][mask][heavy]") {
     // A sharp coat's grazing bins are below the horizon (invalid); with one θh row entirely invalid
     // as well. Unregularised, rank 4 reconstructed log-space values of 490–630 there (expm1: beyond
     // any float) and cbrt values up to 1,200, against data at most 8.9 and 19.
@@ -436,7 +438,8 @@ TEST_CASE("factored: eval is the interpolated reconstruction, within 1e-5, at ra
     check_eval_interpolates(true);
 }
 
-TEST_CASE("factored: eval is the interpolated reconstruction, within 1e-5, at random pairs (half the cases)", "[factored][light]") {
+TEST_CASE("factored: eval is the interpolated reconstruction, within 1e-5, at random pairs (half the cases)",
+          "[factored][light][qemu]") {
     check_eval_interpolates(false);
 }
 
@@ -505,7 +508,7 @@ TEST_CASE("factored: the SSE2, AVX2 and AVX-512 kernels agree (half the cases)",
 // Separate colour of rank 3 and 4 runs a kernel of its own (channels in groups of 4 floats, no colour
 // mix); the same factors as shared colour of rank 3·r with one-hot colour weights run the mixing
 // kernel. Both builds, both layouts, every space: the two agree to float rounding.
-TEST_CASE("factored: separate colour of rank 3 and 4 evaluates as its shared one-hot equivalent", "[factored]") {
+TEST_CASE("factored: separate colour of rank 3 and 4 evaluates as its shared one-hot equivalent", "[factored][qemu]") {
     const GridSpec g{12, 10, 16};
     std::mt19937_64 rng(14);
     std::uniform_real_distribution<float> entry(0.05f, 0.6f);
@@ -594,7 +597,8 @@ TEST_CASE("factored: factors on a warped θd axis are sampled and interpolated o
     CHECK(worst_linear > 1e-2);  // the axis matters: the same factors on the linear axis differ
 }
 
-TEST_CASE("factored: factors on a warped θd axis round-trip through .brdfz with their axis", "[factored][container][warp]") {
+TEST_CASE("factored: factors on a warped θd axis round-trip through .brdfz with their axis",
+          "[factored][container][warp]") {
     test::TempDir dir;
     const std::string path = (dir.path / "w.brdfz").string();
     const Factored f = factor(coated({12, 10, 20, BinPosition::Centre, 0.65}),
@@ -794,12 +798,14 @@ void check_random_draws(std::size_t n) {
 
 }  // namespace
 
-TEST_CASE("factored sampler: 10^7 random (wo, u) give finite, non-negative pdfs and weights", "[factored][sample][heavy]") {
+TEST_CASE("factored sampler: 10^7 random (wo, u) give finite, non-negative pdfs and weights",
+          "[factored][sample][heavy]") {
     check_random_draws(10000000);
 }
 
 // The sanitizers' share of the test above (the same draws, first 10^5).
-TEST_CASE("factored sampler: 10^5 random (wo, u) give finite, non-negative pdfs and weights", "[factored][sample][light]") {
+TEST_CASE("factored sampler: 10^5 random (wo, u) give finite, non-negative pdfs and weights",
+          "[factored][sample][light]") {
     check_random_draws(100000);
 }
 

@@ -42,7 +42,8 @@ TabularBrdf tabulated(double alpha) {
 
 }  // namespace
 
-TEST_CASE("tabular sampler: chi-square, normalisation, round trip (glossy and near-specular)", "[sample][tabular][heavy]") {
+TEST_CASE("tabular sampler: chi-square, normalisation, round trip (glossy and near-specular)",
+          "[sample][tabular][heavy]") {
     SECTION("glossy") { check_sampler(tabulated(0.12), 1000000, test::kViewsLevel, kFineChi2); }
     SECTION("near-specular") { check_sampler(tabulated(0.02), 1000000, test::kViewsLevel, kFineChi2); }
 }
@@ -75,12 +76,14 @@ void check_random_draws(std::size_t n) {
 
 }  // namespace
 
-TEST_CASE("tabular sampler: 10^7 random (wo, u) give finite, non-negative pdfs and weights", "[sample][tabular][heavy]") {
+TEST_CASE("tabular sampler: 10^7 random (wo, u) give finite, non-negative pdfs and weights",
+          "[sample][tabular][heavy]") {
     check_random_draws(10000000);
 }
 
 // The sanitizers' share of the test above (the same draws, first 10^5).
-TEST_CASE("tabular sampler: 10^5 random (wo, u) give finite, non-negative pdfs and weights", "[sample][tabular][light]") {
+TEST_CASE("tabular sampler: 10^5 random (wo, u) give finite, non-negative pdfs and weights",
+          "[sample][tabular][light]") {
     check_random_draws(100000);
 }
 
@@ -335,7 +338,7 @@ TEST_CASE("tabular sample: the weight from the draw's angles is eval's", "[sampl
 
 // The fused batch kernels of both table classes against their one-at-a-time path, with bad input mixed in.
 TEST_CASE("table sample_batch: each result is the one-at-a-time sample, and bad input gives failed samples",
-          "[sample][tabular][compact]") {
+          "[sample][tabular][compact][qemu]") {
     TabularBrdf t = tabulated(0.05);
     const Compressed u8 = compress(t, "tabular:res=45x45x90,dtype=u8log");
     const double nan = std::nan(""), inf = INFINITY;
@@ -390,7 +393,7 @@ TEST_CASE("table sample_batch: each result is the one-at-a-time sample, and bad 
 // draw_block searches the CDFs across draws in two steps of the guided scan and hands longer scans
 // (and cell coordinates needing a nudge) to Piecewise2D::sample: every draw must still be draw()'s,
 // angles included, in both builds. A near-specular table has the steepest CDFs (the longest scans).
-TEST_CASE("HalfVectorSampler::draw_block: each draw is draw()'s, in every build", "[sample][tabular]") {
+TEST_CASE("HalfVectorSampler::draw_block: each draw is draw()'s, in every build", "[sample][tabular][qemu]") {
     const TabularBrdf t = tabulated(0.02);
     const HalfVectorSampler& sampler = *t.sampler().fine();
     auto [wo, us] = random_views(20000, 31);
