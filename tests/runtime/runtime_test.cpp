@@ -303,6 +303,35 @@ TEST_CASE("runtime: bad layouts are refused with a line, never read", "[runtime]
     CHECK_THAT(rt::Material::open("/nonexistent/x.brdfzrt", &error) ? std::string() : error, Catch::Contains("/nonexistent/x.brdfzrt"));
 }
 
+TEST_CASE("runtime: every build this CPU runs gives the baseline build's bits", "[runtime][qemu]") {
+    const CoatedDiffuse source = coated(0.08);
+    auto [wo, us] = test::random_views(5000, 3);
+    auto [wi, unused] = test::random_views(5000, 4);
+    for (const char* spec : {"tabular:res=16x16x32,dtype=f16,symmetry=none", "svd:rank=3,res=16x12x16,space=log",
+                             "tabular:res=12x12x16,phih=3,symmetry=bilateral", "analytic:lambert+ggx"}) {
+        const Compressed c = compress(source, spec);
+        // Each level's outputs as bytes: eval, pdf and draws of the float calls.
+        const auto outputs = [&](detail::Simd level) {
+            const test::SimdCap cap(level);
+            const rt::Material m = exported(*c.brdf);  // builds are taken at open
+            std::vector<float> out;
+            for (std::size_t k = 0; k < wo.size(); ++k) {
+                const rt::Float3 i = to_float(wi[k]), o = to_float(wo[k]);
+                const rt::Rgb32 f = m.eval(i, o);
+                const rt::Sample32 s = m.sample(o, static_cast<float>(us[k][0]), static_cast<float>(us[k][1]));
+                out.insert(out.end(), {f.r, f.g, f.b, m.pdf(o, i), s.wi.x, s.wi.y, s.wi.z, s.pdf, s.weight.r, s.weight.g, s.weight.b});
+            }
+            return out;
+        };
+        const std::vector<float> base = outputs(detail::Simd::Sse2);
+        REQUIRE(std::count_if(base.begin(), base.end(), [](float x) { return x > 0.0f; }) > 1000);
+        for (detail::Simd level : test::simd_levels()) {
+            INFO(spec << ", " << test::simd_label(level));
+            CHECK(std::memcmp(outputs(level).data(), base.data(), base.size() * sizeof(float)) == 0);
+        }
+    }
+}
+
 TEST_CASE("runtime: directions are prepared as the library prepares them", "[runtime][qemu]") {
     const Compressed c = compress(coated(0.1), "tabular:res=16x16x32,dtype=f16");
     const rt::Material m = exported(*c.brdf);

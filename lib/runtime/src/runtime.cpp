@@ -6,6 +6,7 @@
 #include <cstdio>
 #include <cstring>
 #include <limits>
+#include <type_traits>
 #include <map>
 #include <utility>
 #include <vector>
@@ -24,6 +25,7 @@
 #include "brdfz/runtime/kernels/grid.h"
 #include "brdfz/runtime/kernels/lobe_mixture.h"
 #include "brdfz/runtime/kernels/phi_h.h"
+#include "brdfz/runtime/kernels/simd.h"
 #include "brdfz/runtime/kernels/values.h"
 #include "brdfz/runtime/layout.h"
 
@@ -388,58 +390,87 @@ std::shared_ptr<const Data> parsed(std::unique_ptr<Data> d, std::string* error) 
     return nullptr;
 }
 
-// f for a pair above the horizon.
-void eval_object(const Data& d, const Object& o, const Vec3& wi, const Vec3& wo, double f[3]) {
-    switch (o.kind) {
-        case L::Kind::Table: {
-            const k::BinCoords c = k::fast_bin_coords(o.grid, wi, wo);
-            const auto read = [&](const auto& values) {
-                if (o.nearest)
-                    k::read_nearest(values, k::nearest_bin(o.grid, c, wi, wo), f);
-                else
-                    k::blend_linear(o.grid, values, k::linear_corners(o.grid, c, wi, wo), f);
-            };
-            if (o.f32)
-                read(k::Float32Values{o.f32});
-            else if (o.half)
-                read(k::HalfValues{o.codes, o.half_scale});
-            else
-                read(k::LogU8Values{o.codes, o.lut});
-            return;
-        }
-        case L::Kind::Factored: return k::eval_factored(o.factors, wi, wo, f);
-        case L::Kind::PhiH: {
-            const k::PhiHPick pick = k::phi_h_pick(o.bilateral, o.count, wi, wo);
-            f[0] = f[1] = f[2] = 0.0;
-            if (!pick.ok) return;
-            Vec3 a = wi, b = wo;
-            if (pick.mirrored) a.y = -a.y, b.y = -b.y;
-            double x[3], y[3];
-            // Slices are tables or factorisations, whose own eval is 0 below the horizon (never here).
-            eval_object(d, d.slices[o.first + pick.k0], a, b, x);
-            eval_object(d, d.slices[o.first + pick.k1], a, b, y);
-            for (int c = 0; c < 3; ++c) f[c] = x[c] * (1.0 - pick.t) + y[c] * pick.t;
-            return;
-        }
-        case L::Kind::Analytic: return k::lobe_mixture_eval(o.lobes, wi, wo, f);
+// The evaluators of one kind of object, for a pair above the horizon (eval<Wide>(o, wi, wo, f); Wide:
+// in a build with AVX2). Each call table below is built for one of them, so that a material's calls
+// hold only its own kind's code.
+template <typename Values, bool Nearest>
+struct TableLeaf {
+    static Values values(const Object& o) {
+        if constexpr (std::is_same_v<Values, k::Float32Values>) return {o.f32};
+        else if constexpr (std::is_same_v<Values, k::HalfValues>) return {o.codes, o.half_scale};
+        else return {o.codes, o.lut};
     }
+    template <bool Wide>
+    static void eval(const Object& o, const Vec3& wi, const Vec3& wo, double f[3]) {
+        const k::BinCoords c = k::fast_bin_coords(o.grid, wi, wo);
+        if constexpr (Nearest)
+            k::read_nearest(values(o), k::nearest_bin(o.grid, c, wi, wo), f);
+        else
+            k::blend_linear_vectors<Wide>(o.grid, values(o), k::linear_corners(o.grid, c, wi, wo), f);
+    }
+};
+struct FactoredLeaf {
+    template <bool Wide>
+    static void eval(const Object& o, const Vec3& wi, const Vec3& wo, double f[3]) { k::eval_factored(o.factors, wi, wo, f); }
+};
+struct LobesLeaf {
+    template <bool Wide>
+    static void eval(const Object& o, const Vec3& wi, const Vec3& wo, double f[3]) { k::lobe_mixture_eval(o.lobes, wi, wo, f); }
+};
+// Any object but a φh stack (the slices of one).
+struct AnyLeaf {
+    template <bool Wide, bool Nearest>
+    static void table(const Object& o, const Vec3& wi, const Vec3& wo, double f[3]) {
+        if (o.f32) return TableLeaf<k::Float32Values, Nearest>::template eval<Wide>(o, wi, wo, f);
+        if (o.half) return TableLeaf<k::HalfValues, Nearest>::template eval<Wide>(o, wi, wo, f);
+        return TableLeaf<k::LogU8Values, Nearest>::template eval<Wide>(o, wi, wo, f);
+    }
+    template <bool Wide>
+    static void eval(const Object& o, const Vec3& wi, const Vec3& wo, double f[3]) {
+        switch (o.kind) {
+            case L::Kind::Table: return o.nearest ? table<Wide, true>(o, wi, wo, f) : table<Wide, false>(o, wi, wo, f);
+            case L::Kind::Factored: return FactoredLeaf::eval<Wide>(o, wi, wo, f);
+            case L::Kind::Analytic: return LobesLeaf::eval<Wide>(o, wi, wo, f);
+            case L::Kind::PhiH: break;  // never a slice: parse refuses stacks of stacks
+        }
+        f[0] = f[1] = f[2] = 0.0;
+    }
+};
+
+// f of the root for a pair above the horizon; Leaf evaluates the root, or a φh stack's slices.
+template <typename Leaf, bool Wide>
+void eval_root(const Data& d, const Vec3& wi, const Vec3& wo, double f[3]) {
+    const Object& o = d.root;
+    if (o.kind != L::Kind::PhiH) return Leaf::template eval<Wide>(o, wi, wo, f);
+    const k::PhiHPick pick = k::phi_h_pick(o.bilateral, o.count, wi, wo);
+    f[0] = f[1] = f[2] = 0.0;
+    if (!pick.ok) return;
+    Vec3 a = wi, b = wo;
+    if (pick.mirrored) a.y = -a.y, b.y = -b.y;
+    double x[3], y[3];
+    // Slices are tables or factorisations, whose own eval is 0 below the horizon (never here).
+    Leaf::template eval<Wide>(d.slices[o.first + pick.k0], a, b, x);
+    Leaf::template eval<Wide>(d.slices[o.first + pick.k1], a, b, y);
+    for (int c = 0; c < 3; ++c) f[c] = x[c] * (1.0 - pick.t) + y[c] * pick.t;
 }
 
-Rgb64 eval64(const Data* d, Vec3 wi, Vec3 wo) {
+template <typename Leaf, bool Wide = false>
+Rgb64 eval64(const Data* d, Vec3 wi, Vec3 wo) noexcept {
     Rgb64 f{0.0, 0.0, 0.0};
-    if (!d || !prepare_direction(wi) || !prepare_direction(wo) || !(wi.z > 0.0 && wo.z > 0.0)) return f;
-    eval_object(*d, d->root, wi, wo, f.data());
+    if (!prepare_direction(wi) || !prepare_direction(wo) || !(wi.z > 0.0 && wo.z > 0.0)) return f;
+    eval_root<Leaf, Wide>(*d, wi, wo, f.data());
     return f;
 }
 
-double pdf64(const Data* d, Vec3 wo, Vec3 wi) {
-    if (!d || !prepare_direction(wo) || !prepare_direction(wi) || !(wi.z > 0.0 && wo.z > 0.0)) return 0.0;
+double pdf64(const Data* d, Vec3 wo, Vec3 wi) noexcept {
+    if (!prepare_direction(wo) || !prepare_direction(wi) || !(wi.z > 0.0 && wo.z > 0.0)) return 0.0;
     if (!d->has_sampler) return k::lobe_mixture_pdf(d->root.lobes, wo, wi);
     return k::compact_pdf(d->sampler, wo, wi);
 }
 
-Sample64 sample64(const Data* d, Vec3 wo, double u1, double u2) {
-    if (!d || !prepare_direction(wo) || !(wo.z > 0.0 && u1 >= 0.0 && u1 < 1.0 && u2 >= 0.0 && u2 < 1.0)) return {};
+template <typename Leaf, bool Wide>
+Sample64 sample64(const Data* d, Vec3 wo, double u1, double u2) noexcept {
+    if (!prepare_direction(wo) || !(wo.z > 0.0 && u1 >= 0.0 && u1 < 1.0 && u2 >= 0.0 && u2 < 1.0)) return {};
     Sample64 s;
     if (!d->has_sampler) {
         const k::LobeMixtureDraw draw = k::lobe_mixture_sample(d->root.lobes, wo, u1, u2);
@@ -450,17 +481,74 @@ Sample64 sample64(const Data* d, Vec3 wo, double u1, double u2) {
     }
     if (!(s.wi.z > 0.0 && s.pdf > 0.0 && s.pdf < std::numeric_limits<double>::infinity())) return {};
     double f[3];
-    eval_object(*d, d->root, s.wi, wo, f);
+    eval_root<Leaf, Wide>(*d, s.wi, wo, f);
     for (int c = 0; c < 3; ++c) s.weight[c] = f[c] * s.wi.z / s.pdf;  // the library's arithmetic
     return s;
 }
 
-Vec3 widen(const Float3& v) { return {v.x, v.y, v.z}; }
-Float3 narrow(const Vec3& v) { return {static_cast<float>(v.x), static_cast<float>(v.y), static_cast<float>(v.z)}; }
-Rgb32 narrow(const Rgb64& f) { return {static_cast<float>(f[0]), static_cast<float>(f[1]), static_cast<float>(f[2])}; }
+// The calls' builds (brdfz/runtime/kernels/simd.h), each flattened into one body of its kind's code: the
+// lookups and the sampler run faster with AVX2 (as the library's one-pair table call); without FMA it
+// gives the baseline's bits. An analytic model's eval is not flattened: its lobe mixture, every family
+// inlined into one body, runs slower.
+[[gnu::flatten]] double pdf_base(const Data* d, Vec3 wo, Vec3 wi) noexcept { return pdf64(d, wo, wi); }
+[[gnu::flatten, BRDFZ_AVX2]] double pdf_avx2(const Data* d, Vec3 wo, Vec3 wi) noexcept { return pdf64(d, wo, wi); }
+
+template <typename Leaf>
+struct Builds {
+    [[gnu::flatten]] static Rgb64 eval_base(const Data* d, Vec3 wi, Vec3 wo) noexcept { return eval64<Leaf>(d, wi, wo); }
+    [[gnu::flatten]] static Sample64 sample_base(const Data* d, Vec3 wo, double u1, double u2) noexcept {
+        return sample64<Leaf, false>(d, wo, u1, u2);
+    }
+    [[gnu::flatten, BRDFZ_AVX2]] static Rgb64 eval_avx2(const Data* d, Vec3 wi, Vec3 wo) noexcept {
+        return eval64<Leaf, true>(d, wi, wo);
+    }
+    [[gnu::flatten, BRDFZ_AVX2]] static Sample64 sample_avx2(const Data* d, Vec3 wo, double u1, double u2) noexcept {
+        return sample64<Leaf, true>(d, wo, u1, u2);
+    }
+    static constexpr bool kLobes = std::is_same_v<Leaf, LobesLeaf>;
+    static constexpr Calls base{kLobes ? eval64<Leaf> : eval_base, pdf_base, sample_base};
+    static constexpr Calls avx2{kLobes ? eval64<Leaf> : eval_avx2, pdf_avx2, sample_avx2};
+};
+
+template <typename Leaf>
+const Calls* calls_of() {
+    return k::build_for(k::simd_level(), &Builds<Leaf>::base, &Builds<Leaf>::avx2);
+}
+
+// The call table of the root's kind (a φh stack's: its slices' kind, where they share one).
+const Calls* calls_for(const Data& d) {
+    const Object* o = &d.root;
+    if (o->kind == L::Kind::PhiH) {
+        for (const Object& slice : d.slices)
+            if (slice.kind != d.slices[0].kind || (slice.f32 != nullptr) != (d.slices[0].f32 != nullptr) ||
+                slice.half != d.slices[0].half || slice.nearest != d.slices[0].nearest)
+                return calls_of<AnyLeaf>();
+        o = &d.slices[0];
+    }
+    switch (o->kind) {
+        case L::Kind::Factored: return calls_of<FactoredLeaf>();
+        case L::Kind::Analytic: return calls_of<LobesLeaf>();
+        case L::Kind::Table:
+            if (o->f32) return o->nearest ? calls_of<TableLeaf<k::Float32Values, true>>() : calls_of<TableLeaf<k::Float32Values, false>>();
+            if (o->half) return o->nearest ? calls_of<TableLeaf<k::HalfValues, true>>() : calls_of<TableLeaf<k::HalfValues, false>>();
+            return o->nearest ? calls_of<TableLeaf<k::LogU8Values, true>>() : calls_of<TableLeaf<k::LogU8Values, false>>();
+        case L::Kind::PhiH: break;
+    }
+    return calls_of<AnyLeaf>();
+}
+
+Rgb64 no_eval(const Data*, Vec3, Vec3) noexcept { return {0.0, 0.0, 0.0}; }
+double no_pdf(const Data*, Vec3, Vec3) noexcept { return 0.0; }
+Sample64 no_sample(const Data*, Vec3, double, double) noexcept { return {}; }
 
 }  // namespace
+
+const Calls kNoCalls{no_eval, no_pdf, no_sample};
+
 }  // namespace detail
+
+Material::Material(std::shared_ptr<const detail::Data> d)
+    : d_(std::move(d)), calls_(d_ ? detail::calls_for(*d_) : &detail::kNoCalls) {}
 
 Material Material::from_memory(const void* data, std::size_t size, bool copy, std::string* error) {
     auto d = std::make_unique<detail::Data>();
@@ -529,23 +617,6 @@ std::string Material::describe() const { return d_ ? d_->describe : std::string(
 const void* Material::data() const { return d_ ? d_->bytes : nullptr; }
 std::size_t Material::nbytes() const { return d_ ? d_->size : 0; }
 std::size_t Material::sampler_nbytes() const { return d_ ? d_->sampler_bytes : 0; }
-
-Rgb64 Material::eval(const Vec3& wi, const Vec3& wo) const noexcept { return detail::eval64(d_.get(), wi, wo); }
-double Material::pdf(const Vec3& wo, const Vec3& wi) const noexcept { return detail::pdf64(d_.get(), wo, wi); }
-Sample64 Material::sample(const Vec3& wo, double u1, double u2) const noexcept {
-    return detail::sample64(d_.get(), wo, u1, u2);
-}
-
-Rgb32 Material::eval(const Float3& wi, const Float3& wo) const noexcept {
-    return detail::narrow(detail::eval64(d_.get(), detail::widen(wi), detail::widen(wo)));
-}
-float Material::pdf(const Float3& wo, const Float3& wi) const noexcept {
-    return static_cast<float>(detail::pdf64(d_.get(), detail::widen(wo), detail::widen(wi)));
-}
-Sample32 Material::sample(const Float3& wo, float u1, float u2) const noexcept {
-    const Sample64 s = detail::sample64(d_.get(), detail::widen(wo), u1, u2);
-    return {detail::narrow(s.wi), static_cast<float>(s.pdf), detail::narrow(s.weight)};
-}
 
 void Material::eval(const Float3* wi, const Float3* wo, Rgb32* out, std::size_t n) const noexcept {
     for (std::size_t i = 0; i < n; ++i) out[i] = eval(wi[i], wo[i]);

@@ -9,7 +9,6 @@
 #include <algorithm>
 #include <bit>
 #include <cmath>
-#include <concepts>
 #include <cstddef>
 #include <cstdint>
 #include <cstdio>
@@ -73,81 +72,11 @@ inline Rgb read_nearest(const Values& values, std::size_t bin) {
     return f;
 }
 
-// The blend runs across channels, as vectors of doubles (GCC vector extensions): the three channels
-// and a spare lane in one AVX register (Wide, for kernels built for AVX2), or in two SSE2 registers.
-// Within one function, so no such vector crosses a call (whose ABI depends on the instruction set).
-// Each channel's arithmetic is the scalar one's (the same products, the same order of sums), so the
-// result is the same to the bit in either form.
-typedef double Doubles2 __attribute__((vector_size(16)));
-typedef std::int64_t Mask2 __attribute__((vector_size(16)));
-typedef double Doubles4 __attribute__((vector_size(32)));
-typedef std::int64_t Mask4 __attribute__((vector_size(32)));
-typedef float Floats4 __attribute__((vector_size(16)));
-
-// A Values policy whose bins are three floats in memory, readable as four (Table pads its storage):
-// read_linear then loads each corner as one vector instead of assembling it lane by lane.
-template <typename Values>
-concept FloatBins = requires(const Values& v) {
-    { v.floats(std::size_t{}) } -> std::same_as<const float*>;
-};
-
-// A bin's values as kParts vectors (the last lane spare, its content unused).
-template <bool Wide, typename Values, typename V>
-[[gnu::always_inline]] inline void load_bin(const Values& values, std::size_t bin, V* x) {
-    if constexpr (FloatBins<Values>) {
-        Floats4 v;
-        std::memcpy(&v, values.floats(bin), sizeof v);
-        // Lane by lane, not __builtin_convertvector: GCC lowers that to two 128-bit conversions and a
-        // spill even in the AVX2 build, where this is one vcvtps2pd.
-        if constexpr (Wide)
-            x[0] = Doubles4{v[0], v[1], v[2], v[3]};
-        else
-            x[0] = Doubles2{v[0], v[1]}, x[1] = Doubles2{v[2], v[3]};
-    } else {
-        float v[3];
-        values.load(bin, v);
-        if constexpr (Wide)
-            x[0] = V{v[0], v[1], v[2], 0.0};
-        else
-            x[0] = V{v[0], v[1]}, x[1] = V{v[2], 0.0};
-    }
-}
-
+// The linear blend across channels (the runtime's, kernels/grid.h), as an Rgb.
 template <bool Wide, typename Values>
 [[gnu::always_inline]] inline Rgb read_linear(const GridSpec& g, const Values& values, const Corners& k) {
-    using V = std::conditional_t<Wide, Doubles4, Doubles2>;
-    using M = std::conditional_t<Wide, Mask4, Mask2>;
-    constexpr int kParts = Wide ? 1 : 2;  // vectors per three channels
-    constexpr int kLanes = Wide ? 4 : 2;
-    const V zero = {};
-    V sum[kParts], wsum[kParts];
-    for (int i = 0; i < kParts; ++i) sum[i] = wsum[i] = zero;
-    for (int a = 0; a < 2; ++a) {
-        const int ih = a ? k.h.i1 : k.h.i0;
-        const double wa = a ? k.h.t : 1.0 - k.h.t;
-        for (int b = 0; b < 2; ++b) {
-            const int id = b ? k.d.i1 : k.d.i0;
-            const double wb = wa * (b ? k.d.t : 1.0 - k.d.t);
-            const std::size_t row = g.index(ih, id, 0);  // the index is linear in φd's
-            for (int p = 0; p < 2; ++p) {
-                const double w = wb * (p ? k.p.t : 1.0 - k.p.t);
-                V x[kParts];
-                const V wv = w - zero;  // w in every lane: one broadcast (a lane loop became two shuffles)
-                load_bin<Wide>(values, row + (p ? k.p.i1 : k.p.i0), x);
-                for (int i = 0; i < kParts; ++i) {
-                    // Invalid samples are NaN: they contribute neither value nor weight.
-                    const M ok = x[i] == x[i];
-                    sum[i] += ok ? wv * x[i] : zero;
-                    wsum[i] += ok ? wv : zero;
-                }
-            }
-        }
-    }
     Rgb f;
-    for (int i = 0; i < kParts; ++i) {
-        const V q = wsum[i] > zero ? sum[i] / wsum[i] : zero;
-        for (int j = 0; j < kLanes && i * kLanes + j < 3; ++j) f[i * kLanes + j] = q[j];
-    }
+    runtime::kernels::blend_linear_vectors<Wide>(g, values, k, f.data());
     return f;
 }
 

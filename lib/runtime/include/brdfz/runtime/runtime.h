@@ -51,7 +51,15 @@ using brdfz::prepare_direction;  // vec.h: the rule every call applies to its di
 
 namespace detail {
 struct Data;
-}
+// A material's calls, in the build for this CPU (brdfz/runtime/kernels/simd.h), picked when it is
+// parsed; an empty material's give 0.
+struct Calls {
+    Rgb64 (*eval)(const Data*, Vec3 wi, Vec3 wo) noexcept;
+    double (*pdf)(const Data*, Vec3 wo, Vec3 wi) noexcept;
+    Sample64 (*sample)(const Data*, Vec3 wo, double u1, double u2) noexcept;
+};
+extern const Calls kNoCalls;
+}  // namespace detail
 
 class Material {
 public:
@@ -73,13 +81,24 @@ public:
     std::size_t nbytes() const;
     std::size_t sampler_nbytes() const;
 
-    Rgb32 eval(const Float3& wi, const Float3& wo) const noexcept;
-    float pdf(const Float3& wo, const Float3& wi) const noexcept;
-    Sample32 sample(const Float3& wo, float u1, float u2) const noexcept;
+    // One call each, inline: the call table's entry is the only indirection.
+    Rgb32 eval(const Float3& wi, const Float3& wo) const noexcept {
+        const Rgb64 f = calls_->eval(d_.get(), widen(wi), widen(wo));
+        return {static_cast<float>(f[0]), static_cast<float>(f[1]), static_cast<float>(f[2])};
+    }
+    float pdf(const Float3& wo, const Float3& wi) const noexcept {
+        return static_cast<float>(calls_->pdf(d_.get(), widen(wo), widen(wi)));
+    }
+    Sample32 sample(const Float3& wo, float u1, float u2) const noexcept {
+        const Sample64 s = calls_->sample(d_.get(), widen(wo), u1, u2);
+        return {{static_cast<float>(s.wi.x), static_cast<float>(s.wi.y), static_cast<float>(s.wi.z)},
+                static_cast<float>(s.pdf),
+                {static_cast<float>(s.weight[0]), static_cast<float>(s.weight[1]), static_cast<float>(s.weight[2])}};
+    }
 
-    Rgb64 eval(const Vec3& wi, const Vec3& wo) const noexcept;
-    double pdf(const Vec3& wo, const Vec3& wi) const noexcept;
-    Sample64 sample(const Vec3& wo, double u1, double u2) const noexcept;
+    Rgb64 eval(const Vec3& wi, const Vec3& wo) const noexcept { return calls_->eval(d_.get(), wi, wo); }
+    double pdf(const Vec3& wo, const Vec3& wi) const noexcept { return calls_->pdf(d_.get(), wo, wi); }
+    Sample64 sample(const Vec3& wo, double u1, double u2) const noexcept { return calls_->sample(d_.get(), wo, u1, u2); }
 
     // Batches: out[k] for pair or draw k; u holds n (u1, u2) pairs.
     void eval(const Float3* wi, const Float3* wo, Rgb32* out, std::size_t n) const noexcept;
@@ -87,8 +106,10 @@ public:
     void sample(const Float3* wo, const float* u, Sample32* out, std::size_t n) const noexcept;
 
 private:
-    explicit Material(std::shared_ptr<const detail::Data> d) : d_(std::move(d)) {}
+    explicit Material(std::shared_ptr<const detail::Data> d);
+    static Vec3 widen(const Float3& v) { return {v.x, v.y, v.z}; }
     std::shared_ptr<const detail::Data> d_;
+    const detail::Calls* calls_ = &detail::kNoCalls;
 };
 
 }  // namespace brdfz::runtime

@@ -1,0 +1,76 @@
+// How a kernel gets its builds, in one place for the library and brdfz::runtime alike. A kernel is
+// written once (a template over its lane count, or one body) and wrapped once per level in a
+// [[gnu::flatten]] function carrying that level's attribute below; build_for picks the wrapper for the
+// level the CPU allows, at run time.
+//
+// Only x86-64 has levels beyond its baseline (SSE2): AVX2 and AVX-512. Elsewhere (ARM64, whose baseline
+// has NEON) every kernel runs its baseline build and the attributes name no instruction set.
+#pragma once
+
+#include <atomic>
+
+#if (defined(__x86_64__) || defined(__i386__)) && (defined(__GNUC__) || defined(__clang__))
+#define BRDFZ_X86 1
+#else
+#define BRDFZ_X86 0
+#endif
+
+namespace brdfz {
+
+// The kernels' builds, ordered: the baseline (SSE2 on x86-64; on other CPUs the only build, NEON on
+// ARM64), and x86-64's AVX2 and AVX-512 (F, DQ, VL and BW: x86-64-v4).
+enum class Simd { Sse2, Avx2Fma, Avx512 };
+
+namespace runtime::kernels {
+
+// The widest level this CPU runs.
+inline Simd cpu_simd() {
+#if BRDFZ_X86
+    static const bool avx2_fma = __builtin_cpu_supports("avx2") && __builtin_cpu_supports("fma");
+    static const bool avx512 = avx2_fma && __builtin_cpu_supports("avx512f") && __builtin_cpu_supports("avx512dq") &&
+                               __builtin_cpu_supports("avx512vl") && __builtin_cpu_supports("avx512bw");
+    return avx512 ? Simd::Avx512 : avx2_fma ? Simd::Avx2Fma : Simd::Sse2;
+#else
+    return Simd::Sse2;
+#endif
+}
+
+// Tests lower it to run the narrower builds on a CPU that has the wider ones; Avx512 is no cap. A
+// runtime material takes its builds when it is opened.
+inline std::atomic<Simd> simd_cap{Simd::Avx512};
+
+// The widest level both the CPU and simd_cap allow (brdfz::simd_level() for code outside the core).
+inline Simd simd_level() {
+    const Simd cpu = cpu_simd(), cap = simd_cap.load(std::memory_order_relaxed);
+    return cpu < cap ? cpu : cap;
+}
+
+// A kernel's build at the level: avx512 where given and allowed, else avx2, else the baseline. Levels
+// are ordered: a kernel without an AVX-512 build runs its AVX2 one at Avx512.
+template <typename F>
+F* build_for(Simd level, F* baseline, F* avx2, F* avx512 = nullptr) {
+    if (level >= Simd::Avx512 && avx512) return avx512;
+    return level >= Simd::Avx2Fma ? avx2 : baseline;
+}
+
+}  // namespace runtime::kernels
+}  // namespace brdfz
+
+// The levels' attributes. AVX2 comes without FMA: its contraction would round differently from the
+// baseline build, and the builds give the same bits. AVX-512 asks for 512-bit vectors (GCC and clang
+// otherwise prefer 256-bit ones even where AVX-512 is enabled; clang with its own attribute); it has
+// FMA, which the library's -ffp-contract=off keeps from contracting. BRDFZ_AVX2_FMA is for a kernel
+// whose builds need not agree to the bit (factored eval, within its float rounding).
+#if BRDFZ_X86
+#define BRDFZ_AVX2 gnu::target("avx2")
+#define BRDFZ_AVX2_FMA gnu::target("avx2,fma")
+#if defined(__clang__)
+#define BRDFZ_AVX512 gnu::target("avx512f,avx512dq,avx512vl,avx512bw"), clang::min_vector_width(512)
+#else
+#define BRDFZ_AVX512 gnu::target("avx512f,avx512dq,avx512vl,avx512bw,prefer-vector-width=512")
+#endif
+#else
+#define BRDFZ_AVX2
+#define BRDFZ_AVX2_FMA
+#define BRDFZ_AVX512
+#endif
