@@ -7,7 +7,9 @@
 //   ns/call      one call at a time and in batches of 2^16, the library's (double) against the runtime's
 //                (float32), interleaved rep by rep, as the median of the ratios library/runtime (> 1:
 //                the runtime is faster), for eval, pdf and sample; the *_f64 columns give the runtime's
-//                double calls the library's unit double directions, which the float calls normalise first
+//                double calls the library's unit double directions, which the float calls normalise first;
+//                the *_same columns give the library the float directions (widened, as a renderer working in
+//                float passes them; it normalises them too) against the runtime's float calls
 //   runtime_bench [--reps N] [--spec SPEC]... FILES...
 // Prints one CSV row per (file, spec).
 #include <malloc.h>
@@ -84,12 +86,13 @@ struct Inputs {
     std::vector<std::array<double, 2>> u;
     std::vector<rt::Float3> fi, fo;
     std::vector<float> fu;
+    std::vector<Vec3> gi, go;  // fi, fo in double
 };
 
 Inputs inputs(std::size_t n) {
     const bench::Pairs p = bench::uniform_pairs(n);
     Inputs in{p.wi, p.wo, std::vector<std::array<double, 2>>(n), std::vector<rt::Float3>(n), std::vector<rt::Float3>(n),
-              std::vector<float>(2 * n)};
+              std::vector<float>(2 * n), std::vector<Vec3>(n), std::vector<Vec3>(n)};
     std::mt19937_64 rng(5);
     std::uniform_real_distribution<float> u(0.0f, 1.0f);
     for (std::size_t k = 0; k < n; ++k) {
@@ -97,6 +100,7 @@ Inputs inputs(std::size_t n) {
         in.u[k] = {in.fu[2 * k], in.fu[2 * k + 1]};
         in.fi[k] = {static_cast<float>(in.wi[k].x), static_cast<float>(in.wi[k].y), static_cast<float>(in.wi[k].z)};
         in.fo[k] = {static_cast<float>(in.wo[k].x), static_cast<float>(in.wo[k].y), static_cast<float>(in.wo[k].z)};
+        in.gi[k] = {in.fi[k].x, in.fi[k].y, in.fi[k].z}, in.go[k] = {in.fo[k].x, in.fo[k].y, in.fo[k].z};
     }
     return in;
 }
@@ -134,7 +138,7 @@ int main(int argc, char** argv) {
     std::printf("file,spec,bytes,sampler_bytes,brdfz_bytes,brdfzrt_bytes,load_ms,open_ms,first_sample_us,first_allocations,"
                 "first_threads,memory_bytes,eval_one_ns,eval_one_ratio,pdf_one_ns,pdf_one_ratio,sample_one_ns,"
                 "sample_one_ratio,eval_batch_ns,eval_batch_ratio,sample_batch_ns,sample_batch_ratio,eval_one_f64_ns,"
-                "eval_one_f64_ratio,pdf_one_f64_ns,pdf_one_f64_ratio,sample_one_f64_ns,sample_one_f64_ratio\n");
+                "eval_one_f64_ratio,pdf_one_f64_ns,pdf_one_f64_ratio,sample_one_f64_ns,sample_one_f64_ratio,eval_same_ratio,pdf_same_ratio,sample_same_ratio\n");
     for (const std::string& file : files) {
         const Loaded source = load(file);
         for (const std::string& spec : specs) {
@@ -168,7 +172,7 @@ int main(int argc, char** argv) {
             const rt::Material m = rt::Material::open(flat, &error);
             const Brdf& b = *c.brdf;
             std::vector<double> r_eval, r_pdf, r_sample, r_beval, r_bsample, r_eval64, r_pdf64, r_sample64, t_eval, t_pdf,
-                t_sample, t_beval, t_bsample, t_eval64, t_pdf64, t_sample64;
+                t_sample, t_beval, t_bsample, t_eval64, t_pdf64, t_sample64, r_esame, r_psame, r_ssame;
             std::vector<Rgb> f(n);
             std::vector<BrdfSample> drawn(n);
             std::vector<rt::Rgb32> rf(n);
@@ -177,14 +181,17 @@ int main(int argc, char** argv) {
             for (int r = 0; r < reps; ++r) {
                 const double le = per_call([&] { for (std::size_t k = 0; k < single; ++k) sink += b.eval(in.wi[k], in.wo[k])[1]; }, single);
                 const double re = per_call([&] { for (std::size_t k = 0; k < single; ++k) sink += m.eval(in.fi[k], in.fo[k]).g; }, single);
+                const double lg = per_call([&] { for (std::size_t k = 0; k < single; ++k) sink += b.eval(in.gi[k], in.go[k])[1]; }, single);
                 const double le2 = per_call([&] { for (std::size_t k = 0; k < single; ++k) sink += b.eval(in.wi[k], in.wo[k])[1]; }, single);
                 const double re64 = per_call([&] { for (std::size_t k = 0; k < single; ++k) sink += m.eval(in.wi[k], in.wo[k])[1]; }, single);
                 const double lp = per_call([&] { for (std::size_t k = 0; k < single; ++k) sink += b.pdf(in.wo[k], in.wi[k]); }, single);
                 const double rp = per_call([&] { for (std::size_t k = 0; k < single; ++k) sink += m.pdf(in.fo[k], in.fi[k]); }, single);
+                const double lpg = per_call([&] { for (std::size_t k = 0; k < single; ++k) sink += b.pdf(in.go[k], in.gi[k]); }, single);
                 const double lp2 = per_call([&] { for (std::size_t k = 0; k < single; ++k) sink += b.pdf(in.wo[k], in.wi[k]); }, single);
                 const double rp64 = per_call([&] { for (std::size_t k = 0; k < single; ++k) sink += m.pdf(in.wo[k], in.wi[k]); }, single);
                 const double ls = per_call([&] { for (std::size_t k = 0; k < single; ++k) sink += b.sample(in.wo[k], in.u[k][0], in.u[k][1]).pdf; }, single);
                 const double rs1 = per_call([&] { for (std::size_t k = 0; k < single; ++k) sink += m.sample(in.fo[k], in.fu[2 * k], in.fu[2 * k + 1]).pdf; }, single);
+                const double lsg = per_call([&] { for (std::size_t k = 0; k < single; ++k) sink += b.sample(in.go[k], in.u[k][0], in.u[k][1]).pdf; }, single);
                 const double ls2 = per_call([&] { for (std::size_t k = 0; k < single; ++k) sink += b.sample(in.wo[k], in.u[k][0], in.u[k][1]).pdf; }, single);
                 const double rs64 = per_call([&] { for (std::size_t k = 0; k < single; ++k) sink += m.sample(in.wo[k], in.u[k][0], in.u[k][1]).pdf; }, single);
                 const double lbe = per_call([&] { b.eval(std::span<const Vec3>(in.wi), std::span<const Vec3>(in.wo), std::span(f)); }, n);
@@ -194,12 +201,13 @@ int main(int argc, char** argv) {
                 r_eval.push_back(le / re), r_pdf.push_back(lp / rp), r_sample.push_back(ls / rs1);
                 r_beval.push_back(lbe / rbe), r_bsample.push_back(lbs / rbs), r_eval64.push_back(le2 / re64);
                 r_pdf64.push_back(lp2 / rp64), r_sample64.push_back(ls2 / rs64);
+                r_esame.push_back(lg / re), r_psame.push_back(lpg / rp), r_ssame.push_back(lsg / rs1);
                 t_eval.push_back(re), t_pdf.push_back(rp), t_sample.push_back(rs1), t_beval.push_back(rbe), t_bsample.push_back(rbs);
                 t_eval64.push_back(re64), t_pdf64.push_back(rp64), t_sample64.push_back(rs64);
                 sink += f[r][0] + drawn[r].pdf + rf[r].r + rs[r].pdf;
             }
             const std::string name = file.substr(file.find_last_of('/') + 1);
-            std::printf("%s,\"%s\",%zu,%zu,%ju,%ju,%.3f,%.3f,%.1f,%zu,%d,%zu,%.1f,%.2f,%.1f,%.2f,%.1f,%.2f,%.1f,%.2f,%.1f,%.2f,%.1f,%.2f,%.1f,%.2f,%.1f,%.2f\n",
+            std::printf("%s,\"%s\",%zu,%zu,%ju,%ju,%.3f,%.3f,%.1f,%zu,%d,%zu,%.1f,%.2f,%.1f,%.2f,%.1f,%.2f,%.1f,%.2f,%.1f,%.2f,%.1f,%.2f,%.1f,%.2f,%.1f,%.2f,%.2f,%.2f,%.2f\n",
                         name.c_str(), spec.c_str(), b.nbytes(), sampler_bytes(*c.brdf),
                         static_cast<std::uintmax_t>(std::filesystem::file_size(stored)),
                         static_cast<std::uintmax_t>(std::filesystem::file_size(flat)), 1e3 * bench::median(load_s),
@@ -208,7 +216,8 @@ int main(int argc, char** argv) {
                         1e9 * bench::median(t_sample), bench::median(r_sample), 1e9 * bench::median(t_beval),
                         bench::median(r_beval), 1e9 * bench::median(t_bsample), bench::median(r_bsample),
                         1e9 * bench::median(t_eval64), bench::median(r_eval64), 1e9 * bench::median(t_pdf64),
-                        bench::median(r_pdf64), 1e9 * bench::median(t_sample64), bench::median(r_sample64));
+                        bench::median(r_pdf64), 1e9 * bench::median(t_sample64), bench::median(r_sample64),
+                        bench::median(r_esame), bench::median(r_psame), bench::median(r_ssame));
             std::fprintf(stderr, "[%g]\n", sink);
             std::fflush(stdout);
         }
