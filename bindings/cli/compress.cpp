@@ -6,8 +6,11 @@
 // reports what it achieved: bytes, ratio to the input file, the metrics against the input, batch
 // eval speed and build time. --auto tries candidates from cheapest to richest (select.h) and keeps the
 // smallest that meets the error budget, the most accurate within the size budget, or the smallest
-// within both, reporting every candidate; exit status 2, nothing written, when none does.
+// within both, reporting every candidate; exit status 2, nothing written, when none does. --auto
+// judges over direction pairs unless --over grid: the grid's bins weigh pairs unlike a renderer, and
+// rank settings that render off-colour ahead of better ones.
 #include <cmath>
+#include <cstdio>
 #include <filesystem>
 #include <iostream>
 #include <sstream>
@@ -129,14 +132,18 @@ void add_compress(CLI::App& app) {
         ->needs(automatic);
     cmd->add_option("--scene", args->scene, "scene file (docs/scene-json.md): measure the error where it looks")
         ->needs(automatic);
-    cmd->add_option("--candidate", args->candidates, "a candidate spec for --auto (repeatable; default: cheapest "
-                                                     "to richest of every kind)")
+    char threshold[16];
+    std::snprintf(threshold, sizeof threshold, "%g", kReciprocityThreshold);
+    cmd->add_option("--candidate", args->candidates,
+                    "a candidate spec for --auto (repeatable; default: cheapest to richest of every kind, phi_d kept "
+                    "whole with symmetry=bilateral when IN's reciprocity error, as `brdfz info` prints it, is above " +
+                        std::string(threshold) + ")")
         ->needs(automatic);
-    add_over_options(cmd, args->metrics);
+    CLI::Option* over = add_over_options(cmd, args->metrics)->default_str("grid; directions with --auto");
     add_threads_option(cmd, args->threads);
     cmd->add_flag("--json", args->json, "print the report as JSON");
     add_load_options(cmd, args->load);
-    cmd->callback([args, max_error, max_bytes] {
+    cmd->callback([args, max_error, max_bytes, over] {
         if (!args->automatic && args->repr.empty())
             throw ValueError("compress: give --repr SPEC or --auto with --max-error E, --max-bytes B or both");
         if (args->automatic && !*max_error && !*max_bytes)
@@ -145,6 +152,7 @@ void add_compress(CLI::App& app) {
             throw ValueError("compress --auto: --max-error must be a finite number > 0");
         // Check what can be checked before spending time on loading and building.
         if (!args->automatic) check_spec(args->repr);
+        if (args->automatic && !*over) args->metrics.over = Over::Directions;
         for (const std::string& c : args->candidates) check_spec(c);
         format_of(args->out, Access::Write);
         check_output(args->out);

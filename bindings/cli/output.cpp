@@ -53,15 +53,16 @@ const char* const kOverHelp =
     "--max-theta and within the reference's measured range, theta_o below --max-theta, every azimuth; "
     "each pair once: what a renderer asks for)";
 
-void add_over_options(CLI::App* cmd, MetricOptions& options) {
-    cmd->add_option("--over", options.over, kOverHelp)
-        ->transform(CLI::CheckedTransformer(
-            std::map<std::string, Over>{{"grid", Over::Grid}, {"directions", Over::Directions}}))
-        ->default_str("grid");
+CLI::Option* add_over_options(CLI::App* cmd, MetricOptions& options) {
+    CLI::Option* over = cmd->add_option("--over", options.over, kOverHelp)
+                            ->transform(CLI::CheckedTransformer(
+                                std::map<std::string, Over>{{"grid", Over::Grid}, {"directions", Over::Directions}}))
+                            ->default_str(over_name(options.over));
     cmd->add_option("--directions", options.directions, "direction pairs drawn with --over directions")
         ->check(CLI::Range(std::size_t{1}, MetricOptions::kMaxDirections))
         ->capture_default_str();
     cmd->add_option("--seed", options.seed, "seed of those pairs")->capture_default_str()->check(unsigned_integer());
+    return over;
 }
 
 bool parse_numbers(const std::string& text, double* out, int count) {

@@ -28,8 +28,9 @@ std::function<void(double)> progress_bar(const std::string& label);
 // --bin-position and --lookup, shared by every command that loads files.
 void add_load_options(CLI::App* cmd, LoadOptions& options);
 
-// --over grid|directions, --directions N and --seed S: where the metrics are taken (metrics.h).
-void add_over_options(CLI::App* cmd, MetricOptions& options);
+// --over grid|directions, --directions N and --seed S: where the metrics are taken (metrics.h). Returns
+// --over, whose default is options.over's (grid unless the command sets another).
+CLI::Option* add_over_options(CLI::App* cmd, MetricOptions& options);
 // The help text of --over, which diff and compress print.
 extern const char* const kOverHelp;
 

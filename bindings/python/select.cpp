@@ -155,13 +155,33 @@ void bind_select(py::module_& m) {
           py::arg("brdf").none(false), py::arg("max_error") = py::none(), py::kw_only(), py::arg("max_bytes") = py::none(),
           py::arg("metric") = "log", py::arg("scene") = py::none(),
           py::arg("candidates") = std::vector<std::string>{}, py::arg("measure_speed") = true, py::arg("threads") = 0,
-          py::arg("over") = "grid", py::arg("directions") = MetricOptions{}.directions,
+          py::arg("over") = "directions", py::arg("directions") = MetricOptions{}.directions,
           py::arg("seed") = MetricOptions{}.seed, py::arg("on_candidate") = py::none(),
           "by budget (select.h): the smallest candidate within max_error, the most accurate within max_bytes, or the "
           "smallest within both; on_candidate(candidate, index, total) after each");
 
     m.def("benchmark_specs", &benchmark_specs, "the settings the compression benchmark sweeps");
-    m.def("default_candidates", &default_candidates, "select_representation's candidates, cheapest first");
+    m.def("default_candidates",
+          [](const BrdfPtr& source, int threads, std::size_t directions, std::uint64_t seed) {
+              if (!source) return default_candidates();
+              const MetricOptions o = metric_options(80.0, threads, "directions", directions, seed);
+              return Interruptible().run([&] { return default_candidates(*source, o); });
+          },
+          py::arg("source") = py::none(), py::kw_only(), py::arg("threads") = 0,
+          py::arg("directions") = MetricOptions{}.directions, py::arg("seed") = MetricOptions{}.seed,
+          "select_representation's candidates, cheapest first; for a source, with phi_d kept whole "
+          "(keep_phi_d_whole) when it is not reciprocal (is_reciprocal)");
+    m.attr("RECIPROCITY_THRESHOLD") = kReciprocityThreshold;
+    m.def("is_reciprocal",
+          [](const BrdfPtr& source, int threads, std::size_t directions, std::uint64_t seed) {
+              const MetricOptions o = metric_options(80.0, threads, "directions", directions, seed);
+              return Interruptible().run([&] { return is_reciprocal(*source, o); });
+          },
+          py::arg("source").none(false), py::kw_only(), py::arg("threads") = 0,
+          py::arg("directions") = MetricOptions{}.directions, py::arg("seed") = MetricOptions{}.seed,
+          "whether the source's reciprocity error is at most RECIPROCITY_THRESHOLD");
+    m.def("keep_phi_d_whole", &keep_phi_d_whole, py::arg("specs"),
+          "the specs with symmetry=bilateral where they would fold phi_d by reciprocity (tabular, svd, nmf)");
     m.def("format_of", [](const std::string& path) { return format_of(path); }, py::arg("path"),
           "the format name of a file's extension ('merl', 'rgl', ...)");
 }

@@ -1,5 +1,6 @@
 #include "brdfz/select.h"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 
@@ -74,6 +75,7 @@ std::vector<std::string> default_candidates() {
         "svd:rank=10,space=cos,colour=shared,res=50x24x28,dwarp=0.9,fit=lsq,weight=solid,symmetry=none,dtype=f16",  // 14,560
         // Reciprocal sources. On the size benchmark's four RGL materials, which are not, it holds the mean of
         // f(wi, wo) and f(wo, wi), 1.5–9.7 % off; the same spec with symmetry=none is within 2 % on each.
+        // default_candidates(source) keeps φd whole in this one and those below for such sources.
         "svd:rank=8,space=cos,colour=shared,res=64x48x18,dwarp=0.9,fit=lsq,dtype=f16",  // 14,944
         // Reciprocal sources, without a factorisation to build (on those four as the spec above).
         "tabular:res=24x28x8,dtype=u8log,filter=lsq,dwarp=0.8",  // 16,200
@@ -91,12 +93,44 @@ std::vector<std::string> default_candidates() {
     });
 }
 
+bool is_reciprocal(const Brdf& source, const MetricOptions& options) {
+    return reciprocity_error(source, options).cos_rmse_rel.mean <= kReciprocityThreshold;
+}
+
+std::vector<std::string> keep_phi_d_whole(std::vector<std::string> specs) {
+    // Whether the kind's symmetry= takes bilateral: its help lists the choices before the ':'.
+    const auto takes_bilateral = [](const std::string& kind) {
+        const ReprKind* k = find_representation_kind(kind);
+        if (!k) return false;
+        const auto key = std::ranges::find(k->keys, std::string("symmetry"), &SpecKey::name);
+        if (key == k->keys.end()) return false;
+        std::string choices = key->help.substr(0, key->help.find(':'));
+        choices.insert(choices.begin(), '|');
+        return (choices += '|').find("|bilateral|") != std::string::npos;
+    };
+    const std::string folded = "symmetry=reciprocal";
+    for (std::string& spec : specs) {
+        const ReprSpec parsed = ReprSpec::parse(spec);
+        if (!takes_bilateral(parsed.kind())) continue;
+        if (!parsed.has("symmetry"))
+            spec += (spec.find(':') == std::string::npos ? ":" : ",") + std::string("symmetry=bilateral");
+        else if (parsed.get_string("symmetry", "") == "reciprocal")
+            spec.replace(spec.find(folded), folded.size(), "symmetry=bilateral");
+    }
+    return specs;
+}
+
+std::vector<std::string> default_candidates(const Brdf& source, const MetricOptions& options) {
+    return is_reciprocal(source, options) ? default_candidates() : keep_phi_d_whole(default_candidates());
+}
+
 Selection select_representation(const Brdf& source, const SelectOptions& options) {
     if (!options.max_error && !options.max_bytes) throw ValueError("select: give an error budget, a size budget or both");
     if (options.max_error && !(std::isfinite(*options.max_error) && *options.max_error > 0.0))
         throw ValueError("select: the error budget must be a finite number > 0");
     if (options.max_bytes && *options.max_bytes == 0) throw ValueError("select: the size budget must be at least 1 byte");
-    const std::vector<std::string> candidates = options.candidates.empty() ? default_candidates() : options.candidates;
+    const std::vector<std::string> candidates =
+        options.candidates.empty() ? default_candidates(source, options.trial.metrics) : options.candidates;
     const std::optional<Scene> judge =
         options.scene ? options.scene
                       : options.metric == SceneMetric::Image ? std::optional<Scene>(build_scene(default_scene())) : std::nullopt;
@@ -196,6 +230,15 @@ std::string sweep_csv_row(const std::string& material, const std::string& format
            num(static_cast<double>(input_bytes) / static_cast<double>(t.bytes)) + "," + num(t.metrics.cos_rmse.mean) +
            "," + num(t.metrics.cos_rmse_rel.mean) + "," + num(t.metrics.log_rmse.mean) + "," +
            num(t.metrics.cbrt_rmse.mean) + "," + num(t.eval_rate) + "," + num(t.build_seconds) + "," + field(status);
+}
+
+std::string sweep_csv_directions(const Metrics* over_directions) {
+    if (!over_directions) return ",,,,";
+    std::string cells;
+    for (const PerChannel* p : {&over_directions->cos_rmse, &over_directions->cos_rmse_rel, &over_directions->log_rmse,
+                                &over_directions->cbrt_rmse})
+        (cells += ',') += num(p->mean);
+    return cells;
 }
 
 }  // namespace brdfz

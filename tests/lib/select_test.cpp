@@ -1,5 +1,6 @@
 #include <catch2/catch.hpp>
 
+#include <algorithm>
 #include <cmath>
 #include <numbers>
 
@@ -17,6 +18,27 @@ namespace {
 
 // f = ρ/π, scaled by `gain`.
 AnalyticBrdf lambert(double rho) { return AnalyticBrdf("lambert", {rho, rho, rho}); }
+
+// Isotropic but not reciprocal, as real RGL measurements: brighter where the light is higher than the view.
+class Skewed final : public Brdf {
+public:
+    int channels() const override { return 3; }
+    std::size_t nbytes() const override { return 0; }
+    std::string describe() const override { return "skewed lambert"; }
+
+protected:
+    Rgb eval_above(const Vec3& wi, const Vec3& wo) const override {
+        const double f = (1.0 + 0.5 * (wi.z - wo.z)) * 0.5 / std::numbers::pi;
+        return {f, f, f};
+    }
+};
+
+// Few pairs: enough to tell a reciprocity error of 0 from one of 0.1.
+MetricOptions few_directions() {
+    MetricOptions o;
+    o.directions = 4096;
+    return o;
+}
 
 }  // namespace
 
@@ -198,7 +220,9 @@ TEST_CASE("the default candidates are in order of size, so the first within budg
     const AnalyticBrdf source = lambert(0.5);
     CompressOptions quick;
     std::size_t previous = 0;
-    for (const std::string& spec : default_candidates()) {
+    // Those of a non-reciprocal source too, with φd kept whole.
+    const bool whole = GENERATE(false, true);
+    for (const std::string& spec : whole ? default_candidates(Skewed(), few_directions()) : default_candidates()) {
         const ReprSpec parsed = ReprSpec::parse(spec);
         // Nor on how factors are fitted: fit=lsq's refit (seconds) is left out, and its weight= with it.
         std::string sized = spec;
@@ -210,4 +234,41 @@ TEST_CASE("the default candidates are in order of size, so the first within budg
         CHECK(bytes > previous);
         previous = bytes;
     }
+}
+
+TEST_CASE("a source above the reciprocity threshold gets candidates that keep phi_d whole", "[select]") {
+    const AnalyticBrdf reciprocal = lambert(0.5);
+    const Skewed skewed;
+    // The threshold sits between what the two measure.
+    CHECK(reciprocity_error(reciprocal, few_directions()).cos_rmse_rel.mean < 1e-9);
+    CHECK(reciprocity_error(skewed, few_directions()).cos_rmse_rel.mean > 10 * kReciprocityThreshold);
+    CHECK(is_reciprocal(reciprocal, few_directions()));
+    CHECK_FALSE(is_reciprocal(skewed, few_directions()));
+    CHECK(default_candidates(reciprocal, few_directions()) == default_candidates());
+
+    const std::vector<std::string> plain = default_candidates(), whole = default_candidates(skewed, few_directions());
+    REQUIRE(whole.size() == plain.size());
+    std::size_t changed = 0;
+    for (std::size_t k = 0; k < whole.size(); ++k) {
+        INFO(plain[k] << " -> " << whole[k]);
+        const ReprSpec spec = ReprSpec::parse(whole[k]);
+        if (spec.kind() == "tabular" || spec.kind() == "svd" || spec.kind() == "nmf") {
+            const std::string symmetry = spec.get_string("symmetry", "reciprocal");
+            CHECK((symmetry == "bilateral" || symmetry == "none"));
+        }
+        changed += whole[k] != plain[k];
+    }
+    CHECK(changed > 0);
+    CHECK(std::ranges::find(whole, "tabular:res=90x90x180,symmetry=bilateral") != whole.end());
+
+    CHECK(keep_phi_d_whole({"tabular", "tabular:res=8x8x16", "svd:rank=2,symmetry=reciprocal,dtype=f16",
+                            "nmf:rank=2,symmetry=none", "svd:rank=2,symmetry=bilateral", "bivariate:res=32x32",
+                            "analytic:lambert+ggx", "nosuch:x=1"}) ==
+          std::vector<std::string>{"tabular:symmetry=bilateral", "tabular:res=8x8x16,symmetry=bilateral",
+                                   "svd:rank=2,symmetry=bilateral,dtype=f16", "nmf:rank=2,symmetry=none",
+                                   "svd:rank=2,symmetry=bilateral", "bivariate:res=32x32", "analytic:lambert+ggx",
+                                   "nosuch:x=1"});
+    // As many bins, so as many bytes: a list by size stays one.
+    CHECK(compress(reciprocal, "tabular:res=8x8x16,symmetry=bilateral").brdf->nbytes() ==
+          compress(reciprocal, "tabular:res=8x8x16").brdf->nbytes());
 }

@@ -76,7 +76,7 @@ def test_catalogue_complete(first, inputs):
     assert [(r["material"], r["spec"]) for r in cat] == [(f.stem, s) for f in [*files, corrupt] for s in SPECS]
     assert cat == as_text(rows)
     for r in cat[:-2]:
-        assert r["status"] == "ok" and r["error"] == "" and r["over"] == "grid"
+        assert r["status"] == "ok" and r["error"] == "" and r["over"] == "directions"
         assert r["output"] == f"{r['material']}/{batch.spec_hash(r['spec'])}.brdfz"
         assert int(r["bytes"]) > 0 and float(r["eval_rate"]) > 0 and float(r["build_seconds"]) > 0
         assert r["brdfz_version"] == brdfz.__version__ and r["worker"].startswith("tcp://")
@@ -86,19 +86,20 @@ def test_catalogue_complete(first, inputs):
 
 
 def test_catalogue_equals_diff(first, cli):
-    """Every ok row's numbers are what the CLI measures on the written file against its material, and
-    the file holds its spec."""
+    """Every ok row's numbers are what the CLI measures over directions (the default) on the written file
+    against its material, and the file holds its spec and its errors over the grid."""
     out, rows = first
     for r in rows:
         if r["status"] != "ok":
             continue
-        diff = json.loads(run(cli, "diff", r["input"], out / r["output"], "--json").stdout)
+        diff = json.loads(run(cli, "diff", r["input"], out / r["output"], "--over", "directions", "--json").stdout)
         for m in ("cos_rmse", "cos_rmse_rel", "log_rmse", "cbrt_rmse"):
             assert r[m] == pytest.approx(diff[m]["mean"], rel=1e-9), (r["material"], r["spec"], m)
         info = json.loads(run(cli, "info", out / r["output"], "--json").stdout)
         assert info["nbytes"] == r["bytes"] and info["container"]["build_spec"] == r["spec"]
         assert info["container"]["source"]["sha256"] == r["input_sha256"]
-        assert info["container"]["achieved"]["cos_rmse_rel"] == pytest.approx(r["cos_rmse_rel"], rel=1e-12)
+        grid = json.loads(run(cli, "diff", r["input"], out / r["output"], "--json").stdout)
+        assert info["container"]["achieved"]["cos_rmse_rel"] == pytest.approx(grid["cos_rmse_rel"]["mean"], rel=1e-9)
         assert os.path.getsize(out / r["output"]) == r["file_bytes"]
 
 
@@ -263,14 +264,25 @@ def test_same_name_twice_is_an_error(inputs, tmp_path):
 
 @pytest.mark.skipif(not batch.measures_directions(),
                     reason="brdfz.metrics has no over= in this build (branch data adds errors over directions)")
-def test_over_directions(inputs, cli, tmp_path):
+def test_over_grid_and_both(inputs, cli, tmp_path):
     files, _ = inputs
-    rows = batch.run(files[:1], SPECS[:1], tmp_path, workers=1, over="directions", charts=False)
+    rows = batch.run(files[:1], SPECS[:1], tmp_path, workers=1, over="grid", charts=False)
     r = rows[0]
-    assert r["status"] == "ok" and r["over"] == "directions"
-    diff = json.loads(run(cli, "diff", r["input"], tmp_path / r["output"], "--over", "directions", "--json").stdout)
+    assert r["status"] == "ok" and r["over"] == "grid"
+    diff = json.loads(run(cli, "diff", r["input"], tmp_path / r["output"], "--json").stdout)
     for m in ("cos_rmse", "cos_rmse_rel", "log_rmse", "cbrt_rmse"):
         assert r[m] == pytest.approx(diff[m]["mean"], rel=1e-9)
-    both = batch.run(files[:1], SPECS[:1], tmp_path / "both", workers=1, over=("grid", "directions"), charts=False)
-    assert both[0]["directions_cos_rmse_rel"] == r["cos_rmse_rel"]
+    both = batch.run(files[:1], SPECS[:1], tmp_path / "both", workers=1, over=("directions", "grid"), charts=False)
+    assert both[0]["grid_cos_rmse_rel"] == r["cos_rmse_rel"]
     assert both[0]["cos_rmse_rel"] != r["cos_rmse_rel"]
+
+
+def test_the_command_measures_over_directions_by_default(demo_table, tmp_path):
+    """python -m brdfz.batch without --over: the catalogue's errors are over direction pairs."""
+    out = tmp_path / "cmd"
+    assert batch.main([str(demo_table), "--specs", "tabular:res=8x8x16", "--out", str(out), "--workers", "1",
+                       "--no-charts"]) == 0
+    row = read_csv(out / "catalogue.csv")[0]
+    demo = brdfz.load(demo_table)
+    over = brdfz.metrics(demo, brdfz.load(out / row["output"]), over="directions").cos_rmse_rel.mean
+    assert row["over"] == "directions" and float(row["cos_rmse_rel"]) == pytest.approx(over, rel=1e-5)

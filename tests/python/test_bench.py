@@ -215,3 +215,30 @@ def test_summary_agrees_with_its_budget_choices(tmp_path):
     # Without the choices, the measured rows alone: none within either.
     alone = report.write_summary(tmp_path, "t", rows, [], source="test", table="sweep.csv").read_text()
     assert "| paint | none |  | none |  |" in alone
+
+
+def test_quick_keeps_phi_d_whole_for_a_non_reciprocal_material(demo_table, rgl_files, tmp_path, monkeypatch):
+    """--quick's settings fold φd by the mirror (symmetry=bilateral) for a material above
+    brdfz.RECIPROCITY_THRESHOLD and are as given for a reciprocal one; the charts and summary judge
+    over direction pairs, and the auto selection there too."""
+    rgl = next(p for p in rgl_files if p.name == "satin_rosaline_rgb.bsdf")
+    # Two cheap settings stand for QUICK_SPECS: a table that folds φd and a kind without a φd axis.
+    monkeypatch.setattr(bench, "QUICK_SPECS", ["tabular:res=8x8x16", "bivariate:res=8x8"])
+    out = tmp_path / "quick"
+    assert bench.main(["--quick", "--materials", str(rgl), str(demo_table), "--out", str(out), "--budgets", "0.9",
+                       "--candidates", "tabular:res=8x8x16,symmetry=bilateral", "--render-size", "0",
+                       "--workers", "1"]) == 0
+    with open(out / "sweep.csv", newline="") as f:
+        rows = list(csv.DictReader(f))
+    assert [(r["material"], r["repr"]) for r in rows] == [
+        (rgl.stem, "tabular:res=8x8x16,symmetry=bilateral"), (rgl.stem, "bivariate:res=8x8"),
+        ("coated-diffuse", "tabular:res=8x8x16"), ("coated-diffuse", "bivariate:res=8x8")]
+    # Judged over directions: the auto selection's error is the sweep's over directions for that setting.
+    with open(out / "auto.csv", newline="") as f:
+        auto = {r["material"]: r for r in csv.DictReader(f)}
+    swept = {r["material"]: r for r in rows if r["repr"] == "tabular:res=8x8x16,symmetry=bilateral"}
+    assert auto[rgl.stem]["chosen"] == "tabular:res=8x8x16,symmetry=bilateral"
+    assert float(auto[rgl.stem]["cos_rmse_rel"]) == pytest.approx(float(swept[rgl.stem]["directions_cos_rmse_rel"]),
+                                                                  rel=1e-5)
+    summary = (out / "summary.md").read_text()
+    assert "judged (fronts, smallest within an error, choices, renders) by cos_rmse_rel over direction pairs" in summary

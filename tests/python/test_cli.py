@@ -171,8 +171,12 @@ def test_demo_runs_without_data(cli, tmp_path):
     assert re.search(r"pca:basis=no-such-basis.brdfz,k=2 +failed: ", proc.stdout)
     rows = (tmp_path / "brdfz-demo" / "representations.csv").read_text().splitlines()
     assert rows[0].startswith("material,format,repr,describe,bytes,input_bytes,ratio,") and len(rows) == 3
-    assert rows[1].startswith("coated-diffuse,merl,tabular:res=8x8x16,") and rows[1].endswith(",ok")
+    # The errors over direction pairs follow the status, for the charts to judge there.
+    assert rows[0].endswith(",status,directions_cos_rmse,directions_cos_rmse_rel,directions_log_rmse,directions_cbrt_rmse")
+    assert rows[1].startswith("coated-diffuse,merl,tabular:res=8x8x16,") and ",ok," in rows[1]
+    assert all(float(v) > 0 for v in rows[1].split(",")[-4:])
     assert rows[2].startswith('coated-diffuse,merl,"pca:basis=no-such-basis.brdfz,k=2",,,') and "error: " in rows[2]
+    assert rows[2].endswith(",,,,")
 
 
 def subprocess_in(cli, cwd):

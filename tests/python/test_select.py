@@ -139,3 +139,42 @@ def test_progress_and_trial(demo, capsys):
     assert t.spec == "tabular:res=16x16x32" and t.bytes == 16 * 16 * 32 * 12 == t.brdf.nbytes
     assert t.metrics.cos_rmse_rel.mean == pytest.approx(brdfz.metrics(demo, t.brdf).cos_rmse_rel.mean, rel=1e-12)
     assert brdfz.benchmark_specs()[0] == "tabular:res=90x90x180" and brdfz.default_candidates()
+
+
+def test_auto_measures_over_directions_unless_told_grid(cli, demo_table, demo, tmp_path):
+    """--auto and compress(auto=True) judge over direction pairs by default, and say so; --over grid stays."""
+    cand = CANDIDATES[:1]
+    status, r = cli_auto(cli, demo_table, tmp_path, "--max-error", 5, "--metric", "cos", "--directions", 4096,
+                         candidates=cand)
+    over = brdfz.metrics(demo, brdfz.compress(demo, cand[0]), over="directions", directions=4096).cos_rmse_rel.mean
+    assert status == 0 and r["over"] == "directions" and r["metrics"]["samples"] == 4096
+    assert r["error"] == pytest.approx(over, rel=1e-12)
+    s = brdfz.compress(demo, auto=True, max_error=5, metric="cos", directions=4096, candidates=cand, report=True)
+    assert s.candidates[0].error == pytest.approx(over, rel=1e-12)
+    status, g = cli_auto(cli, demo_table, tmp_path, "--max-error", 5, "--metric", "cos", "--over", "grid",
+                         candidates=cand)
+    grid = brdfz.metrics(demo, brdfz.compress(demo, cand[0])).cos_rmse_rel.mean
+    assert status == 0 and g["over"] == "grid" and g["error"] == pytest.approx(grid, rel=1e-12)
+    assert grid != pytest.approx(over, rel=1e-3)
+    # Without --auto, --repr keeps the grid.
+    single = json.loads(run(cli, "compress", demo_table, "-o", tmp_path / "one.brdfz", "--repr", cand[0], "--json").stdout)
+    assert single["metrics"]["cos_rmse_rel"]["mean"] == pytest.approx(grid, rel=1e-12)
+
+
+def test_a_non_reciprocal_source_gets_candidates_that_keep_phi_d_whole(demo, rgl_files):
+    """Above RECIPROCITY_THRESHOLD (real RGL files: 0.1-1; a reciprocal table: 0) the default candidates
+    fold φd by the mirror or not at all, never by reciprocity; a reciprocal source keeps them as they are."""
+    rgl = brdfz.load(next(p for p in rgl_files if p.name == "satin_rosaline_rgb.bsdf"))
+    few = 1 << 14
+    assert brdfz.reciprocity_error(demo, directions=few).cos_rmse_rel.mean < 1e-6 < brdfz.RECIPROCITY_THRESHOLD
+    assert brdfz.reciprocity_error(rgl, directions=few).cos_rmse_rel.mean > 10 * brdfz.RECIPROCITY_THRESHOLD
+    assert brdfz.is_reciprocal(demo, directions=few) and not brdfz.is_reciprocal(rgl, directions=few)
+    plain = brdfz.default_candidates()
+    assert brdfz.default_candidates(demo, directions=few) == plain
+    whole = brdfz.default_candidates(rgl, directions=few)
+    assert len(whole) == len(plain) and whole != plain
+    for spec in whole:
+        kind, _, options = spec.partition(":")
+        if kind in ("tabular", "svd", "nmf"):
+            assert "symmetry=bilateral" in options.split(",") or "symmetry=none" in options.split(","), spec
+    assert whole == brdfz.keep_phi_d_whole(plain)

@@ -30,7 +30,7 @@ from typing import Callable, Mapping, NamedTuple, Optional, Sequence, Tuple, Uni
 import numpy as np
 
 from . import _core
-from ._core import MAX_THREADS, __version__
+from ._core import MAX_THREADS, RECIPROCITY_THRESHOLD, __version__
 from ._core import (
     Brdf,
     Candidate,
@@ -55,6 +55,8 @@ from ._core import (
     format_of,
     formats,
     from_half_diff,
+    is_reciprocal,
+    keep_phi_d_whole,
     load,
     representations,
     simd,
@@ -64,9 +66,10 @@ from ._core import (
 
 __all__ = [
     "Brdf", "Candidate", "ChannelMetrics", "Compressed", "FitReport", "FitResult", "FormatError", "MAX_THREADS",
-    "Metrics", "Scene", "Selection", "Trial", "UnsupportedError", "ValidationCheck", "ValidationReport", "albedo",
+    "Metrics", "RECIPROCITY_THRESHOLD", "Scene", "Selection", "Trial", "UnsupportedError", "ValidationCheck",
+    "ValidationReport", "albedo",
     "benchmark_specs", "compress", "compress_kinds", "container_metadata", "convert", "default_candidates", "directions", "export", "fit",
-    "format_of", "formats", "from_half_diff",
+    "format_of", "formats", "from_half_diff", "is_reciprocal", "keep_phi_d_whole",
     "load", "load_measurements", "Measurements", "metric_samples", "metrics", "metrics_at", "read_scene", "reciprocity_error", "representations", "save",
     "simd", "tabulate", "to_half_diff", "trial", "validate",
 ]
@@ -212,17 +215,18 @@ def _candidate_hook(progress: Progress, done_on_accept: bool = True) -> Optional
 
 def compress(brdf: Brdf, spec: Optional[str] = None, *, auto: bool = False, max_error: Optional[float] = None,
              max_bytes: Optional[int] = None, metric: str = "log", scene: Union[Path, Mapping, Scene, None] = None,
-             candidates: Optional[Sequence[str]] = None, over: str = "grid", directions: int = 1 << 18,
+             candidates: Optional[Sequence[str]] = None, over: str = "directions", directions: int = 1 << 18,
              seed: int = 1, report: bool = False, threads: int = 0, progress: Progress = None):
     """Builds the representation `spec` names, as ``brdfz compress`` spells it ("tabular:res=45x45x90",
     "analytic:lambert+ggx", "svd:rank=4", ...; see compress_kinds()). Returns the Brdf, or with
     report=True a :class:`Compressed` holding it with its canonical spec, build_seconds and notes.
 
-    With auto=True (``brdfz compress --auto``) it tries `candidates` (default: default_candidates())
-    from cheapest to richest and returns the first, so the smallest, whose error in `metric` ("log":
-    log_rmse, "cos": cos_rmse_rel, "image": relative pixel RMSE; under `scene` when given, a scene
-    file or dict) is at most `max_error`, the errors without a scene taken `over` the grid or over
-    direction pairs (as in metrics()). With `max_bytes` (``--max-bytes``) alone it returns the most
+    With auto=True (``brdfz compress --auto``) it tries `candidates` (default: default_candidates(brdf),
+    with φd kept whole when `brdf`'s reciprocity error is above RECIPROCITY_THRESHOLD) from cheapest to
+    richest and returns the first, so the smallest, whose error in `metric` ("log": log_rmse, "cos":
+    cos_rmse_rel, "image": relative pixel RMSE; under `scene` when given, a scene file or dict) is at
+    most `max_error`, the errors without a scene taken `over` direction pairs (the default, as a
+    renderer sees them) or over="grid" (as in metrics()). With `max_bytes` (``--max-bytes``) alone it returns the most
     accurate candidate of at most that many bytes; with both, the smallest within both. report=True returns the :class:`Selection` instead, every
     candidate with its bytes, error, eval_rate, build_seconds and why it was rejected. No candidate
     within the budget is a ValueError (its ``selection`` attribute holds the report). progress=True

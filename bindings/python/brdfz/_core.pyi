@@ -7,7 +7,7 @@ import numpy
 import numpy.typing
 import os
 import typing
-__all__: list[str] = ['Brdf', 'Candidate', 'ChannelMetrics', 'Compressed', 'FitReport', 'FitResult', 'FormatError', 'MAX_THREADS', 'Metrics', 'Scene', 'Selection', 'Trial', 'UnsupportedError', 'ValidationCheck', 'ValidationReport', 'albedo', 'benchmark_specs', 'compress', 'compress_kinds', 'container_metadata', 'convert', 'default_candidates', 'directions', 'fit', 'format_of', 'formats', 'from_half_diff', 'load', 'load_measurements', 'metric_samples', 'metrics', 'metrics_at', 'read_scene', 'reciprocity_error', 'representations', 'save', 'select_representation', 'simd', 'tabulate', 'to_half_diff', 'trial', 'validate']
+__all__: list[str] = ['Brdf', 'Candidate', 'ChannelMetrics', 'Compressed', 'FitReport', 'FitResult', 'FormatError', 'MAX_THREADS', 'Metrics', 'RECIPROCITY_THRESHOLD', 'Scene', 'Selection', 'Trial', 'UnsupportedError', 'ValidationCheck', 'ValidationReport', 'albedo', 'benchmark_specs', 'compress', 'compress_kinds', 'container_metadata', 'convert', 'default_candidates', 'directions', 'fit', 'format_of', 'formats', 'from_half_diff', 'is_reciprocal', 'keep_phi_d_whole', 'load', 'load_measurements', 'metric_samples', 'metrics', 'metrics_at', 'read_scene', 'reciprocity_error', 'representations', 'save', 'select_representation', 'simd', 'tabulate', 'to_half_diff', 'trial', 'validate']
 class FormatError(ValueError):
     pass
 class UnsupportedError(ValueError):
@@ -412,9 +412,9 @@ def convert(src: os.PathLike | str | bytes, dst: os.PathLike | str | bytes, *, r
     """
     as `brdfz convert SRC DST`; returns the written bins' counts
     """
-def default_candidates() -> list[str]:
+def default_candidates(source: Brdf = None, *, threads: typing.SupportsInt | typing.SupportsIndex = 0, directions: typing.SupportsInt | typing.SupportsIndex = 262144, seed: typing.SupportsInt | typing.SupportsIndex = 1) -> list[str]:
     """
-    select_representation's candidates, cheapest first
+    select_representation's candidates, cheapest first; for a source, with phi_d kept whole (keep_phi_d_whole) when it is not reciprocal (is_reciprocal)
     """
 def directions(theta: numpy.typing.NDArray[numpy.floating], phi: numpy.typing.NDArray[numpy.floating]) -> numpy.typing.NDArray[numpy.float64]:
     """
@@ -435,6 +435,14 @@ def formats() -> list:
 def from_half_diff(theta_h: numpy.typing.NDArray[numpy.floating], theta_d: numpy.typing.NDArray[numpy.floating], phi_d: numpy.typing.NDArray[numpy.floating], phi_h: numpy.typing.NDArray[numpy.floating] = 0.0) -> tuple:
     """
     direction pairs (wi, wo) at Rusinkiewicz angles (radians, broadcast), each (..., 3); to_half_diff's inverse
+    """
+def is_reciprocal(source: Brdf, *, threads: typing.SupportsInt | typing.SupportsIndex = 0, directions: typing.SupportsInt | typing.SupportsIndex = 262144, seed: typing.SupportsInt | typing.SupportsIndex = 1) -> bool:
+    """
+    whether the source's reciprocity error is at most RECIPROCITY_THRESHOLD
+    """
+def keep_phi_d_whole(specs: collections.abc.Sequence[str]) -> list[str]:
+    """
+    the specs with symmetry=bilateral where they would fold phi_d by reciprocity (tabular, svd, nmf)
     """
 def load(path: os.PathLike | str | bytes, *, lookup: str = 'linear', bin_position: str = 'centre', format: str = '') -> Brdf:
     """
@@ -472,7 +480,7 @@ def save(brdf: Brdf, path: os.PathLike | str | bytes, *, res: tuple[typing.Suppo
     """
     writes atomically (format from the extension unless given); returns the written bins' counts. .brdfz keeps provenance: build_spec (the compress() spec), source (the file it came from: name, format and SHA-256) and source_metrics (its metrics against that file)
     """
-def select_representation(brdf: Brdf, max_error: typing.SupportsFloat | typing.SupportsIndex | None = None, *, max_bytes: typing.SupportsInt | typing.SupportsIndex | None = None, metric: str = 'log', scene: Scene | None = None, candidates: collections.abc.Sequence[str] = [], measure_speed: bool = True, threads: typing.SupportsInt | typing.SupportsIndex = 0, over: str = 'grid', directions: typing.SupportsInt | typing.SupportsIndex = 262144, seed: typing.SupportsInt | typing.SupportsIndex = 1, on_candidate: typing.Any = None) -> Selection:
+def select_representation(brdf: Brdf, max_error: typing.SupportsFloat | typing.SupportsIndex | None = None, *, max_bytes: typing.SupportsInt | typing.SupportsIndex | None = None, metric: str = 'log', scene: Scene | None = None, candidates: collections.abc.Sequence[str] = [], measure_speed: bool = True, threads: typing.SupportsInt | typing.SupportsIndex = 0, over: str = 'directions', directions: typing.SupportsInt | typing.SupportsIndex = 262144, seed: typing.SupportsInt | typing.SupportsIndex = 1, on_candidate: typing.Any = None) -> Selection:
     """
     by budget (select.h): the smallest candidate within max_error, the most accurate within max_bytes, or the smallest within both; on_candidate(candidate, index, total) after each
     """
@@ -497,4 +505,5 @@ def validate(brdf: Brdf, *, res: tuple[typing.SupportsInt | typing.SupportsIndex
     non-negativity (a table's values, else f on the res grid), reciprocity (rtol, atol in 1/sr) and energy (reflectance <= 1 + albedo_tol at the elevations theta, degrees), as `brdfz validate`
     """
 MAX_THREADS: int = 1024
+RECIPROCITY_THRESHOLD: float = 0.01
 __version__: str = '0.1.0'

@@ -1,18 +1,19 @@
 """Whole databases on Dask: every setting on every material, one task per (material, spec).
 
     python -m brdfz.batch MATERIAL_OR_DIR... --specs SPEC... --out DIR [--workers N | --scheduler ADDR]
-                          [--over grid|directions] [--budgets E...] [--force] [--retries N]
+                          [--over directions|grid] [--budgets E...] [--force] [--retries N]
                           [--threads T] [--memory-per-worker BYTES] [--render-size N] [--no-charts]
 
 Each task loads its material, builds the representation and measures it against the material
-(brdfz.trial: what `brdfz compress` reports; with --over directions the errors are over direction
-pairs uniform in solid angle), then writes it atomically as DIR/<material>/<spec-hash>.brdfz (the spec
+(brdfz.trial: what `brdfz compress` reports; the errors are over direction pairs uniform in solid
+angle, what a renderer sees, or with --over grid over the bins of the material's grid), then writes it atomically as DIR/<material>/<spec-hash>.brdfz (the spec
 in the file's build_spec, the material's name, format and SHA-256 as its source) and its catalogue row
 as <spec-hash>.json beside it, the record a rerun trusts. DIR/catalogue.csv (and catalogue.parquet
 when pyarrow is installed) has one row per task (COLUMNS), status "ok" or "failed" with the one-line
 error; it is rewritten atomically as tasks finish, so an interrupted batch leaves a valid catalogue of
 what finished. At the end: the charts of python -m brdfz.bench over the whole catalogue (per-material
-Pareto fronts; the smallest setting within each --budgets cos_rmse_rel) and DIR/summary.md.
+Pareto fronts; the smallest setting within each --budgets cos_rmse_rel) and DIR/summary.md, judged by
+the errors over directions wherever they were measured (brdfz.report.error_column).
 
 A rerun skips the tasks whose record exists, whose output is still the file the task wrote (its
 SHA-256) and whose input file hash, spec, brdfz version and --over are unchanged, reusing their rows
@@ -516,39 +517,45 @@ def _overs(over: Union[str, Sequence[str]]) -> Tuple[str, ...]:
     return overs
 
 
-def run(materials: Sequence[PathLike], specs: Sequence[str], out: PathLike, *, workers: Optional[int] = None,
-        scheduler: Any = None, over: Union[str, Sequence[str]] = "grid",
+def _unique_specs(specs: Sequence[str]) -> List[str]:
+    """Equivalent spellings of a setting as one task, under the first spelling given."""
+    unique: Dict[str, str] = {}
+    for s in specs:
+        unique.setdefault(normalise_spec(s), s.strip())
+    if not unique or any(not s for s in unique.values()):
+        raise ValueError("give at least one spec, none empty")
+    return list(unique.values())
+
+
+def run(materials: Sequence[PathLike], specs: Union[Sequence[str], Callable[[pathlib.Path], Sequence[str]]],
+        out: PathLike, *, workers: Optional[int] = None, scheduler: Any = None,
+        over: Union[str, Sequence[str]] = "directions",
         budgets: Sequence[float] = DEFAULT_BUDGETS, force: bool = False, retries: int = 2,
         threads: Optional[int] = None, memory_per_worker: Optional[int] = None, charts: bool = True,
         render_size: int = 0, engine: Optional[Engine] = None) -> List[Row]:
     """Every spec on every material (files, or folders of them) into `out`, as the command does; returns
-    the catalogue's rows (dicts with columns(over); numbers as numbers, missing values None). `over`
-    names the errors' domain, "grid" or "directions"; a pair measures both, the second in columns
+    the catalogue's rows (dicts with columns(over); numbers as numbers, missing values None). `specs`
+    may instead be a function of a material's file giving that material's own. `over` names the errors'
+    domain, "directions" (the default) or "grid"; a pair measures both, the second in columns
     <over>_<metric>. `engine` runs the tasks on a cluster the caller holds (it then ignores `workers`,
     `scheduler`, `retries`, `threads` and `memory_per_worker`). Charts (matplotlib) and summary.md
     unless charts=False; render_size > 0 adds sphere renders of each material's Pareto-optimal
     settings."""
     overs = _overs(over)
-    # Equivalent spellings of a setting are one task, under the first spelling given.
-    unique: Dict[str, str] = {}
-    for s in specs:
-        unique.setdefault(normalise_spec(s), s.strip())
-    specs = list(unique.values())
-    if not specs or any(not s for s in specs):
-        raise ValueError("give at least one spec, none empty")
     named = material_names(material_files(materials))
     if not named:
         raise ValueError("no materials: give BRDF files or folders holding them")
+    specs_of = {name: _unique_specs(specs(path) if callable(specs) else specs) for name, path in named.items()}
     out = pathlib.Path(out)
     cols = columns(overs)
-    catalogue = Catalogue(out, cols, [(m, s) for m in named for s in specs])
+    catalogue = Catalogue(out, cols, [(m, s) for m in named for s in specs_of[m]])
     fingerprints = {}
     jobs = []
     own = engine is None
     engine = engine or Engine(workers, scheduler, retries=retries, threads=threads, memory_per_worker=memory_per_worker)
     for name, path in named.items():
         digest = file_sha256(path)
-        for spec in specs:
+        for spec in specs_of[name]:
             fp = {"input_sha256": digest, "spec": normalise_spec(spec), "brdfz_version": brdfz.__version__,
                   "over": list(overs)}
             fingerprints[(name, spec)] = fp
@@ -637,8 +644,9 @@ def render_all(engine: Engine, out: pathlib.Path, rows: Sequence[Row], named: Di
     (out / "renders").mkdir(exist_ok=True)
     env_samples = env_samples or (32 if size <= 64 else 128)
     jobs = []
+    error = report.error_column(rows)
     for name, mine in report.by_material(rows).items():
-        reps = report.representatives(mine)
+        reps = report.representatives(mine, error=error)
         if reps and name in named:
             outputs = [str(out / r["output"]) if r.get("output") else None for r in reps]
             jobs.append(Job(render_task, (name, str(named[name]), reps, outputs, str(out / "renders" / f"{name}.png"),
@@ -712,10 +720,11 @@ def views_all(engine: Engine, out: pathlib.Path, rows: Sequence[Row], named: Dic
     relative to `out` that were written."""
     (out / "views").mkdir(exist_ok=True)
     jobs = []
+    error = report.error_column(rows)
     for name, mine in report.by_material(rows).items():
         if name not in named:
             continue
-        pick = report.smallest_within(mine, 0.02) or report.smallest_within(mine, 0.05)
+        pick = report.smallest_within(mine, 0.02, error) or report.smallest_within(mine, 0.05, error)
         output = str(out / pick["output"]) if pick and pick.get("output") else None
         jobs.append(Job(views_task, (name, str(named[name]), pick, output, str(out / "views")), name,
                         estimate_memory(named[name].stat().st_size, "")))
@@ -755,7 +764,8 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
     p.add_argument("materials", nargs="+", metavar="MATERIAL_OR_DIR", help="BRDF files or folders of them")
     p.add_argument("--specs", nargs="+", required=True, metavar="SPEC", help="representation specs (docs/repr-specs.md)")
     p.add_argument("--out", required=True, metavar="DIR", help="output folder")
-    p.add_argument("--over", choices=OVERS, default="grid", help="errors over the grid (default) or over direction pairs")
+    p.add_argument("--over", choices=OVERS, default="directions",
+                   help="errors over direction pairs uniform in solid angle (default) or over the grid")
     p.add_argument("--budgets", nargs="*", type=float, default=DEFAULT_BUDGETS, metavar="E",
                    help=f"cos_rmse_rel budgets of the choice in the charts and summary (default {DEFAULT_BUDGETS})")
     p.add_argument("--render-size", type=int, default=0, metavar="N", help="sphere renders of N pixels (default 0: none)")

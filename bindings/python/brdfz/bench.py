@@ -6,12 +6,15 @@
 
 Materials default to ../shared/data/rgl/*.bsdf and the MERL tables in $BRDFZ_MERL_DIR (else
 build/merl-tables), relative to the current folder (the repository root). Settings default to
-brdfz.benchmark_specs(). Each (material, setting) is one brdfz.batch task (the numbers `brdfz
-compress` prints, over the grid and, where this build measures them, over direction pairs); a setting
-that fails (e.g. a kind this build lacks) is a row with status "error: ...". The renders and the auto
-selection are tasks too (one per material, one per material and budget). Writes into --out (default
-bench-out/) the batch's outputs and catalogue.csv (DIR/<material>/<spec-hash>.brdfz; a rerun reuses
-what is done, --force rebuilds), and:
+brdfz.benchmark_specs(); with --quick to QUICK_SPECS, with φd kept whole (brdfz.keep_phi_d_whole:
+symmetry=bilateral) for a material whose reciprocity error is above brdfz.RECIPROCITY_THRESHOLD
+(quick_specs). Each (material, setting) is one brdfz.batch task (the numbers `brdfz compress` prints,
+over the grid and over direction pairs); a setting that fails (e.g. a kind this build lacks) is a row
+with status "error: ...". Charts, renders, views, the auto selection and summary.md judge by the
+errors over direction pairs, what a renderer sees (the grid's, of a sweep CSV without them). The
+renders and the auto selection are tasks too (one per material, one per material and budget). Writes
+into --out (default bench-out/) the batch's outputs and catalogue.csv
+(DIR/<material>/<spec-hash>.brdfz; a rerun reuses what is done, --force rebuilds), and:
 
     sweep.csv                    the columns of bench/compress_sweep (COLUMNS), then the errors over
                                  directions (DIRECTIONS_COLUMNS) when measured
@@ -24,8 +27,9 @@ what is done, --force rebuilds), and:
                                  and its smallest setting within 2 % (else 5 %), and that setting's
                                  relative error in both (not drawn with --render-size 0)
     auto.csv, auto_size_vs_error.png, auto_speed_vs_error.png
-                                 brdfz.compress(auto=True, metric="cos") at each budget, the chosen
-                                 representations drawn over each method's Pareto front
+                                 brdfz.compress(auto=True, metric="cos") at each budget (over directions,
+                                 or over the grid where the sweep has only the grid's errors), the
+                                 chosen representations drawn over each method's Pareto front
     summary.md                   tables and every image above
 
 --from-csv FILE draws from an existing sweep CSV (this program's or bench/compress_sweep's) instead of
@@ -48,7 +52,7 @@ COLUMNS = ["material", "format", "repr", "describe", "bytes", "input_bytes", "ra
            "log_rmse", "cbrt_rmse", "eval_pairs_per_s", "build_s", "status"]
 DIRECTIONS_COLUMNS = report.DIRECTIONS_METRICS
 AUTO_COLUMNS = report.AUTO_COLUMNS
-# --quick: one setting of each kind, small enough for a smoke run.
+# --quick: one setting of each kind, small enough for a smoke run (quick_specs: per material).
 QUICK_SPECS = ["tabular:res=45x45x90", "tabular:res=16x16x32,dtype=u8log", "bivariate:res=32x32,dtype=f16",
                "svd:rank=2,space=log", "nmf:rank=2", "analytic:lambert+ggx"]
 DEFAULT_BUDGETS = report.DEFAULT_BUDGETS
@@ -116,15 +120,25 @@ def read_csv(path: pathlib.Path) -> List[Row]:
         return [catalogue_row(r) for r in reader]
 
 
+def quick_specs(path: pathlib.Path) -> List[str]:
+    """QUICK_SPECS for one material: with φd kept whole (brdfz.keep_phi_d_whole) when its reciprocity
+    error is above brdfz.RECIPROCITY_THRESHOLD, as real RGL measurements' are, since a reciprocal table
+    of them holds the mean of f(wi, wo) and f(wo, wi). 2^16 pairs tell 0 from 0.1-1."""
+    return QUICK_SPECS if brdfz.is_reciprocal(brdfz.load(path), directions=1 << 16) else \
+        brdfz.keep_phi_d_whole(QUICK_SPECS)
+
+
 # --------------------------------------------------------------------------------- auto selection
 
-def auto_task(name: str, path: str, budget: float, candidates: Optional[Sequence[str]], threads: int) -> Row:
-    """brdfz.compress(auto=True, metric="cos") of one material at one budget, as an AUTO_COLUMNS row."""
+def auto_task(name: str, path: str, budget: float, candidates: Optional[Sequence[str]], threads: int,
+              over: str = "directions") -> Row:
+    """brdfz.compress(auto=True, metric="cos") of one material at one budget, its errors `over`
+    directions or the grid, as an AUTO_COLUMNS row."""
     ref = brdfz.load(path)
     row = dict.fromkeys(AUTO_COLUMNS, "") | {"material": name, "budget": f"{budget:g}"}
     try:
         s = brdfz.compress(ref, auto=True, max_error=budget, metric="cos", candidates=candidates, report=True,
-                           threads=threads)
+                           threads=threads, over=over)
         c = s.candidates[s.chosen]
         row |= {"chosen": c.spec, "bytes": str(c.bytes), "cos_rmse_rel": report.fmt(c.error),
                 "eval_pairs_per_s": report.fmt(c.eval_rate), "build_s": report.fmt(c.build_seconds),
@@ -135,10 +149,10 @@ def auto_task(name: str, path: str, budget: float, candidates: Optional[Sequence
 
 
 def auto_selection(engine: batch.Engine, materials: Dict[str, pathlib.Path], budgets: Sequence[float],
-                   candidates: Optional[Sequence[str]]) -> List[Row]:
+                   candidates: Optional[Sequence[str]], over: str = "directions") -> List[Row]:
     """auto_task on every material at every budget, one task each; rows in material, budget order."""
     tried = candidates or brdfz.default_candidates()
-    jobs = [batch.Job(auto_task, (name, str(path), budget, candidates, engine.task_threads()),
+    jobs = [batch.Job(auto_task, (name, str(path), budget, candidates, engine.task_threads(), over),
                       f"{name} budget {budget:g}", max(batch.estimate_memory(path.stat().st_size, c) for c in tried))
             for name, path in materials.items() for budget in budgets]
     done = {}
@@ -158,7 +172,9 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
     p.add_argument("--materials", nargs="+", metavar="DIR_OR_FILE", help="BRDF files or folders of them")
     p.add_argument("--specs", nargs="+", metavar="SPEC", help="settings (default: brdfz.benchmark_specs())")
     p.add_argument("--out", default="bench-out", help="output folder (default: bench-out)")
-    p.add_argument("--quick", action="store_true", help="one setting per kind, small renders, one budget")
+    p.add_argument("--quick", action="store_true",
+                   help="one setting per kind (symmetry=bilateral for a material whose reciprocity error is above "
+                        f"{brdfz.RECIPROCITY_THRESHOLD:g}), small renders, one budget")
     p.add_argument("--from-csv", metavar="FILE", help="draw from this sweep CSV instead of sweeping")
     p.add_argument("--budgets", nargs="*", type=float, metavar="E",
                    help=f"cos_rmse_rel budgets of the auto selection (default {DEFAULT_BUDGETS}; none: skip it)")
@@ -183,7 +199,7 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
     out = pathlib.Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
     named = batch.material_names(files)
-    specs = args.specs or (QUICK_SPECS if args.quick else brdfz.benchmark_specs())
+    specs = args.specs or (quick_specs if args.quick else brdfz.benchmark_specs())
     size = args.render_size if args.render_size is not None else (64 if args.quick else 128)
     budgets = args.budgets if args.budgets is not None else (DEFAULT_BUDGETS[1:] if args.quick else DEFAULT_BUDGETS)
 
@@ -202,7 +218,8 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
             renders = batch.render_all(engine, out, rows, named, size, 32 if args.quick else 128) if size > 0 else []
             views = batch.views_all(engine, out, rows, named) if size > 0 else []
             materials = {n: f for n, f in named.items() if n in {r["material"] for r in rows}}
-            auto = auto_selection(engine, materials, budgets, args.candidates) if budgets and materials else []
+            auto = (auto_selection(engine, materials, budgets, args.candidates, report.frame(rows))
+                    if budgets and materials else [])
     except KeyboardInterrupt:
         print(f"bench: interrupted; {out / 'catalogue.csv'} holds the tasks that finished", file=sys.stderr)
         return 130

@@ -61,6 +61,19 @@ def has_directions(rows: Sequence[Row]) -> bool:
     return any(ok(r) and r.get("directions_cos_rmse_rel") not in (None, "") for r in rows)
 
 
+def error_column(rows: Sequence[Row]) -> str:
+    """The cos_rmse_rel column that fronts, budget choices, charts and summaries judge by: over direction
+    pairs wherever measured (what a renderer sees; the grid's bins weigh pairs otherwise), else the rows'
+    own (over the grid for a sweep CSV without directions_*, a catalogue's `over` for a batch's)."""
+    return "directions_cos_rmse_rel" if has_directions(rows) else "cos_rmse_rel"
+
+
+def frame(rows: Sequence[Row]) -> str:
+    """Where error_column(rows) was measured: "directions" or "grid"."""
+    return "directions" if has_directions(rows) or any(ok(r) and r.get("over") == "directions" for r in rows) \
+        else "grid"
+
+
 def method(spec: str) -> str:
     """The method a setting belongs to, for colours and per-method fronts: its kind, and the stored
     type of tables ("tabular u8log")."""
@@ -82,37 +95,41 @@ def pareto_front(xs: Sequence[float], ys: Sequence[float], *, maximize_x: bool =
     return front
 
 
-def size_front(rows: Sequence[Row]) -> List[Row]:
-    """The ok rows on the bytes vs cos_rmse_rel Pareto front, smallest first."""
+def size_front(rows: Sequence[Row], error: Optional[str] = None) -> List[Row]:
+    """The ok rows on the bytes vs cos_rmse_rel Pareto front (the `error` column, default
+    error_column(rows)), smallest first."""
+    error = error or error_column(rows)
     good = [r for r in rows if ok(r)]
-    return [good[i] for i in pareto_front([value(r, "bytes") for r in good], [value(r, "cos_rmse_rel") for r in good])]
+    return [good[i] for i in pareto_front([value(r, "bytes") for r in good], [value(r, error) for r in good])]
 
 
-def representatives(rows: Sequence[Row], count: int = 4) -> List[Row]:
+def representatives(rows: Sequence[Row], count: int = 4, error: Optional[str] = None) -> List[Row]:
     """Up to `count` settings spread along the material's size vs cos_rmse_rel Pareto front."""
-    front = size_front(rows)
+    front = size_front(rows, error)
     if len(front) <= count:
         return front
     return [front[round(k * (len(front) - 1) / (count - 1))] for k in range(count)]
 
 
-def smallest_within(rows: Sequence[Row], limit: float) -> Optional[Row]:
-    fits = [r for r in rows if ok(r) and value(r, "cos_rmse_rel") <= limit]
+def smallest_within(rows: Sequence[Row], limit: float, error: Optional[str] = None) -> Optional[Row]:
+    error = error or error_column(rows)
+    fits = [r for r in rows if ok(r) and value(r, error) <= limit]
     return min(fits, key=lambda r: value(r, "bytes")) if fits else None
 
 
 def budget_choice(rows: Sequence[Row], budgets: Sequence[float]) -> List[Row]:
-    """Per material and budget, the smallest setting of the catalogue whose cos_rmse_rel is within the
-    budget: the choice `brdfz compress --auto --metric cos` makes with these settings as candidates.
-    Rows with AUTO_COLUMNS; "chosen" empty when none is."""
+    """Per material and budget, the smallest setting of the catalogue whose cos_rmse_rel (error_column)
+    is within the budget: the choice `brdfz compress --auto --metric cos` makes with these settings as
+    candidates. Rows with AUTO_COLUMNS, their cos_rmse_rel that column's; "chosen" empty when none is."""
+    error = error_column(rows)
     out = []
     for name, mine in by_material(rows).items():
         for budget in budgets:
-            r = smallest_within(mine, budget)
+            r = smallest_within(mine, budget, error)
             a = dict.fromkeys(AUTO_COLUMNS, "") | {"material": name, "budget": f"{budget:g}",
                                                    "tried": str(sum(ok(x) for x in mine))}
             if r:
-                a |= {"chosen": r["spec"], "bytes": str(int(value(r, "bytes"))), "cos_rmse_rel": fmt(r["cos_rmse_rel"]),
+                a |= {"chosen": r["spec"], "bytes": str(int(value(r, "bytes"))), "cos_rmse_rel": fmt(r[error]),
                       "eval_pairs_per_s": fmt(r["eval_rate"]), "build_s": fmt(r["build_seconds"])}
             out.append(a)
     return out
@@ -297,8 +314,9 @@ def chart_tradeoff(rows: Sequence[Row], x: str, y: str, path: pathlib.Path, *, m
 
 
 def chart_auto(rows: Sequence[Row], auto: Sequence[Row], x: str, path: pathlib.Path) -> None:
-    """Per material: each method's Pareto front (size or speed vs cos_rmse_rel) as a line, the setting
-    chosen at each budget as a star."""
+    """Per material: each method's Pareto front (size or speed vs cos_rmse_rel, error_column(rows)) as a
+    line, the setting chosen at each budget as a star."""
+    error = error_column(rows)
     mats = by_material([r for r in rows if ok(r)])
     colours = _colours([method(r["spec"]) for r in rows])
     maximize_x = x == "eval_rate"
@@ -309,7 +327,7 @@ def chart_auto(rows: Sequence[Row], auto: Sequence[Row], x: str, path: pathlib.P
         for m in sorted({method(r["spec"]) for r in mine}):
             pts = [r for r in mine if method(r["spec"]) == m]
             xs = [value(r, x) for r in pts]
-            ys = [max(value(r, "cos_rmse_rel"), ERROR_FLOOR) for r in pts]
+            ys = [max(value(r, error), ERROR_FLOOR) for r in pts]
             front = pareto_front(xs, ys, maximize_x=maximize_x)
             ax.plot([xs[i] for i in front], [ys[i] for i in front], "-o", color=colours[m], ms=3, lw=1, alpha=0.6,
                     label=m)
@@ -320,7 +338,7 @@ def chart_auto(rows: Sequence[Row], auto: Sequence[Row], x: str, path: pathlib.P
                        color="k", zorder=3, label=f"chosen at budget {a['budget']}")
         for b in budgets:
             ax.axhline(float(b), color="grey", ls=":", lw=1)
-        ax.set(xscale="log", yscale="log", title=name, xlabel=_AXIS_LABEL[x], ylabel="cos_rmse_rel")
+        ax.set(xscale="log", yscale="log", title=name, xlabel=_AXIS_LABEL[x], ylabel=f"cos_rmse_rel over {frame(rows)}")
         _readable_log_ticks(ax)
         for a in chosen:
             _label(ax, _short(a["chosen"]), float(a[_AUTO_NAME[x]]), max(float(a["cos_rmse_rel"]), ERROR_FLOOR))
@@ -330,8 +348,8 @@ def chart_auto(rows: Sequence[Row], auto: Sequence[Row], x: str, path: pathlib.P
 
 def write_charts(out: pathlib.Path, rows: Sequence[Row], auto: Sequence[Row]) -> List[str]:
     """Every chart of a catalogue into `out`: bytes vs each error metric (over directions too when
-    measured), eval speed vs error, and with `auto` rows the choices over the Pareto fronts. Returns
-    the file names (none when no row is ok)."""
+    measured), eval speed vs error (error_column) and with `auto` rows the choices over the Pareto
+    fronts. Returns the file names (none when no row is ok)."""
     if not any(ok(r) for r in rows):
         return []
     charts = []
@@ -339,7 +357,7 @@ def write_charts(out: pathlib.Path, rows: Sequence[Row], auto: Sequence[Row]) ->
     for metric in metrics:
         chart_tradeoff(rows, "bytes", metric, out / f"size_vs_{metric}.png")
         charts.append(f"size_vs_{metric}.png")
-    chart_tradeoff(rows, "eval_rate", "cos_rmse_rel", out / "speed_vs_error.png", maximize_x=True)
+    chart_tradeoff(rows, "eval_rate", error_column(rows), out / "speed_vs_error.png", maximize_x=True)
     charts.append("speed_vs_error.png")
     if auto:
         for x, name in (("bytes", "auto_size_vs_error.png"), ("eval_rate", "auto_speed_vs_error.png")):
@@ -482,10 +500,11 @@ def _g(v: Any) -> str:
     return "" if v in (None, "") else f"{float(v):.3g}"
 
 
-def _smallest_cells(rows: Sequence[Row], auto: Sequence[Row], limit: float) -> List[str]:
-    """The smallest setting within `limit` among the material's rows and its budget choices (`auto`,
-    measured in the same frame), so that the summary never says "none" where its own choices found one."""
-    r = smallest_within(rows, limit)
+def _smallest_cells(rows: Sequence[Row], auto: Sequence[Row], limit: float, error: str) -> List[str]:
+    """The smallest setting within `limit` in the `error` column among the material's rows and its budget
+    choices (`auto`, measured in the same frame), so that the summary never says "none" where its own
+    choices found one."""
+    r = smallest_within(rows, limit, error)
     best = (value(r, "bytes"), f"`{r['spec']}`") if r else None
     for a in auto:
         if a["chosen"] and value(a, "cos_rmse_rel") <= limit and (best is None or value(a, "bytes") < best[0]):
@@ -497,32 +516,36 @@ def write_summary(out: pathlib.Path, title: str, rows: Sequence[Row], charts: Se
                   source: str, table: str, renders: Sequence[str] = (), views: Sequence[str] = (),
                   auto: Sequence[Row] = (), auto_heading: str = "") -> pathlib.Path:
     """out/summary.md: the smallest setting within 2 % and 5 %, every chart, each material's Pareto
-    front, eval speed per method, the choices at the budgets (`auto`, under `auto_heading`), the
-    renders, the views (polar plots, θh×θd images, comparisons) and the failed tasks. `table` names the
-    file with every row."""
+    front, eval speed per method, the choices at the budgets (`auto`, under `auto_heading`: measured in
+    the frame of error_column(rows)), the renders, the views (polar plots, θh×θd images, comparisons)
+    and the failed tasks, all judged by error_column(rows). `table` names the file with every row."""
     mats = by_material(rows)
     chosen = by_material(auto)
     directions = has_directions(rows)
+    error = error_column(rows)
+    primary = "directions" if not directions and frame(rows) == "directions" else "grid"
+    over = {"grid": "over the grid", "directions": "over direction pairs uniform in solid angle"}
     md = [f"# {title}\n",
           f"{len(mats)} materials × {len({r['spec'] for r in rows})} settings from {source}; "
           f"{datetime.date.today()}, {platform.node()} ({os.cpu_count()} CPUs, {platform.processor() or platform.machine()}). "
           "Errors are against each material's own data (cos_rmse_rel: cosine-weighted RMSE relative to the "
-          "reference's RMS, channel mean; over the grid"
-          + (", and over direction pairs uniform in solid angle: directions_*" if directions else "")
-          + f"); eval speed is batch eval on one thread. All rows: [{table}]({table}).\n",
+          f"reference's RMS, channel mean; {over[primary]}"
+          + (f", and {over['directions']}: directions_*" if directions else "")
+          + f"); settings are judged (fronts, smallest within an error, choices, renders) by cos_rmse_rel "
+          f"{over[frame(rows)]}. Eval speed is batch eval on one thread. All rows: [{table}]({table}).\n",
           "## Smallest setting within an error\n",
           "Of the settings measured and of the budget choices (below).\n" if auto else "",
           _table(["material", "≤ 2 % cos_rmse_rel", "bytes", "≤ 5 % cos_rmse_rel", "bytes"],
-                 [[m, *_smallest_cells(mine, chosen.get(m, []), 0.02), *_smallest_cells(mine, chosen.get(m, []), 0.05)]
-                  for m, mine in mats.items()]),
+                 [[m, *_smallest_cells(mine, chosen.get(m, []), 0.02, error),
+                   *_smallest_cells(mine, chosen.get(m, []), 0.05, error)] for m, mine in mats.items()]),
           "## Size and speed against error\n"]
     md += [f"![{c}]({c})\n" for c in charts if not c.startswith("auto_")]
-    md.append("## Pareto-optimal settings (bytes vs cos_rmse_rel)\n")
+    md.append(f"## Pareto-optimal settings (bytes vs cos_rmse_rel {over[frame(rows)]})\n")
     header = ["setting", "bytes", "ratio", "cos_rmse_rel", "log_rmse", "eval pairs/s", "build s"]
     for m, mine in mats.items():
         cells = [[f"`{r['spec']}`", f"{int(value(r, 'bytes')):,}", _g(r.get("ratio")), _g(r["cos_rmse_rel"]),
                   _g(r["log_rmse"]), _g(r["eval_rate"]), _g(r["build_seconds"])]
-                 + ([_g(r.get("directions_cos_rmse_rel"))] if directions else []) for r in size_front(mine)]
+                 + ([_g(r.get("directions_cos_rmse_rel"))] if directions else []) for r in size_front(mine, error)]
         md += [f"### {m}\n", _table(header + (["cos_rmse_rel over directions"] if directions else []), cells)]
     speeds: Dict[str, List[float]] = {}
     for r in rows:

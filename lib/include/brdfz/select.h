@@ -55,7 +55,7 @@ struct SelectOptions {
     std::optional<std::uint64_t> max_bytes;
     SceneMetric metric = SceneMetric::Log;
     std::optional<Scene> scene;
-    std::vector<std::string> candidates;  // empty: default_candidates()
+    std::vector<std::string> candidates;  // empty: default_candidates(source, trial.metrics)
     TrialOptions trial;
     // Called after each candidate (the CLI's progress lines).
     std::function<void(const struct Candidate&)> on_candidate;
@@ -88,10 +88,38 @@ inline constexpr const char* kSweepCsvHeader =
 // A line of it (no newline): `trial` measured, or `error` when trial is null.
 std::string sweep_csv_row(const std::string& material, const std::string& format, const std::string& spec,
                           std::uintmax_t input_bytes, const Trial* trial, const std::string& error = {});
+// The columns that follow the status when the errors over direction pairs are measured too (`brdfz demo`;
+// python -m brdfz.bench's DIRECTIONS_COLUMNS), and their cells, each after a comma: empty without `over_directions`.
+inline constexpr const char* kSweepCsvDirectionsColumns =
+    "directions_cos_rmse,directions_cos_rmse_rel,directions_log_rmse,directions_cbrt_rmse";
+std::string sweep_csv_directions(const Metrics* over_directions);
 
 // Candidates from cheapest to richest: analytic fits of growing lobe count, factorisations of growing
 // rank, compact tables, the full-resolution table. Only registered kinds, as benchmark_specs().
 std::vector<std::string> default_candidates();
+
+// The reciprocity error (reciprocity_error()'s cos_rmse_rel.mean, what `brdfz info` prints) above which a
+// source is not reciprocal to the default candidates and the benchmark's quick settings, which then keep
+// φd whole (keep_phi_d_whole()). Reciprocal sources measure about 0 (a table on a reciprocal grid exactly
+// 0, analytic models to rounding), the shared RGL files 0.1-1. A reciprocal fold stores the mean of
+// f(wi, wo) and f(wo, wi), off by about half the reciprocity error: at 1 % a quarter of the benchmark's
+// smallest budget (2 %), far below what real measurements show.
+inline constexpr double kReciprocityThreshold = 0.01;
+
+// Whether `source`'s reciprocity error, measured with `options` (directions, seed, max_theta_deg, threads;
+// over is not used), is at most kReciprocityThreshold.
+bool is_reciprocal(const Brdf& source, const MetricOptions& options = {});
+
+// `specs` with φd kept whole: each whose kind takes symmetry=bilateral (tabular, svd, nmf) and that folds
+// φd by reciprocity (symmetry=reciprocal, or no symmetry) gets symmetry=bilateral, as many bins with
+// f(wi, wo) and f(wo, wi) apart (folded by the mirror that isotropic data have); the others (analytic
+// fits, bivariate tables without a φd axis, symmetry=none or bilateral already) as given. Bytes do not
+// change, so a list by size stays one.
+std::vector<std::string> keep_phi_d_whole(std::vector<std::string> specs);
+
+// default_candidates() for `source`: keep_phi_d_whole() of them when it is not reciprocal (is_reciprocal()
+// with `options`).
+std::vector<std::string> default_candidates(const Brdf& source, const MetricOptions& options = {});
 
 // ValueError for no budget, an error budget that is not finite and > 0, a size budget of 0, or an
 // empty candidate list; SpecError for a
