@@ -454,23 +454,21 @@ void eval_root(const Data& d, const Vec3& wi, const Vec3& wo, double f[3]) {
     for (int c = 0; c < 3; ++c) f[c] = x[c] * (1.0 - pick.t) + y[c] * pick.t;
 }
 
+// The calls on prepared directions (Calls' contract).
 template <typename Leaf, bool Wide = false>
-Rgb64 eval64(const Data* d, Vec3 wi, Vec3 wo) noexcept {
-    Rgb64 f{0.0, 0.0, 0.0};
-    if (!prepare_direction(wi) || !prepare_direction(wo) || !(wi.z > 0.0 && wo.z > 0.0)) return f;
+Rgb64 eval64(const Data* d, const Vec3& wi, const Vec3& wo) noexcept {
+    Rgb64 f;
     eval_root<Leaf, Wide>(*d, wi, wo, f.data());
     return f;
 }
 
-double pdf64(const Data* d, Vec3 wo, Vec3 wi) noexcept {
-    if (!prepare_direction(wo) || !prepare_direction(wi) || !(wi.z > 0.0 && wo.z > 0.0)) return 0.0;
+double pdf64(const Data* d, const Vec3& wo, const Vec3& wi) noexcept {
     if (!d->has_sampler) return k::lobe_mixture_pdf(d->root.lobes, wo, wi);
     return k::compact_pdf(d->sampler, wo, wi);
 }
 
 template <typename Leaf, bool Wide>
-Sample64 sample64(const Data* d, Vec3 wo, double u1, double u2) noexcept {
-    if (!prepare_direction(wo) || !(wo.z > 0.0 && u1 >= 0.0 && u1 < 1.0 && u2 >= 0.0 && u2 < 1.0)) return {};
+Sample64 sample64(const Data* d, const Vec3& wo, double u1, double u2) noexcept {
     Sample64 s;
     if (!d->has_sampler) {
         const k::LobeMixtureDraw draw = k::lobe_mixture_sample(d->root.lobes, wo, u1, u2);
@@ -490,19 +488,23 @@ Sample64 sample64(const Data* d, Vec3 wo, double u1, double u2) noexcept {
 // lookups and the sampler run faster with AVX2 (as the library's one-pair table call); without FMA it
 // gives the baseline's bits. An analytic model's eval is not flattened: its lobe mixture, every family
 // inlined into one body, runs slower.
-[[gnu::flatten]] double pdf_base(const Data* d, Vec3 wo, Vec3 wi) noexcept { return pdf64(d, wo, wi); }
-[[gnu::flatten, BRDFZ_AVX2]] double pdf_avx2(const Data* d, Vec3 wo, Vec3 wi) noexcept { return pdf64(d, wo, wi); }
+[[gnu::flatten]] double pdf_base(const Data* d, const Vec3& wo, const Vec3& wi) noexcept { return pdf64(d, wo, wi); }
+[[gnu::flatten, BRDFZ_AVX2]] double pdf_avx2(const Data* d, const Vec3& wo, const Vec3& wi) noexcept {
+    return pdf64(d, wo, wi);
+}
 
 template <typename Leaf>
 struct Builds {
-    [[gnu::flatten]] static Rgb64 eval_base(const Data* d, Vec3 wi, Vec3 wo) noexcept { return eval64<Leaf>(d, wi, wo); }
-    [[gnu::flatten]] static Sample64 sample_base(const Data* d, Vec3 wo, double u1, double u2) noexcept {
+    [[gnu::flatten]] static Rgb64 eval_base(const Data* d, const Vec3& wi, const Vec3& wo) noexcept {
+        return eval64<Leaf>(d, wi, wo);
+    }
+    [[gnu::flatten]] static Sample64 sample_base(const Data* d, const Vec3& wo, double u1, double u2) noexcept {
         return sample64<Leaf, false>(d, wo, u1, u2);
     }
-    [[gnu::flatten, BRDFZ_AVX2]] static Rgb64 eval_avx2(const Data* d, Vec3 wi, Vec3 wo) noexcept {
+    [[gnu::flatten, BRDFZ_AVX2]] static Rgb64 eval_avx2(const Data* d, const Vec3& wi, const Vec3& wo) noexcept {
         return eval64<Leaf, true>(d, wi, wo);
     }
-    [[gnu::flatten, BRDFZ_AVX2]] static Sample64 sample_avx2(const Data* d, Vec3 wo, double u1, double u2) noexcept {
+    [[gnu::flatten, BRDFZ_AVX2]] static Sample64 sample_avx2(const Data* d, const Vec3& wo, double u1, double u2) noexcept {
         return sample64<Leaf, true>(d, wo, u1, u2);
     }
     static constexpr bool kLobes = std::is_same_v<Leaf, LobesLeaf>;
@@ -537,9 +539,9 @@ const Calls* calls_for(const Data& d) {
     return calls_of<AnyLeaf>();
 }
 
-Rgb64 no_eval(const Data*, Vec3, Vec3) noexcept { return {0.0, 0.0, 0.0}; }
-double no_pdf(const Data*, Vec3, Vec3) noexcept { return 0.0; }
-Sample64 no_sample(const Data*, Vec3, double, double) noexcept { return {}; }
+Rgb64 no_eval(const Data*, const Vec3&, const Vec3&) noexcept { return {0.0, 0.0, 0.0}; }
+double no_pdf(const Data*, const Vec3&, const Vec3&) noexcept { return 0.0; }
+Sample64 no_sample(const Data*, const Vec3&, double, double) noexcept { return {}; }
 
 }  // namespace
 

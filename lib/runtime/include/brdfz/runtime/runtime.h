@@ -52,11 +52,11 @@ using brdfz::prepare_direction;  // vec.h: the rule every call applies to its di
 namespace detail {
 struct Data;
 // A material's calls, in the build for this CPU (brdfz/runtime/kernels/simd.h), picked when it is
-// parsed; an empty material's give 0.
+// parsed; an empty material's give 0. They take prepared directions above the horizon, and u in [0, 1).
 struct Calls {
-    Rgb64 (*eval)(const Data*, Vec3 wi, Vec3 wo) noexcept;
-    double (*pdf)(const Data*, Vec3 wo, Vec3 wi) noexcept;
-    Sample64 (*sample)(const Data*, Vec3 wo, double u1, double u2) noexcept;
+    Rgb64 (*eval)(const Data*, const Vec3& wi, const Vec3& wo) noexcept;
+    double (*pdf)(const Data*, const Vec3& wo, const Vec3& wi) noexcept;
+    Sample64 (*sample)(const Data*, const Vec3& wo, double u1, double u2) noexcept;
 };
 extern const Calls kNoCalls;
 }  // namespace detail
@@ -81,24 +81,35 @@ public:
     std::size_t nbytes() const;
     std::size_t sampler_nbytes() const;
 
-    // One call each, inline: the call table's entry is the only indirection.
+    // One call each, inline, as the library's Brdf: the directions are prepared here, in the caller,
+    // and the call table's entry is the only indirection.
     Rgb32 eval(const Float3& wi, const Float3& wo) const noexcept {
-        const Rgb64 f = calls_->eval(d_.get(), widen(wi), widen(wo));
+        const Rgb64 f = eval(widen(wi), widen(wo));
         return {static_cast<float>(f[0]), static_cast<float>(f[1]), static_cast<float>(f[2])};
     }
-    float pdf(const Float3& wo, const Float3& wi) const noexcept {
-        return static_cast<float>(calls_->pdf(d_.get(), widen(wo), widen(wi)));
-    }
+    float pdf(const Float3& wo, const Float3& wi) const noexcept { return static_cast<float>(pdf(widen(wo), widen(wi))); }
     Sample32 sample(const Float3& wo, float u1, float u2) const noexcept {
-        const Sample64 s = calls_->sample(d_.get(), widen(wo), u1, u2);
+        const Sample64 s = sample(widen(wo), u1, u2);
         return {{static_cast<float>(s.wi.x), static_cast<float>(s.wi.y), static_cast<float>(s.wi.z)},
                 static_cast<float>(s.pdf),
                 {static_cast<float>(s.weight[0]), static_cast<float>(s.weight[1]), static_cast<float>(s.weight[2])}};
     }
 
-    Rgb64 eval(const Vec3& wi, const Vec3& wo) const noexcept { return calls_->eval(d_.get(), wi, wo); }
-    double pdf(const Vec3& wo, const Vec3& wi) const noexcept { return calls_->pdf(d_.get(), wo, wi); }
-    Sample64 sample(const Vec3& wo, double u1, double u2) const noexcept { return calls_->sample(d_.get(), wo, u1, u2); }
+    Rgb64 eval(const Vec3& wi, const Vec3& wo) const noexcept {
+        Vec3 a = wi, b = wo;
+        if (!prepare_direction(a) || !prepare_direction(b) || !(a.z > 0.0 && b.z > 0.0)) return {0.0, 0.0, 0.0};
+        return calls_->eval(d_.get(), a, b);
+    }
+    double pdf(const Vec3& wo, const Vec3& wi) const noexcept {
+        Vec3 a = wo, b = wi;
+        if (!prepare_direction(a) || !prepare_direction(b) || !(a.z > 0.0 && b.z > 0.0)) return 0.0;
+        return calls_->pdf(d_.get(), a, b);
+    }
+    Sample64 sample(const Vec3& wo, double u1, double u2) const noexcept {
+        Vec3 a = wo;
+        if (!prepare_direction(a) || !(a.z > 0.0 && u1 >= 0.0 && u1 < 1.0 && u2 >= 0.0 && u2 < 1.0)) return {};
+        return calls_->sample(d_.get(), a, u1, u2);
+    }
 
     // Batches: out[k] for pair or draw k; u holds n (u1, u2) pairs.
     void eval(const Float3* wi, const Float3* wo, Rgb32* out, std::size_t n) const noexcept;
