@@ -305,8 +305,11 @@ TEST_CASE("runtime: bad layouts are refused with a line, never read", "[runtime]
 
 TEST_CASE("runtime: every build this CPU runs gives the baseline build's bits", "[runtime][qemu]") {
     const CoatedDiffuse source = coated(0.08);
-    auto [wo, us] = test::random_views(5000, 3);
-    auto [wi, unused] = test::random_views(5000, 4);
+    // Named, not bound: the lambda below captures them (clang 14 cannot capture structured bindings).
+    const auto views = test::random_views(5000, 3);
+    const std::vector<Vec3>& wo = views.first;
+    const std::vector<std::array<double, 2>>& us = views.second;
+    const std::vector<Vec3> wi = test::random_views(5000, 4).first;
     for (const char* spec : {"tabular:res=16x16x32,dtype=f16,symmetry=none", "svd:rank=3,res=16x12x16,space=log",
                              "tabular:res=12x12x16,phih=3,symmetry=bilateral", "analytic:lambert+ggx"}) {
         const Compressed c = compress(source, spec);
