@@ -54,6 +54,11 @@ double read_theta_d_warp(const h5::ReadNode& rep);
 void write_phi_d_axis(h5::WriteNode& rep, const GridSpec& g);
 Symmetry read_phi_d_symmetry(const h5::ReadNode& rep);
 
+// A stored grid's attributes (formats/SPEC.md: `grid`, `bin_position`, `theta_h_axis`, and the θd axis
+// where the module stores warped ones, else a linear one; the φd axis), checked: FormatError names the
+// attribute that is out of range before anything is allocated.
+GridSpec read_grid(const h5::ReadNode& rep, bool warped_theta_d);
+
 // Features of the container itself (layout, metadata, CRC-32C checksums).
 inline const Feature kCore{"core", 1};
 

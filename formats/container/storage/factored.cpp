@@ -94,17 +94,7 @@ std::unique_ptr<Brdf> read(const h5::ReadNode& rep, const ReadContext&) {
     const std::string dtype = rep.str("dtype");
     if (dtype != "float32" && dtype != "float16") bad("unsupported factor element type '" + dtype + "'");
     f.dtype = dtype == "float16" ? FactorDtype::F16 : FactorDtype::F32;
-    if (rep.str("theta_h_axis") != "sqrt") bad("unknown theta_h_axis '" + rep.str("theta_h_axis") + "'");
-    const std::string position = rep.str("bin_position");
-    if (position != "centre" && position != "start") bad("unknown bin_position '" + position + "'");
-    const std::vector<std::uint64_t> dims = rep.u64s("grid");
-    if (dims.size() != 3) bad("attribute 'grid' has " + std::to_string(dims.size()) + " entries, expected 3");
-    for (std::uint64_t d : dims)
-        if (d < 1 || d > static_cast<std::uint64_t>(GridSpec::kMaxAxis))
-            bad("grid axis " + std::to_string(d) + " outside 1.." + std::to_string(GridSpec::kMaxAxis));
-    f.grid = GridSpec{static_cast<int>(dims[0]), static_cast<int>(dims[1]), static_cast<int>(dims[2]),
-                      position == "centre" ? BinPosition::Centre : BinPosition::Start, read_theta_d_warp(rep),
-                      read_phi_d_symmetry(rep)};
+    f.grid = read_grid(rep, true);
     const std::uint64_t rows = static_cast<std::uint64_t>(f.rows()), cols = static_cast<std::uint64_t>(f.columns());
     const std::uint64_t rank = rep.u64("rank");
     if (rank < 1 || rank > std::min(rows, cols))

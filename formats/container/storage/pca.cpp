@@ -182,18 +182,9 @@ std::shared_ptr<const PcaBasis> read_referenced(const h5::ReadNode& rep, const G
 
 std::unique_ptr<Brdf> read(const h5::ReadNode& rep, const ReadContext& ctx) {
     const auto bad = [&](const std::string& what) { throw FormatError(rep.file(), rep.path() + ": " + what); };
-    const std::vector<std::uint64_t> dims = rep.u64s("grid");
-    if (dims.size() != 3) bad("attribute 'grid' has " + std::to_string(dims.size()) + " entries, expected 3");
-    for (std::uint64_t d : dims)
-        if (d < 1 || d > static_cast<std::uint64_t>(GridSpec::kMaxAxis))
-            bad("grid axis " + std::to_string(d) + " outside 1.." + std::to_string(GridSpec::kMaxAxis));
-    const std::string position = rep.str("bin_position");
-    if (position != "centre" && position != "start") bad("unknown bin_position '" + position + "'");
-    if (rep.str("theta_h_axis") != "sqrt") bad("unknown theta_h_axis '" + rep.str("theta_h_axis") + "'");
     const std::string transform = rep.str("transform");
     if (transform != kTransform) bad("unknown transform '" + transform + "'");
-    const GridSpec grid{static_cast<int>(dims[0]), static_cast<int>(dims[1]), static_cast<int>(dims[2]),
-                        position == "centre" ? BinPosition::Centre : BinPosition::Start, 0.0, read_phi_d_symmetry(rep)};
+    const GridSpec grid = read_grid(rep, false);
     const double epsilon = rep.f64("epsilon");
     const std::uint64_t k = rep.u64("k"), k_max = rep.u64("k_max");
     if (k_max < 1 || k > k_max) bad("k = " + std::to_string(k) + " and k_max = " + std::to_string(k_max) + " are inconsistent");

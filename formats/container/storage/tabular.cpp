@@ -105,19 +105,7 @@ std::unique_ptr<Brdf> read(const h5::ReadNode& rep, const ReadContext& ctx) {
     const auto bad = [&](const std::string& what) { throw FormatError(rep.file(), rep.path() + ": " + what); };
     const std::string dtype = rep.str("dtype");
     if (dtype != "float32" && dtype != "float16" && dtype != "uint8") bad("unsupported table element type '" + dtype + "'");
-    const std::vector<std::uint64_t> dims = rep.u64s("grid");
-    if (dims.size() != 3) bad("attribute 'grid' has " + std::to_string(dims.size()) + " entries, expected 3");
-    for (std::uint64_t d : dims)
-        if (d < 1 || d > static_cast<std::uint64_t>(GridSpec::kMaxAxis))
-            bad("grid axis " + std::to_string(d) + " outside 1.." + std::to_string(GridSpec::kMaxAxis));
-    const std::string position = rep.str("bin_position");
-    if (position != "centre" && position != "start") bad("unknown bin_position '" + position + "'");
-    const std::string axis = rep.str("theta_h_axis");
-    if (axis != "sqrt") bad("unknown theta_h_axis '" + axis + "'");
-
-    const double warp = read_theta_d_warp(rep);
-    const GridSpec grid{static_cast<int>(dims[0]), static_cast<int>(dims[1]), static_cast<int>(dims[2]),
-                        position == "centre" ? BinPosition::Centre : BinPosition::Start, warp, read_phi_d_symmetry(rep)};
+    const GridSpec grid = read_grid(rep, true);
     const h5::Dataset values = rep.dataset("values");
     const h5::DType type = dtype == "float32" ? h5::DType::F32 : dtype == "float16" ? h5::DType::F16 : h5::DType::U8;
     if (values.type() != type || values.shape() != values_shape(grid))
@@ -215,6 +203,22 @@ double read_theta_d_warp(const h5::ReadNode& rep) {
 void write_phi_d_axis(h5::WriteNode& rep, const GridSpec& g) {
     if (g.full_circle()) rep.attr("phi_d_axis", std::string("full"));
     if (g.bilateral()) rep.attr("phi_d_axis", std::string("bilateral"));
+}
+
+GridSpec read_grid(const h5::ReadNode& rep, bool warped_theta_d) {
+    const auto bad = [&](const std::string& what) { throw FormatError(rep.file(), rep.path() + ": " + what); };
+    const std::vector<std::uint64_t> dims = rep.u64s("grid");
+    if (dims.size() != 3) bad("attribute 'grid' has " + std::to_string(dims.size()) + " entries, expected 3");
+    for (std::uint64_t d : dims)
+        if (d < 1 || d > static_cast<std::uint64_t>(GridSpec::kMaxAxis))
+            bad("grid axis " + std::to_string(d) + " outside 1.." + std::to_string(GridSpec::kMaxAxis));
+    const std::string position = rep.str("bin_position");
+    if (position != "centre" && position != "start") bad("unknown bin_position '" + position + "'");
+    const std::string axis = rep.str("theta_h_axis");
+    if (axis != "sqrt") bad("unknown theta_h_axis '" + axis + "'");
+    return {static_cast<int>(dims[0]), static_cast<int>(dims[1]), static_cast<int>(dims[2]),
+            position == "centre" ? BinPosition::Centre : BinPosition::Start, warped_theta_d ? read_theta_d_warp(rep) : 0.0,
+            read_phi_d_symmetry(rep)};
 }
 
 Symmetry read_phi_d_symmetry(const h5::ReadNode& rep) {
