@@ -559,60 +559,31 @@ template <int W>
     }
 }
 
-// The kernels' three builds, and a one-lane build for fewer pairs than a vector holds (one call at a
-// time): the same operations, so the same bits, without computing the unused lanes.
-[[gnu::flatten]] void eval_one(const KernelTables& t, const Vec3* wi, const Vec3* wo, Rgb* out, std::size_t n) {
-    eval_passes<1>(t, wi, wo, out, n);
-}
-[[gnu::flatten]] void eval_sse2(const KernelTables& t, const Vec3* wi, const Vec3* wo, Rgb* out, std::size_t n) {
-    eval_passes<2>(t, wi, wo, out, n);
-}
-[[gnu::flatten, BRDFZ_AVX2]] void eval_avx2(const KernelTables& t, const Vec3* wi, const Vec3* wo, Rgb* out,
-                                            std::size_t n) {
-    eval_passes<4>(t, wi, wo, out, n);
-}
-[[gnu::flatten, BRDFZ_AVX512]] void eval_avx512(const KernelTables& t, const Vec3* wi, const Vec3* wo, Rgb* out,
-                                                std::size_t n) {
-    eval_passes<8>(t, wi, wo, out, n);
-}
+// The kernels' builds (runtime/kernels/simd.h: Builds), 2, 4 and 8 lanes wide, and a one-lane build for
+// fewer pairs than a vector holds (one call at a time): the same operations, so the same bits, without
+// computing the unused lanes.
+constexpr int lanes_at(Simd s) { return s == Simd::Avx512 ? 8 : s == Simd::Avx2Fma ? 4 : 2; }
 
-[[gnu::flatten]] void pdf_one(const KernelTables& t, const Vec3* wo, const Vec3* wi, double* out, std::size_t n) {
-    pdf_passes<1>(t, wo, wi, out, n);
-}
-[[gnu::flatten]] void pdf_sse2(const KernelTables& t, const Vec3* wo, const Vec3* wi, double* out, std::size_t n) {
-    pdf_passes<2>(t, wo, wi, out, n);
-}
-[[gnu::flatten, BRDFZ_AVX2]] void pdf_avx2(const KernelTables& t, const Vec3* wo, const Vec3* wi, double* out,
-                                           std::size_t n) {
-    pdf_passes<4>(t, wo, wi, out, n);
-}
-[[gnu::flatten, BRDFZ_AVX512]] void pdf_avx512(const KernelTables& t, const Vec3* wo, const Vec3* wi, double* out,
-                                               std::size_t n) {
-    pdf_passes<8>(t, wo, wi, out, n);
-}
-
-[[gnu::flatten]] void sample_one(const KernelTables& t, const Vec3* wo, const std::array<double, 2>* u,
-                                 BrdfSample* out, std::size_t n) {
-    sample_passes<1>(t, wo, u, out, n);
-}
-[[gnu::flatten]] void sample_sse2(const KernelTables& t, const Vec3* wo, const std::array<double, 2>* u,
-                                  BrdfSample* out, std::size_t n) {
-    sample_passes<2>(t, wo, u, out, n);
-}
-[[gnu::flatten, BRDFZ_AVX2]] void sample_avx2(const KernelTables& t, const Vec3* wo,
-                                              const std::array<double, 2>* u, BrdfSample* out, std::size_t n) {
-    sample_passes<4>(t, wo, u, out, n);
-}
-[[gnu::flatten, BRDFZ_AVX512]] void sample_avx512(const KernelTables& t, const Vec3* wo, const std::array<double, 2>* u,
-                                                  BrdfSample* out, std::size_t n) {
-    sample_passes<8>(t, wo, u, out, n);
-}
+enum class Op { Eval, Pdf, Sample };
+// One: the one-lane build.
+template <Op O, bool One>
+struct Kernel {
+    static constexpr bool kAvx512 = true, kFma = false;
+    template <Simd S, typename... A>
+    static void run(A... a) {
+        constexpr int W = One ? 1 : lanes_at(S);
+        if constexpr (O == Op::Eval) eval_passes<W>(a...);
+        else if constexpr (O == Op::Pdf) pdf_passes<W>(a...);
+        else sample_passes<W>(a...);
+    }
+};
 
 // The build for n pairs at the level asked for: the one-lane build below a vector's worth of pairs.
-template <typename F>
-F* pick(Simd simd, std::size_t n, F* one, F* sse2, F* avx2, F* avx512) {
-    const std::size_t lanes = simd == Simd::Avx512 ? 8 : simd == Simd::Avx2Fma ? 4 : 2;
-    return n < lanes ? one : ::brdfz::detail::build_for(simd, sse2, avx2, avx512);
+template <Op O, typename Signature>
+Signature* pick(Simd simd, std::size_t n) {
+    using runtime::kernels::Builds;
+    return n < static_cast<std::size_t>(lanes_at(simd)) ? Builds<Kernel<O, true>, Signature>::baseline
+                                                         : Builds<Kernel<O, false>, Signature>::at(simd);
 }
 
 }  // namespace
@@ -630,16 +601,17 @@ void sample_warp(const WarpTables& w, int slice, double* x, double* y, double* p
 }
 
 void eval_pairs(Simd simd, const KernelTables& t, const Vec3* wi, const Vec3* wo, Rgb* out, std::size_t n) {
-    pick(simd, n, eval_one, eval_sse2, eval_avx2, eval_avx512)(t, wi, wo, out, n);
+    pick<Op::Eval, void(const KernelTables&, const Vec3*, const Vec3*, Rgb*, std::size_t)>(simd, n)(t, wi, wo, out, n);
 }
 
 void pdf_pairs(Simd simd, const KernelTables& t, const Vec3* wo, const Vec3* wi, double* out, std::size_t n) {
-    pick(simd, n, pdf_one, pdf_sse2, pdf_avx2, pdf_avx512)(t, wo, wi, out, n);
+    pick<Op::Pdf, void(const KernelTables&, const Vec3*, const Vec3*, double*, std::size_t)>(simd, n)(t, wo, wi, out, n);
 }
 
 void sample_pairs(Simd simd, const KernelTables& t, const Vec3* wo, const std::array<double, 2>* u,
                   BrdfSample* out, std::size_t n) {
-    pick(simd, n, sample_one, sample_sse2, sample_avx2, sample_avx512)(t, wo, u, out, n);
+    pick<Op::Sample, void(const KernelTables&, const Vec3*, const std::array<double, 2>*, BrdfSample*, std::size_t)>(
+        simd, n)(t, wo, u, out, n);
 }
 
 }  // namespace brdfz::rgl::detail

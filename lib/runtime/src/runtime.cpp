@@ -484,37 +484,47 @@ Sample64 sample64(const Data* d, const Vec3& wo, double u1, double u2) noexcept 
     return s;
 }
 
-// The calls' builds (brdfz/runtime/kernels/simd.h), each flattened into one body of its kind's code: the
+// The calls' builds (kernels/simd.h: Builds), each flattened into one body of its kind's code: the
 // lookups and the sampler run faster with AVX2 (as the library's one-pair table call); without FMA it
 // gives the baseline's bits. An analytic model's eval is not flattened: its lobe mixture, every family
 // inlined into one body, runs slower.
-[[gnu::flatten]] double pdf_base(const Data* d, const Vec3& wo, const Vec3& wi) noexcept { return pdf64(d, wo, wi); }
-[[gnu::flatten, BRDFZ_AVX2]] double pdf_avx2(const Data* d, const Vec3& wo, const Vec3& wi) noexcept {
-    return pdf64(d, wo, wi);
-}
+template <typename Leaf>
+struct EvalCall {
+    static constexpr bool kAvx512 = false, kFma = false;
+    template <Simd S>
+    static Rgb64 run(const Data* d, const Vec3& wi, const Vec3& wo) noexcept {
+        return eval64<Leaf, S != Simd::Sse2>(d, wi, wo);
+    }
+};
+struct PdfCall {
+    static constexpr bool kAvx512 = false, kFma = false;
+    template <Simd>
+    static double run(const Data* d, const Vec3& wo, const Vec3& wi) noexcept {
+        return pdf64(d, wo, wi);
+    }
+};
+template <typename Leaf>
+struct SampleCall {
+    static constexpr bool kAvx512 = false, kFma = false;
+    template <Simd S>
+    static Sample64 run(const Data* d, const Vec3& wo, double u1, double u2) noexcept {
+        return sample64<Leaf, S != Simd::Sse2>(d, wo, u1, u2);
+    }
+};
 
 template <typename Leaf>
-struct Builds {
-    [[gnu::flatten]] static Rgb64 eval_base(const Data* d, const Vec3& wi, const Vec3& wo) noexcept {
-        return eval64<Leaf>(d, wi, wo);
-    }
-    [[gnu::flatten]] static Sample64 sample_base(const Data* d, const Vec3& wo, double u1, double u2) noexcept {
-        return sample64<Leaf, false>(d, wo, u1, u2);
-    }
-    [[gnu::flatten, BRDFZ_AVX2]] static Rgb64 eval_avx2(const Data* d, const Vec3& wi, const Vec3& wo) noexcept {
-        return eval64<Leaf, true>(d, wi, wo);
-    }
-    [[gnu::flatten, BRDFZ_AVX2]] static Sample64 sample_avx2(const Data* d, const Vec3& wo, double u1, double u2) noexcept {
-        return sample64<Leaf, true>(d, wo, u1, u2);
-    }
+struct CallTables {
+    using E = k::Builds<EvalCall<Leaf>, Rgb64(const Data*, const Vec3&, const Vec3&)>;
+    using P = k::Builds<PdfCall, double(const Data*, const Vec3&, const Vec3&)>;
+    using S = k::Builds<SampleCall<Leaf>, Sample64(const Data*, const Vec3&, double, double)>;
     static constexpr bool kLobes = std::is_same_v<Leaf, LobesLeaf>;
-    static constexpr Calls base{kLobes ? eval64<Leaf> : eval_base, pdf_base, sample_base};
-    static constexpr Calls avx2{kLobes ? eval64<Leaf> : eval_avx2, pdf_avx2, sample_avx2};
+    static constexpr Calls base{kLobes ? eval64<Leaf> : E::baseline, P::baseline, S::baseline};
+    static constexpr Calls avx2{kLobes ? eval64<Leaf> : E::avx2, P::avx2, S::avx2};
 };
 
 template <typename Leaf>
 const Calls* calls_of() {
-    return k::build_for(k::simd_level(), &Builds<Leaf>::base, &Builds<Leaf>::avx2);
+    return k::build_for(k::simd_level(), &CallTables<Leaf>::base, &CallTables<Leaf>::avx2);
 }
 
 // The call table of the root's kind (a φh stack's: its slices' kind, where they share one).

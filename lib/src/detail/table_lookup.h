@@ -102,22 +102,21 @@ template <bool Wide, typename Values>
     return read_linear<Wide>(g, values, linear_corners(g, c, wi, wo));
 }
 
-// Its two builds (detail/simd.h), as the batch kernels': the AVX2 one blends the corners in one register,
-// without FMA, so both give the same bits.
+// Its builds (runtime/kernels/simd.h: Builds), as the batch kernels': the AVX2 one blends the corners in
+// one register, without FMA, so both give the same bits.
 template <typename Values>
-[[gnu::flatten]] Rgb eval_one_sse2(const GridSpec& g, const Values& values, Lookup lookup, const Vec3& wi,
-                                   const Vec3& wo) {
-    return eval_one<false>(g, values, lookup, wi, wo);
-}
-template <typename Values>
-[[gnu::flatten, BRDFZ_AVX2]] Rgb eval_one_avx2(const GridSpec& g, const Values& values, Lookup lookup,
-                                               const Vec3& wi, const Vec3& wo) {
-    return eval_one<true>(g, values, lookup, wi, wo);
-}
+struct EvalOneKernel {
+    static constexpr bool kAvx512 = false, kFma = false;
+    template <Simd S>
+    static Rgb run(const GridSpec& g, const Values& values, Lookup lookup, const Vec3& wi, const Vec3& wo) {
+        return eval_one<S != Simd::Sse2>(g, values, lookup, wi, wo);
+    }
+};
 
 template <typename Values>
 Rgb eval_table(const GridSpec& g, const Values& values, Lookup lookup, const Vec3& wi, const Vec3& wo) {
-    return build_for(simd_level(), eval_one_sse2<Values>, eval_one_avx2<Values>)(g, values, lookup, wi, wo);
+    using Signature = Rgb(const GridSpec&, const Values&, Lookup, const Vec3&, const Vec3&);
+    return runtime::kernels::Builds<EvalOneKernel<Values>, Signature>::at(simd_level())(g, values, lookup, wi, wo);
 }
 
 // Batch kernels (eval_table_batch, and sample_table_batch's weights) work in blocks of pairs, in passes
@@ -211,25 +210,23 @@ template <bool Wide, typename Values>
     }
 }
 
-// The kernel's two builds (detail/simd.h); the AVX2 one without FMA, so that both give eval_table's
-// results to the bit.
+// The kernel's builds (runtime/kernels/simd.h: Builds); the AVX2 one without FMA, so that both give
+// eval_table's results to the bit.
 template <typename Values>
-[[gnu::flatten]] void eval_table_batch_sse2(const GridSpec& g, const Values& values, Lookup lookup, const Vec3* wi,
-                                            const Vec3* wo, Rgb* out, std::size_t n) {
-    eval_table_passes<false>(g, values, lookup, wi, wo, out, n);
-}
-template <typename Values>
-[[gnu::flatten, BRDFZ_AVX2]] void eval_table_batch_avx2(const GridSpec& g, const Values& values,
-                                                        Lookup lookup, const Vec3* wi, const Vec3* wo,
-                                                        Rgb* out, std::size_t n) {
-    eval_table_passes<true>(g, values, lookup, wi, wo, out, n);
-}
+struct EvalBatchKernel {
+    static constexpr bool kAvx512 = false, kFma = false;
+    template <Simd S>
+    static void run(const GridSpec& g, const Values& values, Lookup lookup, const Vec3* wi, const Vec3* wo, Rgb* out,
+                    std::size_t n) {
+        eval_table_passes<S != Simd::Sse2>(g, values, lookup, wi, wo, out, n);
+    }
+};
 
 template <typename Values>
 void eval_table_batch(const GridSpec& g, const Values& values, Lookup lookup, const Vec3* wi, const Vec3* wo,
                       Rgb* out, std::size_t n) {
-    const auto kernel = build_for(simd_level(), eval_table_batch_sse2<Values>, eval_table_batch_avx2<Values>);
-    kernel(g, values, lookup, wi, wo, out, n);
+    using Signature = void(const GridSpec&, const Values&, Lookup, const Vec3*, const Vec3*, Rgb*, std::size_t);
+    runtime::kernels::Builds<EvalBatchKernel<Values>, Signature>::at(simd_level())(g, values, lookup, wi, wo, out, n);
 }
 
 }  // namespace brdfz::detail

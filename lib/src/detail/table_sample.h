@@ -70,24 +70,24 @@ template <bool Wide, typename Values>
     return s;
 }
 
-// Its two builds, as the batch kernel's below: the AVX2 one blends the corners in one register.
+// Its builds (runtime/kernels/simd.h: Builds), as the batch kernel's below: the AVX2 one blends the
+// corners in one register.
 template <typename Values>
-[[gnu::flatten]] BrdfSample sample_one_sse2(const GridSpec& g, const Values& values, Lookup lookup,
-                                            const HalfVectorSampler& sampler, const Vec3& wo, double u1, double u2) {
-    return sample_one<false>(g, values, lookup, sampler, wo, u1, u2);
-}
-template <typename Values>
-[[gnu::flatten, BRDFZ_AVX2]] BrdfSample sample_one_avx2(const GridSpec& g, const Values& values,
-                                                        Lookup lookup, const HalfVectorSampler& sampler,
-                                                        const Vec3& wo, double u1, double u2) {
-    return sample_one<true>(g, values, lookup, sampler, wo, u1, u2);
-}
+struct SampleOneKernel {
+    static constexpr bool kAvx512 = false, kFma = false;
+    template <Simd S>
+    static BrdfSample run(const GridSpec& g, const Values& values, Lookup lookup, const HalfVectorSampler& sampler,
+                          const Vec3& wo, double u1, double u2) {
+        return sample_one<S != Simd::Sse2>(g, values, lookup, sampler, wo, u1, u2);
+    }
+};
 
 template <typename Values>
 BrdfSample sample_table(const GridSpec& g, const Values& values, Lookup lookup, const HalfVectorSampler& sampler,
                         const Vec3& wo, double u1, double u2) {
-    const auto kernel = build_for(simd_level(), sample_one_sse2<Values>, sample_one_avx2<Values>);
-    return kernel(g, values, lookup, sampler, wo, u1, u2);
+    using Signature = BrdfSample(const GridSpec&, const Values&, Lookup, const HalfVectorSampler&, const Vec3&, double, double);
+    return runtime::kernels::Builds<SampleOneKernel<Values>, Signature>::at(simd_level())(g, values, lookup, sampler, wo,
+                                                                                          u1, u2);
 }
 
 // Brdf::sample_batch: blocks of draws in passes, as eval_table_batch does for pairs: (1) the draws
@@ -126,26 +126,25 @@ template <bool Wide, typename Values>
     }
 }
 
-// The kernel's two builds; the AVX2 one without FMA, so that both give sample_table's results to the bit.
+// The kernel's builds (runtime/kernels/simd.h: Builds); the AVX2 one without FMA, so that both give
+// sample_table's results to the bit.
 template <typename Values>
-[[gnu::flatten]] void sample_table_batch_sse2(const GridSpec& g, const Values& values, Lookup lookup,
-                                              const HalfVectorSampler& sampler, const Vec3* wo,
-                                              const std::array<double, 2>* u, BrdfSample* out, std::size_t n) {
-    sample_table_passes<false>(g, values, lookup, sampler, wo, u, out, n);
-}
-template <typename Values>
-[[gnu::flatten, BRDFZ_AVX2]] void sample_table_batch_avx2(const GridSpec& g, const Values& values,
-                                                          Lookup lookup, const HalfVectorSampler& sampler,
-                                                          const Vec3* wo, const std::array<double, 2>* u,
-                                                          BrdfSample* out, std::size_t n) {
-    sample_table_passes<true>(g, values, lookup, sampler, wo, u, out, n);
-}
+struct SampleBatchKernel {
+    static constexpr bool kAvx512 = false, kFma = false;
+    template <Simd S>
+    static void run(const GridSpec& g, const Values& values, Lookup lookup, const HalfVectorSampler& sampler,
+                    const Vec3* wo, const std::array<double, 2>* u, BrdfSample* out, std::size_t n) {
+        sample_table_passes<S != Simd::Sse2>(g, values, lookup, sampler, wo, u, out, n);
+    }
+};
 
 template <typename Values>
 void sample_table_batch(const GridSpec& g, const Values& values, Lookup lookup, const HalfVectorSampler& sampler,
                         const Vec3* wo, const std::array<double, 2>* u, BrdfSample* out, std::size_t n) {
-    const auto kernel = build_for(simd_level(), sample_table_batch_sse2<Values>, sample_table_batch_avx2<Values>);
-    kernel(g, values, lookup, sampler, wo, u, out, n);
+    using Signature = void(const GridSpec&, const Values&, Lookup, const HalfVectorSampler&, const Vec3*,
+                           const std::array<double, 2>*, BrdfSample*, std::size_t);
+    runtime::kernels::Builds<SampleBatchKernel<Values>, Signature>::at(simd_level())(g, values, lookup, sampler, wo, u,
+                                                                                      out, n);
 }
 
 }  // namespace brdfz::detail

@@ -157,22 +157,19 @@ template <int W, FactorLayout L, bool Grouped>
             if (above[k] & !(coords[k].up <= g.n_phi_d)) [[unlikely]]  // kIllConditioned or NaN
                 coords[k] = detail::bin_coords(g, a[k], b[k]);
         // One loop per kind of φd axis: a select per pair would compute both kinds of span.
+        const auto set_all = [&](auto phi_d_span) {
+            for (std::size_t k = 0; k < m; ++k) {
+                const detail::BinCoords& c = coords[k];
+                set_corners<L>(g,
+                               {detail::clamped_span(c.uh - off, g.n_theta_h), detail::clamped_span(c.ud - off, g.n_theta_d),
+                                phi_d_span(c.up - off, g.n_phi_d)},
+                               k, corners);
+            }
+        };
         if (g.bilateral())
-            for (std::size_t k = 0; k < m; ++k) {
-                const detail::BinCoords& c = coords[k];
-                set_corners<L>(g,
-                               {detail::clamped_span(c.uh - off, g.n_theta_h), detail::clamped_span(c.ud - off, g.n_theta_d),
-                                detail::clamped_span(c.up - off, g.n_phi_d)},
-                               k, corners);
-            }
+            set_all([](double c, int n) { return detail::clamped_span(c, n); });
         else
-            for (std::size_t k = 0; k < m; ++k) {
-                const detail::BinCoords& c = coords[k];
-                set_corners<L>(g,
-                               {detail::clamped_span(c.uh - off, g.n_theta_h), detail::clamped_span(c.ud - off, g.n_theta_d),
-                                detail::periodic_span(c.up - off, g.n_phi_d)},
-                               k, corners);
-            }
+            set_all([](double c, int n) { return detail::periodic_span(c, n); });
         if (f.prefetch_u)
             for (std::size_t k = 0; k < m; ++k)
                 for (const auto& r : corners.r) __builtin_prefetch(f.u + static_cast<std::size_t>(r[k]) * f.width);
@@ -190,38 +187,27 @@ template <int W, FactorLayout L, bool Grouped>
     }
 }
 
-// The kernel's builds. Single-pair eval runs the same one as the batch (bit for bit: FMA contraction
-// makes the SSE2 build's results differ from the others' in the last bits). The AVX-512 one blends 8
-// floats per step as the AVX2 one (the factors' padding is the same), and runs the coordinates and the
-// inverse transform 8 doubles wide.
+// The kernel's builds (runtime/kernels/simd.h: Builds). Single-pair eval runs the same one as the batch
+// (bit for bit: FMA contraction makes the SSE2 build's results differ from the others' in the last bits).
+// The AVX-512 one blends 8 floats per step as the AVX2 one (the factors' padding is the same), and runs
+// the coordinates and the inverse transform 8 doubles wide.
 template <FactorLayout L, bool Grouped>
-[[gnu::flatten]] void eval_pairs_sse2(const FactorView& f, FactorSpace space, const Vec3* wi, const Vec3* wo,
-                                      Rgb* out, std::size_t n, std::uint64_t& clamped) {
-    eval_pairs<4, L, Grouped>(f, space, wi, wo, out, n, clamped);
-}
-
-template <FactorLayout L, bool Grouped>
-[[gnu::flatten, BRDFZ_AVX2_FMA]] void eval_pairs_avx2(const FactorView& f, FactorSpace space, const Vec3* wi,
-                                                      const Vec3* wo, Rgb* out, std::size_t n,
-                                                      std::uint64_t& clamped) {
-    eval_pairs<8, L, Grouped>(f, space, wi, wo, out, n, clamped);
-}
-
-template <FactorLayout L, bool Grouped>
-[[gnu::flatten, BRDFZ_AVX512]] void eval_pairs_avx512(const FactorView& f, FactorSpace space, const Vec3* wi,
-                                                       const Vec3* wo, Rgb* out, std::size_t n, std::uint64_t& clamped) {
-    eval_pairs<8, L, Grouped>(f, space, wi, wo, out, n, clamped);
-}
+struct EvalKernel {
+    static constexpr bool kAvx512 = true, kFma = true;
+    template <Simd S>
+    static void run(const FactorView& f, FactorSpace space, const Vec3* wi, const Vec3* wo, Rgb* out, std::size_t n,
+                    std::uint64_t& clamped) {
+        eval_pairs<S == Simd::Sse2 ? 4 : 8, L, Grouped>(f, space, wi, wo, out, n, clamped);
+    }
+};
 
 template <bool Grouped>
 void eval_kernel(detail::Simd simd, FactorLayout layout, const FactorView& f, FactorSpace space, const Vec3* wi,
                  const Vec3* wo, Rgb* out, std::size_t n, std::uint64_t& clamped) {
-    constexpr FactorLayout kHxDP = FactorLayout::HxDP, kHDxP = FactorLayout::HDxP;
-    const bool hxdp = layout == kHxDP;
-    const auto kernel = hxdp ? detail::build_for(simd, eval_pairs_sse2<kHxDP, Grouped>, eval_pairs_avx2<kHxDP, Grouped>,
-                                                 eval_pairs_avx512<kHxDP, Grouped>)
-                             : detail::build_for(simd, eval_pairs_sse2<kHDxP, Grouped>, eval_pairs_avx2<kHDxP, Grouped>,
-                                                 eval_pairs_avx512<kHDxP, Grouped>);
+    using Signature = void(const FactorView&, FactorSpace, const Vec3*, const Vec3*, Rgb*, std::size_t, std::uint64_t&);
+    using runtime::kernels::Builds;
+    const auto kernel = layout == FactorLayout::HxDP ? Builds<EvalKernel<FactorLayout::HxDP, Grouped>, Signature>::at(simd)
+                                                     : Builds<EvalKernel<FactorLayout::HDxP, Grouped>, Signature>::at(simd);
     kernel(f, space, wi, wo, out, n, clamped);
 }
 

@@ -278,27 +278,17 @@ Cell exact_cell(const StackView& v, int slice, double u1, double u2) {
     }
 }
 
-// The kernel's three builds. The AVX2 one has no FMA, whose contraction would round differently from
-// draw(): all give draw()'s results to the bit.
-[[gnu::flatten]] void draw_lanes_sse2(const SamplerView& v, const StackView& st, const detail::SinCosTable& table,
-                                      const Vec3* wo, const std::array<double, 2>* u, std::size_t n,
-                                      HalfVectorSampler::Draws& out) {
-    draw_lanes(v, st, table, wo, u, n, out);
-}
-[[gnu::flatten, BRDFZ_AVX2]] void draw_lanes_avx2(const SamplerView& v, const StackView& st,
-                                                  const detail::SinCosTable& table, const Vec3* wo,
-                                                  const std::array<double, 2>* u, std::size_t n,
-                                                  HalfVectorSampler::Draws& out) {
-    draw_lanes(v, st, table, wo, u, n, out);
-}
-// AVX-512 has FMA: the unit is built without contraction (lib/CMakeLists.txt), so this build too gives
-// draw()'s bits.
-[[gnu::flatten, BRDFZ_AVX512]] void draw_lanes_avx512(const SamplerView& v, const StackView& st,
-                                                      const detail::SinCosTable& table, const Vec3* wo,
-                                                      const std::array<double, 2>* u, std::size_t n,
-                                                      HalfVectorSampler::Draws& out) {
-    draw_lanes(v, st, table, wo, u, n, out);
-}
+// The kernel's builds (runtime/kernels/simd.h: Builds). The AVX2 one has no FMA, whose contraction
+// would round differently from draw(); AVX-512 has FMA, but the library is built without contraction
+// (brdfz_float): all give draw()'s results to the bit.
+struct DrawKernel {
+    static constexpr bool kAvx512 = true, kFma = false;
+    template <Simd>
+    static void run(const SamplerView& v, const StackView& st, const detail::SinCosTable& table, const Vec3* wo,
+                    const std::array<double, 2>* u, std::size_t n, HalfVectorSampler::Draws& out) {
+        draw_lanes(v, st, table, wo, u, n, out);
+    }
+};
 
 }  // namespace
 
@@ -393,8 +383,10 @@ HalfVectorSampler::Draw HalfVectorSampler::draw(const Vec3& wo, double u1, doubl
 
 void HalfVectorSampler::draw_block(const Vec3* wo, const std::array<double, 2>* u, std::size_t n, Draws& out) const {
     const SamplerView v{options_.cosine_share, theta_o_.back(), static_cast<int>(theta_o_.size())};
-    detail::build_for(detail::simd_level(), draw_lanes_sse2, draw_lanes_avx2, draw_lanes_avx512)(
-        v, first_, detail::half_turn_sincos(), wo, u, n, out);
+    using Signature = void(const SamplerView&, const StackView&, const detail::SinCosTable&, const Vec3*,
+                           const std::array<double, 2>*, std::size_t, Draws&);
+    runtime::kernels::Builds<DrawKernel, Signature>::at(detail::simd_level())(v, first_, detail::half_turn_sincos(), wo, u,
+                                                                               n, out);
 }
 
 }  // namespace brdfz

@@ -54,9 +54,9 @@ struct Data;
 // A material's calls, in the build for this CPU (brdfz/runtime/kernels/simd.h), picked when it is
 // parsed; an empty material's give 0. They take prepared directions above the horizon, and u in [0, 1).
 struct Calls {
-    Rgb64 (*eval)(const Data*, const Vec3& wi, const Vec3& wo) noexcept;
-    double (*pdf)(const Data*, const Vec3& wo, const Vec3& wi) noexcept;
-    Sample64 (*sample)(const Data*, const Vec3& wo, double u1, double u2) noexcept;
+    Rgb64 (*eval)(const Data*, const Vec3& wi, const Vec3& wo);
+    double (*pdf)(const Data*, const Vec3& wo, const Vec3& wi);
+    Sample64 (*sample)(const Data*, const Vec3& wo, double u1, double u2);
 };
 extern const Calls kNoCalls;
 }  // namespace detail

@@ -203,11 +203,10 @@ inline Corners linear_corners(const G& g, BinCoords c, const Vec3& wi, const Vec
     return {clamped_span(c.uh - off, g.n_theta_h), clamped_span(c.ud - off, g.n_theta_d), phi_d_span(g, c.up - off)};
 }
 
-// The blend of the eight corners, channel by channel: invalid samples (NaN) contribute neither value nor
-// weight; a pair whose corners are all invalid is 0. Values provides load(bin, float v[3]).
-template <typename G, typename Values>
-inline void blend_linear(const G& g, const Values& values, const Corners& k, double f[3]) {
-    double sum[3] = {0.0, 0.0, 0.0}, wsum[3] = {0.0, 0.0, 0.0};
+// The eight corners of a linear lookup in the blends' order: visit(bin, w) with each corner's bin and
+// weight, the same products in the same order for every blend, so that they give the same bits.
+template <typename G, typename Visit>
+[[gnu::always_inline]] inline void for_each_corner(const G& g, const Corners& k, Visit&& visit) {
     for (int a = 0; a < 2; ++a) {
         const int ih = a ? k.h.i1 : k.h.i0;
         const double wa = a ? k.h.t : 1.0 - k.h.t;
@@ -215,18 +214,26 @@ inline void blend_linear(const G& g, const Values& values, const Corners& k, dou
             const int id = b ? k.d.i1 : k.d.i0;
             const double wb = wa * (b ? k.d.t : 1.0 - k.d.t);
             const std::size_t row = g.index(ih, id, 0);  // the index is linear in φd's
-            for (int p = 0; p < 2; ++p) {
-                const double w = wb * (p ? k.p.t : 1.0 - k.p.t);
-                float v[3];
-                values.load(row + (p ? k.p.i1 : k.p.i0), v);
-                for (int c = 0; c < 3; ++c) {
-                    const double x = v[c];
-                    sum[c] += x == x ? w * x : 0.0;
-                    wsum[c] += x == x ? w : 0.0;
-                }
-            }
+            for (int p = 0; p < 2; ++p) visit(row + (p ? k.p.i1 : k.p.i0), wb * (p ? k.p.t : 1.0 - k.p.t));
         }
     }
+}
+
+// The blend of the eight corners, channel by channel: invalid samples (NaN) contribute neither value nor
+// weight; a pair whose corners are all invalid is 0. Values provides load(bin, float v[3]). The scalar
+// reference of blend_linear_vectors.
+template <typename G, typename Values>
+inline void blend_linear(const G& g, const Values& values, const Corners& k, double f[3]) {
+    double sum[3] = {0.0, 0.0, 0.0}, wsum[3] = {0.0, 0.0, 0.0};
+    for_each_corner(g, k, [&](std::size_t bin, double w) {
+        float v[3];
+        values.load(bin, v);
+        for (int c = 0; c < 3; ++c) {
+            const double x = v[c];
+            sum[c] += x == x ? w * x : 0.0;
+            wsum[c] += x == x ? w : 0.0;
+        }
+    });
     for (int c = 0; c < 3; ++c) f[c] = wsum[c] > 0.0 ? sum[c] / wsum[c] : 0.0;
 }
 
@@ -282,27 +289,17 @@ template <bool Wide, typename G, typename Values>
     const V zero = {};
     V sum[kParts], wsum[kParts];
     for (int i = 0; i < kParts; ++i) sum[i] = wsum[i] = zero;
-    for (int a = 0; a < 2; ++a) {
-        const int ih = a ? k.h.i1 : k.h.i0;
-        const double wa = a ? k.h.t : 1.0 - k.h.t;
-        for (int b = 0; b < 2; ++b) {
-            const int id = b ? k.d.i1 : k.d.i0;
-            const double wb = wa * (b ? k.d.t : 1.0 - k.d.t);
-            const std::size_t row = g.index(ih, id, 0);  // the index is linear in φd's
-            for (int p = 0; p < 2; ++p) {
-                const double w = wb * (p ? k.p.t : 1.0 - k.p.t);
-                V x[kParts];
-                const V wv = w - zero;  // w in every lane: one broadcast (a lane loop became two shuffles)
-                lanes::load_bin<Wide>(values, row + (p ? k.p.i1 : k.p.i0), x);
-                for (int i = 0; i < kParts; ++i) {
-                    // Invalid samples are NaN: they contribute neither value nor weight.
-                    const M ok = x[i] == x[i];
-                    sum[i] += ok ? wv * x[i] : zero;
-                    wsum[i] += ok ? wv : zero;
-                }
-            }
+    for_each_corner(g, k, [&](std::size_t bin, double w) {
+        V x[kParts];
+        const V wv = w - zero;  // w in every lane: one broadcast (a lane loop became two shuffles)
+        lanes::load_bin<Wide>(values, bin, x);
+        for (int i = 0; i < kParts; ++i) {
+            // Invalid samples are NaN: they contribute neither value nor weight.
+            const M ok = x[i] == x[i];
+            sum[i] += ok ? wv * x[i] : zero;
+            wsum[i] += ok ? wv : zero;
         }
-    }
+    });
     for (int i = 0; i < kParts; ++i) {
         const V q = wsum[i] > zero ? sum[i] / wsum[i] : zero;
         for (int j = 0; j < kLanes && i * kLanes + j < 3; ++j) f[i * kLanes + j] = q[j];
