@@ -1,4 +1,4 @@
-// The SIMD builds of the batch kernels (detail/simd.h) that this CPU runs, for tests that compare them.
+// The SIMD builds of the kernels (runtime/kernels/simd.h) that this CPU runs, for tests that compare them.
 #pragma once
 
 #include <vector>

@@ -497,7 +497,7 @@ struct EvalCall {
     }
 };
 struct PdfCall {
-    static constexpr bool kAvx512 = false, kFma = false;
+    [[maybe_unused]] static constexpr bool kAvx512 = false, kFma = false;  // CallTables takes its builds directly
     template <Simd>
     static double run(const Data* d, const Vec3& wo, const Vec3& wi) noexcept {
         return pdf64(d, wo, wi);
