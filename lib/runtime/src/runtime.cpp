@@ -28,6 +28,7 @@
 #include "brdfz/runtime/kernels/simd.h"
 #include "brdfz/runtime/kernels/values.h"
 #include "brdfz/runtime/layout.h"
+#include "factored_calls.h"
 
 namespace brdfz::runtime {
 namespace detail {
@@ -47,9 +48,11 @@ struct Object {
     bool half = false;
     std::array<float, 3> half_scale{};
     const float* lut = nullptr;
-    // Factorisations: the view's padded float rows and mix live in `factor_data`.
+    // Factorisations: the view's padded float rows and mix live in `factor_data`; their eval is the
+    // build of the material's level (factored_calls.h).
     k::FactorView factors;
     std::vector<float> factor_data;
+    FactoredEvalFn* factored_eval = nullptr;
     // φh stacks: slices [first, first + count) of Data::slices.
     bool bilateral = false;
     std::size_t first = 0, count = 0;
@@ -64,6 +67,7 @@ struct Data {
     std::size_t size = 0;
     void* mapped = nullptr;
     std::string describe;
+    Simd level = Simd::Sse2;  // the kernels' builds, taken when the material is parsed
     Object root;
     std::vector<Object> slices;
     bool has_sampler = false;
@@ -190,7 +194,7 @@ void read_table(const Sections& s, Object& o) {
     if (valid == 0) fail("the table holds no value");
 }
 
-void read_factored(const Sections& s, Object& o) {
+void read_factored(const Sections& s, Object& o, Simd level) {
     read_grid(s, o);
     const std::int32_t* p = s.get<std::int32_t>(L::kFactorParams, L::DType::I32, 4);
     k::FactorView& f = o.factors;
@@ -219,7 +223,10 @@ void read_factored(const Sections& s, Object& o) {
         return {nullptr, s.get<float>(tag, L::DType::F32, n * m)};
     };
     const Source us = source(L::kFactorU, rows), vs = source(L::kFactorV, cols);
-    f.width = grouped ? 12 : (m + 3) / 4 * 4;
+    const std::uint64_t lanes = k::factor_lanes(level);
+    f.width = ((grouped ? 12 : m) + lanes - 1) / lanes * lanes;
+    f.grouped = grouped;
+    o.factored_eval = factored_eval_build(level);
     const std::uint64_t w = f.width;
     o.factor_data.assign((rows + cols + 3) * w, 0.0f);
     float* const u = o.factor_data.data();
@@ -312,6 +319,7 @@ void read_sampler(const Sections& s, Data& d) {
 
 void parse(Data& d) {
     const unsigned char* b = d.bytes;
+    d.level = k::simd_level();
     if (d.size < L::kHeaderBytes || std::memcmp(b, L::kMagic, 8) != 0) fail("not a brdfz runtime layout");
     const std::uint32_t version = read_le<std::uint32_t>(b + 8);
     if (version != L::kVersion)
@@ -352,7 +360,7 @@ void parse(Data& d) {
     const auto read_object = [&](const Sections& s, Object& o) {
         switch (o.kind) {
             case L::Kind::Table: return read_table(s, o);
-            case L::Kind::Factored: return read_factored(s, o);
+            case L::Kind::Factored: return read_factored(s, o, d.level);
             case L::Kind::Analytic: return read_analytic(s, o);
             case L::Kind::PhiH: fail("a φh slice cannot be a stack");
         }
@@ -411,7 +419,7 @@ struct TableLeaf {
 };
 struct FactoredLeaf {
     template <bool Wide>
-    static void eval(const Object& o, const Vec3& wi, const Vec3& wo, double f[3]) { k::eval_factored(o.factors, wi, wo, f); }
+    static void eval(const Object& o, const Vec3& wi, const Vec3& wo, double f[3]) { o.factored_eval(o.factors, wi, wo, f); }
 };
 struct LobesLeaf {
     template <bool Wide>
@@ -486,8 +494,9 @@ Sample64 sample64(const Data* d, const Vec3& wo, double u1, double u2) noexcept 
 
 // The calls' builds (kernels/simd.h: Builds), each flattened into one body of its kind's code: the
 // lookups and the sampler run faster with AVX2 (as the library's one-pair table call); without FMA it
-// gives the baseline's bits. An analytic model's eval is not flattened: its lobe mixture, every family
-// inlined into one body, runs slower.
+// gives the baseline's bits. A factorisation's eval is its own build's (factored_calls.h), the library's
+// to the bit. An analytic model's eval is not flattened: its lobe mixture, every family inlined into one
+// body, runs slower.
 template <typename Leaf>
 struct EvalCall {
     static constexpr bool kAvx512 = false, kFma = false;
@@ -523,8 +532,8 @@ struct CallTables {
 };
 
 template <typename Leaf>
-const Calls* calls_of() {
-    return k::build_for(k::simd_level(), &CallTables<Leaf>::base, &CallTables<Leaf>::avx2);
+const Calls* calls_of(Simd level) {
+    return k::build_for(level, &CallTables<Leaf>::base, &CallTables<Leaf>::avx2);
 }
 
 // The call table of the root's kind (a φh stack's: its slices' kind, where they share one).
@@ -534,19 +543,19 @@ const Calls* calls_for(const Data& d) {
         for (const Object& slice : d.slices)
             if (slice.kind != d.slices[0].kind || (slice.f32 != nullptr) != (d.slices[0].f32 != nullptr) ||
                 slice.half != d.slices[0].half || slice.nearest != d.slices[0].nearest)
-                return calls_of<AnyLeaf>();
+                return calls_of<AnyLeaf>(d.level);
         o = &d.slices[0];
     }
     switch (o->kind) {
-        case L::Kind::Factored: return calls_of<FactoredLeaf>();
-        case L::Kind::Analytic: return calls_of<LobesLeaf>();
+        case L::Kind::Factored: return calls_of<FactoredLeaf>(d.level);
+        case L::Kind::Analytic: return calls_of<LobesLeaf>(d.level);
         case L::Kind::Table:
-            if (o->f32) return o->nearest ? calls_of<TableLeaf<k::Float32Values, true>>() : calls_of<TableLeaf<k::Float32Values, false>>();
-            if (o->half) return o->nearest ? calls_of<TableLeaf<k::HalfValues, true>>() : calls_of<TableLeaf<k::HalfValues, false>>();
-            return o->nearest ? calls_of<TableLeaf<k::LogU8Values, true>>() : calls_of<TableLeaf<k::LogU8Values, false>>();
+            if (o->f32) return o->nearest ? calls_of<TableLeaf<k::Float32Values, true>>(d.level) : calls_of<TableLeaf<k::Float32Values, false>>(d.level);
+            if (o->half) return o->nearest ? calls_of<TableLeaf<k::HalfValues, true>>(d.level) : calls_of<TableLeaf<k::HalfValues, false>>(d.level);
+            return o->nearest ? calls_of<TableLeaf<k::LogU8Values, true>>(d.level) : calls_of<TableLeaf<k::LogU8Values, false>>(d.level);
         case L::Kind::PhiH: break;
     }
-    return calls_of<AnyLeaf>();
+    return calls_of<AnyLeaf>(d.level);
 }
 
 Rgb64 no_eval(const Data*, const Vec3&, const Vec3&) noexcept { return {0.0, 0.0, 0.0}; }

@@ -3,6 +3,7 @@
 #include <cstring>
 #include <type_traits>
 
+#include "brdfz/runtime/kernels/factored.h"
 #include "detail/table_lookup.h"
 #include "repr/factored_impl.h"
 
@@ -13,32 +14,6 @@ using detail::FactorView;
 
 // ---------------------------------------------------------------------------------------------
 // Evaluation: interpolation corners in factor rows and columns
-
-// The blend's SIMD vectors (GCC vector extensions): 4 floats (SSE) or 8 (AVX). The kernel below is
-// always inlined into its two entry points, so no vector crosses a call and the ABI note GCC warns
-// about for 8-float vectors outside AVX code does not apply.
-#pragma GCC diagnostic ignored "-Wpsabi"
-typedef float Float4 __attribute__((vector_size(16)));
-typedef float Float8 __attribute__((vector_size(32)));
-template <int W>
-struct FloatVector;
-template <>
-struct FloatVector<4> {
-    using type = Float4;
-};
-template <>
-struct FloatVector<8> {
-    using type = Float8;
-};
-template <int W>
-using FloatV = typename FloatVector<W>::type;
-
-template <typename V>
-[[gnu::always_inline]] inline V load(const float* p) {
-    V v;
-    std::memcpy(&v, p, sizeof v);  // unaligned: one movups
-    return v;
-}
 
 constexpr std::size_t kBlock = 64;  // pairs per pass of the kernel
 
@@ -54,82 +29,34 @@ struct BlockCorners {
 template <FactorLayout L>
 using CornersOf = std::conditional_t<L == FactorLayout::HxDP, BlockCorners<2, 4>, BlockCorners<4, 2>>;
 
-// Pair k's corners from its spans along θh, θd and φd. Branch-free.
+// Pair k's corners from its spans along θh, θd and φd (runtime/kernels/factored.h). Branch-free.
 template <FactorLayout L>
 [[gnu::always_inline]] inline void set_corners(const GridSpec& g, const detail::Corners& s, std::size_t k,
                                                CornersOf<L>& out) {
-    const auto hi = [](const detail::Span& a) { return static_cast<float>(a.t); };
-    const auto lo = [](const detail::Span& a) { return static_cast<float>(1.0 - a.t); };
-    // The 2-D axis: outer span a, inner span b, `inner` samples along b.
-    const auto pairs = [&](const detail::Span& a, const detail::Span& b, int inner, int (&idx)[4][kBlock],
-                           float (&w)[4][kBlock]) {
-        idx[0][k] = a.i0 * inner + b.i0, idx[1][k] = a.i0 * inner + b.i1;
-        idx[2][k] = a.i1 * inner + b.i0, idx[3][k] = a.i1 * inner + b.i1;
-        w[0][k] = static_cast<float>((1.0 - a.t) * (1.0 - b.t)), w[1][k] = static_cast<float>((1.0 - a.t) * b.t);
-        w[2][k] = static_cast<float>(a.t * (1.0 - b.t)), w[3][k] = static_cast<float>(a.t * b.t);
-    };
+    using namespace runtime::kernels;
+    int rows[CornersOf<L>::kRows], cols[CornersOf<L>::kColumns];
+    float rw[CornersOf<L>::kRows], cw[CornersOf<L>::kColumns];
     if constexpr (L == FactorLayout::HxDP) {
-        out.r[0][k] = s.h.i0, out.r[1][k] = s.h.i1, out.rw[0][k] = lo(s.h), out.rw[1][k] = hi(s.h);
-        pairs(s.d, s.p, g.n_phi_d, out.c, out.cw);
+        factor_corners_1d(s.h, rows, rw);
+        factor_corners_2d(s.d, s.p, g.n_phi_d, cols, cw);
     } else {
-        pairs(s.h, s.d, g.n_theta_d, out.r, out.rw);
-        out.c[0][k] = s.p.i0, out.c[1][k] = s.p.i1, out.cw[0][k] = lo(s.p), out.cw[1][k] = hi(s.p);
+        factor_corners_2d(s.h, s.d, g.n_theta_d, rows, rw);
+        factor_corners_1d(s.p, cols, cw);
     }
+    for (int r = 0; r < CornersOf<L>::kRows; ++r) out.r[r][k] = rows[r], out.rw[r][k] = rw[r];
+    for (int c = 0; c < CornersOf<L>::kColumns; ++c) out.c[c][k] = cols[c], out.cw[c][k] = cw[c];
 }
 
-// The lane sums of three vectors, in lanes 0-2: pairwise adds of shuffled halves (a horizontal add
-// per vector would take three times the shuffles).
-[[gnu::always_inline]] inline Float4 lane_sums(const Float4 (&a)[3]) {
-    const auto hadd = [](Float4 x, Float4 y) {
-        return __builtin_shufflevector(x, y, 0, 2, 4, 6) + __builtin_shufflevector(x, y, 1, 3, 5, 7);
-    };
-    return hadd(hadd(a[0], a[1]), hadd(a[2], a[2]));
-}
-[[gnu::always_inline]] inline Float4 lane_sums(const Float8 (&a)[3]) {
-    Float4 h[3];
-    for (int i = 0; i < 3; ++i)
-        h[i] = __builtin_shufflevector(a[i], a[i], 0, 1, 2, 3) + __builtin_shufflevector(a[i], a[i], 4, 5, 6, 7);
-    return lane_sums(h);
-}
-
-// Pair k's transform-space values y_c = Σ_j mix_cj · (Σ_r rw_r U[r][j]) · (Σ_c cw_c V[c][j]), in
-// float, W components at a time. Separate colour's mix is one-hot; multiplying by its zeros costs
-// less than the gathers that would avoid it, and rank 3 and 4 (Grouped) skip it. The float sums are within ~1e-7 of the factors'
-// magnitude, as the float32 factors themselves.
+// Pair i's transform-space values, W floats a step (runtime/kernels/factored.h: factor_sums, the
+// runtime's own).
 template <int W, bool Grouped, typename Corners>
 [[gnu::always_inline]] inline void blend(const FactorView& f, const Corners& k, std::size_t i, float y[3]) {
-    using V = FloatV<W>;
     constexpr int NR = Corners::kRows, NC = Corners::kColumns;
-    const float* u[NR];
-    const float* v[NC];
-    for (int r = 0; r < NR; ++r) u[r] = f.u + static_cast<std::size_t>(k.r[r][i]) * f.width;
-    for (int c = 0; c < NC; ++c) v[c] = f.v + static_cast<std::size_t>(k.c[c][i]) * f.width;
-    const auto product = [&](std::size_t j) {
-        V a = k.rw[0][i] * load<V>(u[0] + j), b = k.cw[0][i] * load<V>(v[0] + j);
-        for (int r = 1; r < NR; ++r) a += k.rw[r][i] * load<V>(u[r] + j);
-        for (int c = 1; c < NC; ++c) b += k.cw[c][i] * load<V>(v[c] + j);
-        return a * b;
-    };
-    Float4 s;
-    if constexpr (Grouped) {
-        constexpr std::size_t kSteps = (12 + W - 1) / W;  // the 3 groups, in whole steps
-        Float4 g[kSteps * W / 4];
-        for (std::size_t step = 0; step < kSteps; ++step) {
-            const V p = product(step * W);
-            std::memcpy(&g[step * W / 4], &p, sizeof p);
-        }
-        const Float4 groups[3] = {g[0], g[1], g[2]};
-        s = lane_sums(groups);
-    } else {
-        V acc[3] = {};
-        for (std::size_t j = 0; j < f.width; j += W) {
-            const V p = product(j);
-            for (std::size_t ch = 0; ch < 3; ++ch) acc[ch] += load<V>(f.mix + ch * f.width + j) * p;
-        }
-        s = lane_sums(acc);
-    }
-    // At most the data's largest value: bins without data can reconstruct far beyond it (factor.h).
-    for (int ch = 0; ch < 3; ++ch) y[ch] = std::min(s[ch], f.ceiling[ch]);
+    int rows[NR], cols[NC];
+    float rw[NR], cw[NC];
+    for (int r = 0; r < NR; ++r) rows[r] = k.r[r][i], rw[r] = k.rw[r][i];
+    for (int c = 0; c < NC; ++c) cols[c] = k.c[c][i], cw[c] = k.cw[c][i];
+    runtime::kernels::factor_sums<W, Grouped, NR, NC>(f, rows, rw, cols, cw, y);
 }
 
 // Blocks of pairs in passes, as the tabular kernel: (1) the coordinates, branch-free so the compiler

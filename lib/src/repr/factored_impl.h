@@ -9,6 +9,7 @@
 #include <type_traits>
 
 #include "brdfz/repr/factored.h"
+#include "brdfz/runtime/kernels/factored.h"
 #include "detail/fast_math.h"
 #include "detail/simd.h"
 
@@ -71,7 +72,7 @@ void from_space_n(FactorSpace s, const T* y, double* out, std::size_t n, std::ui
 // Evaluation
 
 // Floats per blend step of each kernel; rows are zero-padded to a multiple of it.
-constexpr std::size_t factor_lanes(Simd s) { return s >= Simd::Avx2Fma ? 8 : 4; }
+using runtime::kernels::factor_lanes;
 
 // The factors as evaluation reads them (FactoredBrdf's padded copies): rows `width` floats apart.
 struct FactorView {
