@@ -25,3 +25,26 @@ ${calls}}
 }  // namespace ${R_NAMESPACE}
 ")
 endfunction()
+
+# brdfz_kinds_library(NAME KINDS DIR REGISTER FUNCTION [SKIP stem...] [PRIVATE_INCLUDES dir...])
+# The library brdfz_NAME (brdfz::NAME) of the sources under src/ of the calling folder, its headers in
+# include/, and the representation kinds of the files in DIR (but the SKIP stems) registered by
+# `brdfz::kinds::FUNCTION` (compress.h, ReprKind).
+function(brdfz_kinds_library name)
+  cmake_parse_arguments(A "" "KINDS;REGISTER" "SKIP;PRIVATE_INCLUDES" ${ARGN})
+  file(GLOB_RECURSE sources CONFIGURE_DEPENDS ${CMAKE_CURRENT_SOURCE_DIR}/src/*.cpp)
+  file(GLOB kind_files CONFIGURE_DEPENDS ${CMAKE_CURRENT_SOURCE_DIR}/${A_KINDS}/*.cpp)
+  list(TRANSFORM kind_files REPLACE ".*/([^/]+)\\.cpp$" "\\1" OUTPUT_VARIABLE kind_names)
+  if(A_SKIP)
+    list(REMOVE_ITEM kind_names ${A_SKIP})
+  endif()
+  set(registry ${CMAKE_CURRENT_BINARY_DIR}/kinds_registry.cpp)
+  brdfz_registry(OUTPUT ${registry} NAMESPACE brdfz::kinds FUNCTION ${A_REGISTER} TYPE ReprKind HEADER brdfz/compress.h
+                 NAMES ${kind_names})
+  add_library(brdfz_${name} ${sources} ${registry})
+  add_library(brdfz::${name} ALIAS brdfz_${name})
+  set_target_properties(brdfz_${name} PROPERTIES EXPORT_NAME ${name})
+  target_include_directories(brdfz_${name}
+    PUBLIC $<BUILD_INTERFACE:${CMAKE_CURRENT_SOURCE_DIR}/include> $<INSTALL_INTERFACE:${CMAKE_INSTALL_INCLUDEDIR}>
+    PRIVATE ${CMAKE_CURRENT_SOURCE_DIR}/src ${A_PRIVATE_INCLUDES})
+endfunction()
