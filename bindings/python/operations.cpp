@@ -64,14 +64,9 @@ BrdfPtr load_brdf(const Path& path, const std::string& format, const LoadOptions
 }
 
 py::dict counts_dict(const ValidityCounts& c) {
-    py::dict d;
-    d["valid"] = c.valid;
-    d["negative"] = c.negative;
-    d["nan"] = c.nan;
-    d["inf"] = c.inf;
-    d["clamped"] = c.clamped;
-    d["below_horizon"] = c.below_horizon;
-    return d;
+    using namespace py::literals;
+    return py::dict("valid"_a = c.valid, "negative"_a = c.negative, "nan"_a = c.nan, "inf"_a = c.inf,
+                    "clamped"_a = c.clamped, "below_horizon"_a = c.below_horizon);
 }
 
 // save() with the GIL released, progress reported and Ctrl-C heard; the written bins' counts.
@@ -136,12 +131,8 @@ Data data_of(const py::handle& obj) {
 }
 
 py::dict per_channel_dict(const PerChannel& c) {
-    py::dict d;
-    d["r"] = c.r;
-    d["g"] = c.g;
-    d["b"] = c.b;
-    d["mean"] = c.mean;
-    return d;
+    using namespace py::literals;
+    return py::dict("r"_a = c.r, "g"_a = c.g, "b"_a = c.b, "mean"_a = c.mean);
 }
 
 using Rows = py::array_t<double, py::array::c_style | py::array::forcecast>;
@@ -168,13 +159,7 @@ Rows to_rows(const std::vector<T>& v) {
 
 MetricOptions metric_options(double max_theta, int threads, const std::string& over, std::size_t directions,
                              std::uint64_t seed) {
-    MetricOptions o;
-    o.max_theta_deg = max_theta;
-    o.threads = threads;
-    o.over = parse_over(over);
-    o.directions = directions;
-    o.seed = seed;
-    return o;
+    return {.max_theta_deg = max_theta, .threads = threads, .over = parse_over(over), .directions = directions, .seed = seed};
 }
 
 void bind_operations(py::module_& m) {
