@@ -19,11 +19,13 @@
 #include "brdfz/formats/io.h"
 #include "brdfz/formats/pca_basis.h"
 #include "brdfz/formats/runtime_layout.h"
+#include "brdfz/metrics.h"
 #include "brdfz/repr/analytic/coated_diffuse.h"
 #include "brdfz/repr/analytic/model.h"
 #include "brdfz/repr/pca.h"
 #include "brdfz/runtime/crc32c.h"
 #include "brdfz/runtime/runtime.h"
+#include "brdfz/select.h"
 #include "brdfz/tabulate.h"
 #include "detail/simd.h"
 #include "sample_stats.h"
@@ -263,6 +265,30 @@ TEST_CASE("runtime: the shared RGL files' compact representations agree with the
         INFO(spec);
         check_agreement(*compress(*source.brdf, spec).brdf, 100000);
     }
+}
+
+TEST_CASE("runtime: a source the layout does not hold is tabulated with φd whole unless it is reciprocal",
+          "[runtime][rgl]") {
+    const std::filesystem::path file = test::rgl_file("cc_ibiza_sunset");
+    std::error_code ec;
+    if (!std::filesystem::exists(file, ec)) {
+        WARN("skipped: " << file << " missing (../shared)");
+        return;
+    }
+    const Loaded source = load(file.string());
+    REQUIRE(!is_reciprocal(*source.brdf));
+    const test::TempDir dir;
+    const std::string path = (dir.path / "rgl.brdfzrt").string();
+    runtime_layout::write(path, *source.brdf);
+    const Loaded exported = load(path);
+    CHECK_THAT(exported.brdf->describe(), Catch::Contains("symmetry bilateral"));
+    MetricOptions o;
+    o.over = Over::Directions;
+    // A reciprocal fold stores the mean of f(wi, wo) and f(wo, wi): 13 % off this file over directions.
+    CHECK(compare(*source.brdf, *exported.brdf, o).cos_rmse_rel.mean < 0.02);
+    // A reciprocal source keeps MERL's folded grid.
+    runtime_layout::write(path, coated(0.1));
+    CHECK_THAT(load(path).brdf->describe(), Catch::Contains("tabulated on 90x90x180") && !Catch::Contains("bilateral"));
 }
 
 TEST_CASE("runtime: bad layouts are refused with a line, never read", "[runtime][robustness]") {
