@@ -14,7 +14,7 @@ void add_view(CLI::App& app) {
     struct Args {
         std::vector<std::string> files, compare;
         std::string html;
-        int port = 0, size = 256, env_samples = 64;
+        int port = 0, size = 256, env_samples = 64, passes = 16;
     };
     auto args = std::make_shared<Args>();
     CLI::App* cmd = app.add_subcommand(
@@ -26,7 +26,9 @@ void add_view(CLI::App& app) {
         ->check(CLI::Range(0, 65535));
     cmd->add_option("--html", args->html, "write one self-contained page that opens from disk, and exit");
     cmd->add_option("--size", args->size, "the sphere's side in pixels")->check(CLI::Range(1, 2048));
-    cmd->add_option("--env-samples", args->env_samples, "sky draws per pixel of the sphere")->check(CLI::Range(0, 4096));
+    cmd->add_option("--env-samples", args->env_samples, "sky draws per pixel of the sphere and pass")->check(CLI::Range(0, 4096));
+    cmd->add_option("--passes", args->passes, "passes of sky draws the spheres and their error average, shown as they come")
+        ->check(CLI::Range(1, 1024));
     cmd->callback([args] {
         for (const std::string& spec : args->compare) ReprSpec::parse(spec);  // a malformed spec before any work
         std::vector<std::string> forward = args->files;
@@ -35,7 +37,8 @@ void add_view(CLI::App& app) {
             forward.insert(forward.end(), args->compare.begin(), args->compare.end());
         }
         forward.insert(forward.end(), {"--port", std::to_string(args->port), "--size", std::to_string(args->size),
-                                       "--env-samples", std::to_string(args->env_samples)});
+                                       "--env-samples", std::to_string(args->env_samples), "--passes",
+                                       std::to_string(args->passes)});
         if (!args->html.empty()) forward.insert(forward.end(), {"--html", args->html});
         run_python("view", "brdfz.view", "the brdfz Python package", forward);
     });

@@ -11,6 +11,14 @@ function decode(b64) {
   return u;
 }
 const f32 = (b64) => new Float32Array(decode(b64).buffer);
+// brdfz.view._packed reversed: gunzip, then the even bytes and the odd ones interleaved again.
+async function unpack(b64, bytes) {
+  const stream = new Blob([decode(b64)]).stream().pipeThrough(new DecompressionStream("gzip"));
+  const s = new Uint8Array(await new Response(stream).arrayBuffer()), half = bytes / 2, out = new Uint8Array(bytes);
+  if (s.length !== bytes) throw new Error(`a layout unpacked to ${s.length} bytes, not ${bytes}`);
+  for (let i = 0; i < half; i++) { out[2 * i] = s[i]; out[2 * i + 1] = s[half + i]; }
+  return out;
+}
 
 const THETA_I = DATA.theta_i, ANGLES = f32(DATA.polar_angles), ALBEDO_THETA = f32(DATA.albedo_theta);
 const [LOBE_EL, LOBE_AZ] = DATA.lobe_res, LOBE_DIRS = f32(DATA.lobe_dirs);
@@ -26,7 +34,7 @@ const mean3 = (rgb) => { const n = rgb.length / 3, out = new Float64Array(n);
   for (let i = 0; i < n; i++) out[i] = (rgb[3 * i] + rgb[3 * i + 1] + rgb[3 * i + 2]) / 3; return out; };
 const polarMean = views.map((v) => mean3(v.polar));
 
-const state = { a: 0, b: Math.min(1, DATA.materials.length - 1), lobeTheta: THETA_I.length - 1,
+const state = { a: 0, b: DATA.b, lobeTheta: THETA_I.length - 1,
   log: true, light: normalise(SPHERE.light), yaw: -0.6, pitch: 0.5 };
 
 function normalise(v) { const n = Math.hypot(v[0], v[1], v[2]); return [v[0] / n, v[1] / n, v[2] / n]; }
@@ -273,14 +281,15 @@ async function startGpu() {
   gpu.pipeline = await gpu.device.createComputePipelineAsync({ layout: "auto", compute: { module, entryPoint: "sphere_render" } });
 }
 
-function materialBuffers(m) {
+async function materialBuffers(m) {
   if (!gpu.buffers.has(m)) {
     const make = (bytes) => {
       const b = gpu.device.createBuffer({ size: Math.max(bytes.length, 4), usage: GPUBufferUsage.STORAGE | GPUBufferUsage.COPY_DST });
       gpu.device.queue.writeBuffer(b, 0, bytes);
       return b;
     };
-    gpu.buffers.set(m, [make(decode(DATA.materials[m].layout)), make(decode(DATA.materials[m].desc))]);
+    const material = DATA.materials[m];
+    gpu.buffers.set(m, [make(await unpack(material.layout, material.layout_bytes)), make(decode(material.desc))]);
   }
   return gpu.buffers.get(m);
 }
@@ -292,10 +301,11 @@ function dispatches(size, n) {
   return out;
 }
 
-// Linear RGB radiance (size² × 3) of material m under the light, as realtime.SphereRenderer.render.
-async function renderSphere(m, light) {
+// Linear RGB radiance (size² × 3) of material m under the light with the draws of `seed`, as
+// realtime.SphereRenderer.render.
+async function renderSphere(m, light, seed) {
   const { device, pipeline } = gpu, size = SPHERE.size, n = SPHERE.env_samples;
-  const [material, desc] = materialBuffers(m);
+  const [material, desc] = await materialBuffers(m);
   const bytes = 12 * size * size;
   const out = device.createBuffer({ size: bytes, usage: GPUBufferUsage.STORAGE | GPUBufferUsage.COPY_SRC });
   const read = device.createBuffer({ size: bytes, usage: GPUBufferUsage.MAP_READ | GPUBufferUsage.COPY_DST });
@@ -303,7 +313,7 @@ async function renderSphere(m, light) {
   const encoder = device.createCommandEncoder();
   for (const [first, count] of dispatches(size, n)) {
     const params = new ArrayBuffer(48), u = new Uint32Array(params), f = new Float32Array(params);
-    u.set([size, n, first, count, SPHERE.seed, side]);
+    u.set([size, n, first, count, seed, side]);
     f.set([1 / side, SPHERE.irradiance, light[0], light[1], light[2]], 6);
     const uniform = device.createBuffer({ size: 48, usage: GPUBufferUsage.UNIFORM | GPUBufferUsage.COPY_DST });
     device.queue.writeBuffer(uniform, 0, params);
@@ -358,7 +368,9 @@ function drawSpheres() {
   putSphere("sphere-e", (p) => (Number.isFinite(e[p]) ? diverging(e[p], top) : (A[3 * p] > 0 ? MASKED : [0, 0, 0])));
 }
 
-// One render at a time; a light moved meanwhile is rendered next, the intermediate ones skipped.
+// One render at a time; a light moved meanwhile is rendered next, the intermediate ones skipped. Pass p
+// draws the sky with seed SPHERE.seed + p; the images shown are the means of the passes so far, so the
+// sampling noise in the spheres and their error falls as the passes come in.
 let rendering = null, pending = false;
 function requestSpheres() {
   if (!gpu.pipeline) return Promise.resolve();
@@ -367,9 +379,18 @@ function requestSpheres() {
     do {
       pending = false;
       const light = state.light.slice(), a = state.a, b = state.b;
-      const [A, B] = await Promise.all([renderSphere(a, light), renderSphere(b, light)]);
-      Object.assign(gpu.images, { a: A, b: B, light, materials: [a, b] });
-      drawSpheres();
+      const sum = { a: new Float64Array(3 * SPHERE.size * SPHERE.size), b: new Float64Array(3 * SPHERE.size * SPHERE.size) };
+      for (let p = 0; p < SPHERE.passes && !pending; p++) {
+        const images = await Promise.all([renderSphere(a, light, SPHERE.seed + p), renderSphere(b, light, SPHERE.seed + p)]);
+        const mean = {};
+        for (const [k, which] of [[0, "a"], [1, "b"]]) {
+          sum[which].forEach((v, i) => { sum[which][i] = v + images[k][i]; });
+          mean[which] = sum[which].map((v) => v / (p + 1));
+        }
+        Object.assign(gpu.images, { a: mean.a, b: mean.b, light, materials: [a, b], passes: p + 1 });
+        drawSpheres();
+        status(`sphere: ${(p + 1) * SPHERE.env_samples} sky draws per pixel`);
+      }
     } while (pending);
   })().catch((e) => { status(`sphere: ${e.message}`); console.warn(e); }).finally(() => { rendering = null; });
   return rendering;
@@ -392,7 +413,8 @@ function drawAll() {
     const m = DATA.materials[state[w]];
     $(`head-${w}`).textContent = `${w.toUpperCase()}: ${m.label}`;
     $(`about-${w}`).textContent = `${w.toUpperCase()}: ${m.source}: ${m.describe} — ${m.bytes.toLocaleString("en")} bytes; `
-      + `measured to θ ${(m.theta_max / DEG).toFixed(1)}°`;
+      + `measured to θ ${(m.theta_max / DEG).toFixed(1)}°`
+      + (m.sphere_describe.endsWith(m.describe) ? "" : `; its sphere draws ${m.sphere_describe}`);
     drawPolar(w); drawLobe(w); drawSlice(w); drawAlbedo(w);
   }
   drawPolarError(); drawLobeError(); drawSliceError(); drawAlbedoError();
@@ -406,8 +428,10 @@ const api = {
   error: () => gpu.error,
   light: () => state.light.slice(),
   // Linear radiance the GPU returned for A or B (row-major, r g b), with the light it was lit by.
+  // The mean of `passes` renders, pass p with seed + p.
   sphere: (which) => ({ light: gpu.images.light, material: gpu.images.materials[which === "a" ? 0 : 1],
-    size: SPHERE.size, env_samples: SPHERE.env_samples, seed: SPHERE.seed, pixels: Array.from(gpu.images[which]) }),
+    size: SPHERE.size, env_samples: SPHERE.env_samples, seed: SPHERE.seed, passes: gpu.images.passes,
+    pixels: Array.from(gpu.images[which]) }),
   polar: (which) => plotted.polar[which],
   slice: (which) => plotted.slice[which],  // θd rows × θh columns at bin centres over [0, 90°)
   idle: async () => { while (rendering) await rendering; },
