@@ -122,11 +122,11 @@ def _error_label(kind: str) -> str:
     return "B − A (1/sr)" if kind == "signed" else "(B − A) / A"
 
 
-def _grid(count: int, polar: bool = False, height: float = 3.6):
+def _grid(count: int, polar: bool = False, height: float = 3.6, layout=None):
     plt = _plt()
     cols = min(count, 4)
     rows = math.ceil(count / cols)
-    fig, axes = plt.subplots(rows, cols, figsize=(4.2 * cols, height * rows + 0.6), squeeze=False,
+    fig, axes = plt.subplots(rows, cols, figsize=(4.2 * cols, height * rows + 0.6), squeeze=False, layout=layout,
                              subplot_kw={"projection": "polar"} if polar else None)
     for ax in axes.flat[count:]:
         ax.set_visible(False)
@@ -258,7 +258,8 @@ def _image_panels(items, grids, extent, labels, error, ref_mask, log, title, cha
         top = float(np.percentile(positive, 99.5))
         norm = LogNorm(max(float(positive.min()), top * 1e-4), top) if log else Normalize(0, top)
         cmap, label = "inferno", f"f_r ({channel}, 1/sr)"
-    fig, axes = _grid(len(shown), height=3.4)
+    # Constrained: the shared colour bar, the figure's title and two-line panel titles kept apart.
+    fig, axes = _grid(len(shown), height=3.4, layout="constrained")
     for ax, (name, image) in zip(axes, shown):
         data = np.ma.masked_invalid(image)
         if log and not error:
