@@ -381,7 +381,9 @@ TEST_CASE("factored: eval interpolates the factors (bin samples give the reconst
 // The kernel blends factor rows in float32 and inverts the transform without libm; the reference is
 // the tabular linear lookup (double arithmetic) of the transform-space reconstruction, mapped back
 // with std: interpolating the factors is interpolating their product, as the lookup interpolates bins.
-// nmf, so that no value is clamped (clamping happens after the interpolation, not before).
+// That is the kernel's specification, and each of its builds this CPU runs (SSE2, AVX2 + FMA, AVX-512;
+// NEON on ARM64) is checked against it. nmf, so that no value is clamped (clamping happens after the
+// interpolation, not before).
 namespace {
 
 // Every space, layout and colour mode (`all`), or the half of the combinations with an even count of
@@ -407,8 +409,8 @@ void check_eval_interpolates(bool all) {
                 // the interpolation here but before it in the reference.
                 Factors unbounded = factor(t, options(FactorMethod::Nmf, 3, space, layout, colour)).brdf->factors();
                 unbounded.max_value = {Factors::kUnbounded, Factors::kUnbounded, Factors::kUnbounded};
-                const Factored f{std::make_unique<FactoredBrdf>(std::move(unbounded)), {}};
-                Table y = f.brdf->reconstruct();
+                const FactoredBrdf reference_factors(unbounded);
+                Table y = reference_factors.reconstruct();
                 for (std::size_t bin = 0; bin < y.bins(); ++bin) {
                     Rgb v;
                     for (int c = 0; c < 3; ++c) {
@@ -418,16 +420,24 @@ void check_eval_interpolates(bool all) {
                     y.set(bin, v);
                 }
                 TabularBrdf(std::move(y), Lookup::Linear).eval(wi, wo, ref);
-                f.brdf->eval(wi, wo, out);
-                double worst = 0.0;
-                for (std::size_t k = 0; k < n; ++k)
-                    for (int c = 0; c < 3; ++c) {
-                        const double r = ref[k][c],
-                                     v = space == FactorSpace::Log ? std::expm1(r) : space == FactorSpace::Cbrt ? r * r * r : r;
-                        worst = std::max(worst, std::fabs(out[k][c] - v) / (std::fabs(v) + 1e-6));
-                    }
-                CHECK(worst < 1e-5);
-                CHECK(f.brdf->clamped_evaluations() == 0);
+                for (detail::Simd level : test::simd_levels()) {
+                    INFO(test::simd_label(level));
+                    // A FactoredBrdf picks its kernel's build when constructed.
+                    const std::unique_ptr<FactoredBrdf> f = [&] {
+                        const test::SimdCap cap(level);
+                        return std::make_unique<FactoredBrdf>(unbounded);
+                    }();
+                    f->eval(wi, wo, out);
+                    double worst = 0.0;
+                    for (std::size_t k = 0; k < n; ++k)
+                        for (int c = 0; c < 3; ++c) {
+                            const double r = ref[k][c],
+                                         v = space == FactorSpace::Log ? std::expm1(r) : space == FactorSpace::Cbrt ? r * r * r : r;
+                            worst = std::max(worst, std::fabs(out[k][c] - v) / (std::fabs(v) + 1e-6));
+                        }
+                    CHECK(worst < 1e-5);
+                    CHECK(f->clamped_evaluations() == 0);
+                }
             }
 }
 
