@@ -389,7 +389,7 @@ function requestSpheres() {
         }
         Object.assign(gpu.images, { a: mean.a, b: mean.b, light, materials: [a, b], passes: p + 1 });
         drawSpheres();
-        status(`sphere: ${(p + 1) * SPHERE.env_samples} sky draws per pixel`);
+        $("sphere-draws").textContent = `; ${(p + 1) * SPHERE.env_samples} sky draws per pixel`;
       }
     } while (pending);
   })().catch((e) => { status(`sphere: ${e.message}`); console.warn(e); }).finally(() => { rendering = null; });
