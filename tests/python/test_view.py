@@ -191,6 +191,17 @@ def test_html_page_from_disk(pages, materials, tmp_path):
         expected = brdf.eval(*pairs).mean(axis=-1).astype(np.float32)
         np.testing.assert_array_equal(np.reshape(image["values"], expected.shape).astype(np.float32), expected)
 
+    # The error panels: relative by default, B − A on request (where A is tiny, a large relative error
+    # may not matter); the polar panel's errors are those of the plotted values.
+    a, b = (np.array(page.evaluate(f"window.brdfzView.polar('{w}')")["values"]) for w in "ab")
+    for mode, expected in (("relative", (b - a) / a), ("absolute", b - a)):
+        page.select_option("#pick-error", mode)
+        shown = page.evaluate("window.brdfzView.polarError()")
+        assert shown["mode"] == mode and shown["materials"] == [0, 2]
+        np.testing.assert_allclose(shown["values"], expected, rtol=1e-15, atol=0)
+    assert page.locator("#head-e").inner_text().startswith("absolute")
+    page.select_option("#pick-error", "relative")
+
     # Dragging on the sphere moves the sun: a new image, still the library's.
     old_light, old = page.evaluate("window.brdfzView.light()"), _sphere(page, "a")[1]
     box = page.locator("#sphere-a").bounding_box()

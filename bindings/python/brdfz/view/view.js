@@ -34,7 +34,7 @@ const mean3 = (rgb) => { const n = rgb.length / 3, out = new Float64Array(n);
   for (let i = 0; i < n; i++) out[i] = (rgb[3 * i] + rgb[3 * i + 1] + rgb[3 * i + 2]) / 3; return out; };
 const polarMean = views.map((v) => mean3(v.polar));
 
-const state = { a: 0, b: DATA.b, lobeTheta: THETA_I.length - 1,
+const state = { a: 0, b: DATA.b, error: "relative", lobeTheta: THETA_I.length - 1,
   log: true, light: normalise(SPHERE.light), yaw: -0.6, pitch: 0.5 };
 
 function normalise(v) { const n = Math.hypot(v[0], v[1], v[2]); return [v[0] / n, v[1] / n, v[2] / n]; }
@@ -48,17 +48,23 @@ function heat(t) {  // dark to bright, an inferno-like ramp
   const x = t * (stops.length - 1), i = Math.min(Math.floor(x), stops.length - 2), f = x - i;
   return stops[i].map((c, k) => Math.round(c + f * (stops[i + 1][k] - c)));
 }
-// Relative errors: linear to ±1 %, logarithmic beyond, up to ±top; blue below, red above.
-const stretch = (x) => (Math.abs(x) <= 0.01 ? Math.abs(x) / 0.01 : 1 + Math.log10(Math.abs(x) / 0.01));
-const unstretch = (t) => (t <= 1 ? t * 0.01 : 0.01 * 10 ** (t - 1));
-function errorScale(e, top) { return Math.sign(e) * Math.min(stretch(e) / stretch(Math.max(top, 0.01)), 1); }
+// Errors of B against A, relative ((B − A) / A) or absolute (B − A: where A is tiny, a relative error
+// can be large and still not matter). Shown linear to ±lin, logarithmic beyond, up to ±top; blue below,
+// red above. lin: 1 % for relative errors, a hundredth of the top for absolute ones.
+function errorOf(a, b) { return state.error === "absolute" ? b - a : a > 0 ? (b - a) / a : NaN; }
+const errorLin = (top) => (state.error === "absolute" ? top / 100 || Number.MIN_VALUE : 0.01);
+const stretch = (x, lin) => (Math.abs(x) <= lin ? Math.abs(x) / lin : 1 + Math.log10(Math.abs(x) / lin));
+const unstretch = (t, lin) => (t <= 1 ? t * lin : lin * 10 ** (t - 1));
+function errorScale(e, top) {
+  const lin = errorLin(top);
+  return Math.sign(e) * Math.min(stretch(e, lin) / stretch(Math.max(top, lin), lin), 1);
+}
 function diverging(e, top) {
   const s = errorScale(e, top), t = Math.abs(s);
   const far = s < 0 ? [33, 102, 172] : [178, 24, 43];
   return [0, 1, 2].map((k) => Math.round(247 + t * (far[k] - 247)));
 }
 const MASKED = [160, 160, 160];
-function relative(a, b) { return a > 0 ? (b - a) / a : NaN; }
 function percentile(values, q) {
   const v = Array.from(values).filter((x) => Number.isFinite(x)).sort((x, y) => x - y);
   return v.length ? v[Math.min(v.length - 1, Math.floor(q * (v.length - 1)))] : 0;
@@ -100,9 +106,12 @@ function line(g, xs, ys, X, Y, colour, width = 1.5) {
 }
 // Error curves on the symmetric scale of errorScale.
 function errorAxes(g, c, xrange, xlabel, top, xt) {
-  const scale = stretch(Math.max(top, 0.01));
-  const fy = (s) => { const v = Math.sign(s) * unstretch(Math.abs(s) * scale); return s === 0 ? "0" : (Math.abs(v) >= 0.1 ? v.toFixed(1) : v.toFixed(3)); };
-  return axes(g, c, xrange, [-1, 1], xlabel, "(B − A) / A", { x: xt, y: [-1, -0.5, 0, 0.5, 1], fy });
+  const lin = errorLin(top), scale = stretch(Math.max(top, lin), lin);
+  const fy = (s) => {
+    const v = Math.sign(s) * unstretch(Math.abs(s) * scale, lin);
+    return s === 0 ? "0" : state.error === "absolute" ? v.toPrecision(2) : (Math.abs(v) >= 0.1 ? v.toFixed(1) : v.toFixed(3));
+  };
+  return axes(g, c, xrange, [-1, 1], xlabel, state.error === "absolute" ? "B − A" : "(B − A) / A", { x: xt, y: [-1, -0.5, 0, 0.5, 1], fy });
 }
 
 // ------------------------------------------------------------------------------------------ polar
@@ -134,10 +143,11 @@ function drawPolar(which) {
 function drawPolarError() {
   const [c, g] = canvas("polar-e");
   const A = polarMean[state.a], B = polarMean[state.b], n = ANGLES.length, tmax = DATA.materials[state.a].theta_max;
-  const errs = THETA_I.map((t, k) => Array.from(ANGLES, (_, i) => (t * DEG > tmax ? NaN : relative(A[k * n + i], B[k * n + i]))));
+  const errs = THETA_I.map((t, k) => Array.from(ANGLES, (_, i) => (t * DEG > tmax ? NaN : errorOf(A[k * n + i], B[k * n + i]))));
   const top = errorTop(errs.flat());
   const ax = errorAxes(g, c, [-90, 90], "θo (°)", top, [-90, -45, 0, 45, 90]);
   errs.forEach((e, k) => line(g, ANGLES, e.map((x) => errorScale(x, top)), ax.X, ax.Y, THETA_COLOURS[k]));
+  plotted.polarError = { mode: state.error, materials: [state.a, state.b], values: errs.flat() };
   THETA_I.forEach((t, k) => label(g, `θi ${t}°${t * DEG > tmax ? " (masked)" : ""}`, ax.L + 4, ax.T + 12 + 12 * k, THETA_COLOURS[k]));
 }
 
@@ -194,7 +204,7 @@ function drawLobeError() {
   const [c, g] = canvas("lobe-e");
   const A = lobePoints(state.a), B = lobePoints(state.b);
   const masked = THETA_I[state.lobeTheta] * DEG > DATA.materials[state.a].theta_max;
-  const e = A.map(([f], i) => (masked ? NaN : relative(f, B[i][0])));
+  const e = A.map(([f], i) => (masked ? NaN : errorOf(f, B[i][0])));
   const top = errorTop(e);
   drawLobeMesh(c, g, A, lobeRadius(), (i, j) => {
     const x = (e[i] + e[j]) / 2;
@@ -236,7 +246,7 @@ function drawSlice(which) {
 }
 function drawSliceError() {
   const A = views[state.a].slice, B = views[state.b].slice, tmax = DATA.materials[state.a].theta_max;
-  const e = Array.from(A, (a, i) => (SLICE_ELEVATION[i] > tmax ? NaN : relative(a, B[i])));
+  const e = Array.from(A, (a, i) => (SLICE_ELEVATION[i] > tmax ? NaN : errorOf(a, B[i])));
   const top = errorTop(e);
   drawImage("slice-e", SLICE, SLICE, (i) => (Number.isFinite(e[i]) ? diverging(e[i], top) : MASKED), `±${top.toPrecision(2)}`);
 }
@@ -254,7 +264,7 @@ function drawAlbedo(which) {
 function drawAlbedoError() {
   const [c, g] = canvas("albedo-e");
   const A = mean3(views[state.a].albedo), B = mean3(views[state.b].albedo), tmax = DATA.materials[state.a].theta_max;
-  const e = Array.from(A, (a, i) => (ALBEDO_THETA[i] * DEG > tmax ? NaN : relative(a, B[i])));
+  const e = Array.from(A, (a, i) => (ALBEDO_THETA[i] * DEG > tmax ? NaN : errorOf(a, B[i])));
   const top = errorTop(e);
   const ax = errorAxes(g, c, [0, 90], "θo (°)", top, [0, 30, 60, 90]);
   line(g, ALBEDO_THETA, e.map((x) => errorScale(x, top)), ax.X, ax.Y, "#222");
@@ -362,7 +372,7 @@ function drawSpheres() {
   const e = new Float64Array(n);
   for (let p = 0; p < n; p++) {
     const a = (A[3 * p] + A[3 * p + 1] + A[3 * p + 2]) / 3, b = (B[3 * p] + B[3 * p + 1] + B[3 * p + 2]) / 3;
-    e[p] = a > 0 && !sunMasked(p, tmax, gpu.images.light) ? (b - a) / a : NaN;
+    e[p] = a > 0 && !sunMasked(p, tmax, gpu.images.light) ? errorOf(a, b) : NaN;
   }
   const top = errorTop(e);
   putSphere("sphere-e", (p) => (Number.isFinite(e[p]) ? diverging(e[p], top) : (A[3 * p] > 0 ? MASKED : [0, 0, 0])));
@@ -417,6 +427,7 @@ function drawAll() {
       + (m.sphere_describe.endsWith(m.describe) ? "" : `; its sphere draws ${m.sphere_describe}`);
     drawPolar(w); drawLobe(w); drawSlice(w); drawAlbedo(w);
   }
+  $("head-e").textContent = state.error === "absolute" ? "absolute error B − A" : "relative error (B − A) / A";
   drawPolarError(); drawLobeError(); drawSliceError(); drawAlbedoError();
 }
 
@@ -433,6 +444,8 @@ const api = {
     size: SPHERE.size, env_samples: SPHERE.env_samples, seed: SPHERE.seed, passes: gpu.images.passes,
     pixels: Array.from(gpu.images[which]) }),
   polar: (which) => plotted.polar[which],
+  // The polar error panel's values (θi-major, as polar's), in the error mode chosen.
+  polarError: () => plotted.polarError,
   slice: (which) => plotted.slice[which],  // θd rows × θh columns at bin centres over [0, 90°)
   idle: async () => { while (rendering) await rendering; },
 };
@@ -450,6 +463,7 @@ function setup() {
   theta.value = state.lobeTheta;
   theta.onchange = () => { state.lobeTheta = +theta.value; drawAll(); };
   $("log").onchange = () => { state.log = $("log").checked; drawAll(); };
+  $("pick-error").onchange = () => { state.error = $("pick-error").value; drawAll(); drawSpheres(); };
   for (const w of ["a", "b", "e"]) {
     const c = $(`sphere-${w}`);
     const move = (ev) => { if (ev.buttons & 1) { ev.preventDefault(); state.light = lightFromMouse(ev); requestSpheres(); } };
