@@ -10,6 +10,7 @@
 #include <filesystem>
 #include <fstream>
 #include <new>
+#include <optional>
 #include <random>
 #include <thread>
 #include <vector>
@@ -246,15 +247,25 @@ TEST_CASE("runtime: PCA materials and fine-sampled ones are exported with their 
     CHECK(s.wi.x == l.wi.x);
 }
 
-TEST_CASE("runtime: the shared RGL files' compact representations agree with the library on 10^5 pairs",
-          "[runtime][rgl][heavy]") {
+namespace {
+
+// The shared RGL car paint, or nothing (with a message) where ../shared is missing.
+std::optional<Loaded> shared_paint() {
     const std::filesystem::path file = test::rgl_file("cc_ibiza_sunset");
     std::error_code ec;
     if (!std::filesystem::exists(file, ec)) {
         WARN("skipped: " << file << " missing (../shared)");
-        return;
+        return std::nullopt;
     }
-    const Loaded source = load(file.string());
+    return load(file.string());
+}
+
+}  // namespace
+
+TEST_CASE("runtime: the shared RGL files' compact representations agree with the library on 10^5 pairs",
+          "[runtime][rgl][heavy]") {
+    const std::optional<Loaded> source = shared_paint();
+    if (!source) return;
     const test::SimdCap sse2(detail::Simd::Sse2);
     for (const char* spec :
          {"svd:rank=10,space=cos,colour=shared,res=50x40x14,dwarp=0.9,fit=lsq,weight=solid,symmetry=bilateral,dtype=f16",
@@ -263,29 +274,24 @@ TEST_CASE("runtime: the shared RGL files' compact representations agree with the
           "tabular:res=45x45x90,symmetry=none", "bivariate:res=64x64", "nmf:rank=3,res=32x32x32,iterations=40",
           "tabular:res=24x24x32,phih=2,symmetry=none,dtype=f16", "analytic:lambert+ggx,starts=1"}) {
         INFO(spec);
-        check_agreement(*compress(*source.brdf, spec).brdf, 100000);
+        check_agreement(*compress(*source->brdf, spec).brdf, 100000);
     }
 }
 
 TEST_CASE("runtime: a source the layout does not hold is tabulated with φd whole unless it is reciprocal",
           "[runtime][rgl]") {
-    const std::filesystem::path file = test::rgl_file("cc_ibiza_sunset");
-    std::error_code ec;
-    if (!std::filesystem::exists(file, ec)) {
-        WARN("skipped: " << file << " missing (../shared)");
-        return;
-    }
-    const Loaded source = load(file.string());
-    REQUIRE(!is_reciprocal(*source.brdf));
+    const std::optional<Loaded> source = shared_paint();
+    if (!source) return;
+    REQUIRE(!is_reciprocal(*source->brdf));
     const test::TempDir dir;
     const std::string path = (dir.path / "rgl.brdfzrt").string();
-    runtime_layout::write(path, *source.brdf);
+    runtime_layout::write(path, *source->brdf);
     const Loaded exported = load(path);
     CHECK_THAT(exported.brdf->describe(), Catch::Contains("symmetry bilateral"));
     MetricOptions o;
     o.over = Over::Directions;
     // A reciprocal fold stores the mean of f(wi, wo) and f(wo, wi): 13 % off this file over directions.
-    CHECK(compare(*source.brdf, *exported.brdf, o).cos_rmse_rel.mean < 0.02);
+    CHECK(compare(*source->brdf, *exported.brdf, o).cos_rmse_rel.mean < 0.02);
     // A reciprocal source keeps MERL's folded grid.
     runtime_layout::write(path, coated(0.1));
     CHECK_THAT(load(path).brdf->describe(), Catch::Contains("tabulated on 90x90x180") && !Catch::Contains("bilateral"));
