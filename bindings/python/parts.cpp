@@ -47,6 +47,7 @@ py::dict grid_dict(const GridSpec& g) {
     d["n_phi_d"] = g.n_phi_d;
     d["position"] = g.position == BinPosition::Centre ? "centre" : "start";
     d["theta_d_warp"] = g.theta_d_warp;
+    d["theta_h_warp"] = g.theta_h_warp;
     d["symmetry"] = symmetry_name(g.symmetry);
     return d;
 }

@@ -68,7 +68,9 @@ public:
             if (!s.bytes.empty()) std::memcpy(out.data() + offsets[i], s.bytes.data(), s.bytes.size());
         }
         std::memcpy(out.data(), L::kMagic, 8);
-        put(8, L::kVersion);
+        const bool warped_theta_h =
+            std::any_of(sections_.begin(), sections_.end(), [](const Section& s) { return s.tag == L::kThetaHWarp; });
+        put(8, std::uint32_t{warped_theta_h ? 2u : 1u});
         put(12, L::kHeaderBytes);
         put(16, static_cast<std::uint64_t>(out.size()));
         put(24, static_cast<std::uint32_t>(sections_.size()));
@@ -92,6 +94,7 @@ void add_grid(Builder& b, std::uint32_t object, const GridSpec& g, Lookup lookup
               {g.n_theta_h, g.n_theta_d, g.n_phi_d, g.position == BinPosition::Centre ? 1 : 0, phi_d_axis(g),
                lookup == Lookup::Nearest ? L::kLookupNearest : L::kLookupLinear});
     b.add(L::kWarp, object, L::DType::F64, &g.theta_d_warp, 1);
+    if (g.theta_h_warp != 0.0) b.add(L::kThetaHWarp, object, L::DType::F64, &g.theta_h_warp, 1);
 }
 
 void add_sampler(Builder& b, const CompactSampler& s) {

@@ -49,15 +49,20 @@ const StorageModule* find_storage(std::string_view type);
 // and throws FormatError for an unknown axis or a warp outside (0, GridSpec::kMaxWarp].
 void write_theta_d_axis(h5::WriteNode& rep, const GridSpec& g);
 double read_theta_d_warp(const h5::ReadNode& rep);
+// The θh axis likewise (`theta_h_axis`, `theta_h_warp`): "sqrt" for the square-root axis, "warped"
+// and its scale in radians for GridSpec::theta_h_warp; reading throws FormatError for an unknown axis or
+// a scale outside [GridSpec::kMinThetaHWarp, kMaxThetaHWarp].
+void write_theta_h_axis(h5::WriteNode& rep, const GridSpec& g);
+double read_theta_h_warp(const h5::ReadNode& rep);
 // The φd axis likewise (formats/SPEC.md, `phi_d_axis`): nothing for the reciprocal [0, π), "full" for
 // Symmetry::None, "bilateral" for Symmetry::Bilateral; reading throws FormatError for another value.
 void write_phi_d_axis(h5::WriteNode& rep, const GridSpec& g);
 Symmetry read_phi_d_symmetry(const h5::ReadNode& rep);
 
-// A stored grid's attributes (formats/SPEC.md: `grid`, `bin_position`, `theta_h_axis`, and the θd axis
-// where the module stores warped ones, else a linear one; the φd axis), checked: FormatError names the
-// attribute that is out of range before anything is allocated.
-GridSpec read_grid(const h5::ReadNode& rep, bool warped_theta_d);
+// A stored grid's attributes (formats/SPEC.md: `grid`, `bin_position`, and the θh and θd axes where the
+// module stores warped ones, else the square-root and linear ones; the φd axis), checked: FormatError
+// names the attribute that is out of range before anything is allocated.
+GridSpec read_grid(const h5::ReadNode& rep, bool warped_axes);
 
 // Features of the container itself (layout, metadata, CRC-32C checksums).
 inline const Feature kCore{"core", 1};

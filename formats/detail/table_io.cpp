@@ -51,7 +51,7 @@ ValidityCounts invalidate_out_of_range(const std::string& path, Table& table) {
     return counts;
 }
 
-// Table formats (MERL, EXR, NPY) know only the linear θd axis and the reciprocal φd axis, so a warped
+// Table formats (MERL, EXR, NPY) know only the square-root θh axis, the linear θd axis and the reciprocal φd axis, so a warped
 // table is tabulated too, a table over the full φd circle onto half as many φd bins over [0, π), and a
 // bilateral table onto as many (each the mean of the pair and its exchange, tabulate.h).
 ValidityCounts save_table(const Brdf& brdf, const SaveOptions& options, const std::function<void(const Table&)>& write) {
@@ -59,7 +59,7 @@ ValidityCounts save_table(const Brdf& brdf, const SaveOptions& options, const st
         throw ValueError("MERL, EXR and NPY tables fold phi_d by reciprocity: a grid with symmetry " +
                          std::string(symmetry_name(options.grid->symmetry)) + " needs .brdfz");
     const Table* table = brdf.stored_table();
-    const auto plain = [](const GridSpec& g) { return g.theta_d_warp == 0.0 && g.reciprocal(); };
+    const auto plain = [](const GridSpec& g) { return g.theta_d_warp == 0.0 && g.theta_h_warp == 0.0 && g.reciprocal(); };
     if (table && plain(table->grid()) && (!options.grid || *options.grid == table->grid())) {
         write(*table);
         ValidityCounts written;
@@ -70,7 +70,7 @@ ValidityCounts save_table(const Brdf& brdf, const SaveOptions& options, const st
     t.grid = options.grid.value_or(GridSpec{});
     if (table && !options.grid) {  // its own grid on the linear θd axis and the reciprocal φd axis
         t.grid = table->grid();
-        t.grid.theta_d_warp = 0.0;
+        t.grid.theta_d_warp = t.grid.theta_h_warp = 0.0;
         if (t.grid.full_circle()) t.grid.n_phi_d = std::max(1, t.grid.n_phi_d / 2);
         t.grid.symmetry = Symmetry::Reciprocal;
     }

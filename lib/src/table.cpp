@@ -24,6 +24,9 @@ void GridSpec::validate() const {
         throw ValueError("grid " + str() + ": unknown phi_d symmetry");
     if (!(theta_d_warp >= 0.0 && theta_d_warp <= kMaxWarp))
         throw ValueError("grid " + str() + ": theta_d warp " + std::to_string(theta_d_warp) + " outside [0, 0.95]");
+    if (!(theta_h_warp == 0.0 || (theta_h_warp >= kMinThetaHWarp && theta_h_warp <= kMaxThetaHWarp)))
+        throw ValueError("grid " + str() + ": theta_h warp " + std::to_string(theta_h_warp * 180.0 / std::numbers::pi) +
+                         " degrees: 0 or in [0.01, 45]");
 }
 
 double axis::u_to_theta_d(double u, int n, double w) {

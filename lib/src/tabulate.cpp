@@ -138,7 +138,8 @@ TabulateOptions supersampled(const TabulateOptions& options) {
     const GridSpec& g = options.grid;
     const auto [sh, sd, sp] = options.supersample;
     TabulateOptions fine = options;
-    fine.grid = GridSpec{g.n_theta_h * sh, g.n_theta_d * sd, g.n_phi_d * sp, BinPosition::Centre, g.theta_d_warp, g.symmetry};
+    fine.grid = GridSpec{g.n_theta_h * sh, g.n_theta_d * sd, g.n_phi_d * sp, BinPosition::Centre, g.theta_d_warp, g.symmetry,
+                           g.theta_h_warp};
     fine.grid.validate();
     return fine;
 }
@@ -271,13 +272,20 @@ FitPoints fit_points(const Brdf& brdf, const TabulateOptions& options, double ou
             const double w = fg.theta_d_warp, t = fg.theta_d_at(jd);
             density[jd] = std::sqrt(2.0 / std::numbers::pi / ((1.0 - w) * 2.0 / std::numbers::pi + w * std::sin(t)));
         }
-    // Weighing by solid angle: dωi dωo = 4 cosθd sinθd sinθh dθh dθd dφh dφd, with dθh/du ∝ u on the
-    // square-root axis (dθd/du is in `density`); the square root, as the scale multiplies a residual.
-    // Normalised to a mean of 1 over the points, so that the outside share keeps its meaning.
+    // On a warped θh axis they crowd towards the pole: dθh/du relative to the square-root axis.
+    std::vector<double> density_h(static_cast<std::size_t>(fg.n_theta_h), 1.0);
+    if (fg.theta_h_warp != 0.0)
+        for (int jh = 0; jh < fg.n_theta_h; ++jh)
+            density_h[jh] = std::sqrt(axis::theta_h_density(jh + fg.sample_offset(), fg.n_theta_h, fg.theta_h_warp));
+    // Weighing by solid angle: dωi dωo = 4 cosθd sinθd sinθh dθh dθd dφh dφd, with dθh/du the axis's
+    // slope (∝ u on the square-root axis; dθd/du is in `density`); the square root, as the scale
+    // multiplies a residual. Normalised to a mean of 1 over the points, so that the outside share keeps
+    // its meaning.
     const bool solid = options.fit_weight == TabulateOptions::FitWeight::SolidAngle;
     const auto solid_scale = [&](int jh, int jd) {
         const double th = fg.theta_h_at(jh), td = fg.theta_d_at(jd);
-        return std::sqrt(std::sin(th) * (jh + 0.5) * std::sin(td) * std::cos(td));
+        return std::sqrt(std::sin(th) * axis::theta_h_slope(jh + 0.5, fg.n_theta_h, fg.theta_h_warp) * std::sin(td) *
+                         std::cos(td));
     };
     // Outside: beyond the cut, or evaluated at a clamped incident elevation (wo too where the bin holds
     // (wo, wi) as well).
@@ -296,7 +304,7 @@ FitPoints fit_points(const Brdf& brdf, const TabulateOptions& options, double ou
                 points.wi.push_back(wi);
                 points.wo.push_back(wo);
                 points.value.push_back({fine.table.at(bin, 0), fine.table.at(bin, 1), fine.table.at(bin, 2)});
-                points.scale.push_back(density[jd] * (solid ? solid_scale(jh, jd) : 1.0) *
+                points.scale.push_back(density[jd] * (solid ? solid_scale(jh, jd) : density_h[jh]) *
                                        (outside ? outside_scale : 1.0));
             }
     if (solid && !points.scale.empty()) {

@@ -43,6 +43,8 @@ const KindCase kKinds[] = {
     {"svd:rank=2,res=16x16x32,phih=3,symmetry=none", false},
     {"tabular:res=16x16x16,symmetry=bilateral", false},
     {"svd:rank=2,res=16x16x16,symmetry=bilateral,dtype=f16", false},
+    {"tabular:res=16x16x32,dtype=f16,hwarp=auto", true},
+    {"svd:rank=2,space=cos,res=16x16x32,hwarp=4", true},
 };
 
 // A basis from a few variations of the source, written where the pca line can name it.

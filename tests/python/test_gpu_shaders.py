@@ -22,6 +22,9 @@ SPECS = {
     "svd_log_hd_p": "svd:rank=4,space=log,colour=shared,layout=hd_p,res=20x14x32,fit=lsq,symmetry=none,dtype=f16",
     "svd_log_separate": "svd:rank=3,space=log,res=20x14x32",
     "nmf": "nmf:rank=4,res=32x32x32",
+    # θh axes warped by the material's peak.
+    "table_f16_hwarp": "tabular:res=45x45x90,dtype=f16,symmetry=bilateral,hwarp=auto",
+    "svd_cos_hwarp": "svd:rank=6,space=cos,colour=shared,res=32x22x13,dwarp=0.9,symmetry=bilateral,dtype=f16,hwarp=auto",
     # φh stacks of tables and of factorisations, on the full and the mirror-folded φh range.
     "phi_h_tables": "tabular:res=32x16x32,phih=8,symmetry=none",
     "phi_h_svd_bilateral": "svd:rank=4,space=log,res=16x10x16,phih=4,symmetry=bilateral",

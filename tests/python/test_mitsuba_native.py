@@ -64,6 +64,7 @@ SYNTHETIC_SPECS = [
     "tabular:res=16x16x32,lookup=nearest",
     "tabular:res=16x16x32,dtype=f16",
     "tabular:res=12x12x24,dtype=u8log,dwarp=0.8",
+    "tabular:res=16x12x24,dtype=f16,hwarp=2",
     "bivariate:res=16x16",
     "svd:rank=3,res=16x16x32",
     "svd:rank=2,space=cbrt,layout=hd_p,colour=shared,res=16x16x32,dtype=f16",
@@ -76,6 +77,7 @@ RGL_SPECS = [
     "tabular:res=16x16x16,dtype=u8log,dwarp=0.8",
     "tabular:res=16x16x16,dtype=f16,lookup=nearest",
     "svd:rank=4,space=cos,colour=shared,res=16x16x8,dwarp=0.9,dtype=f16",
+    "svd:rank=4,space=cos,colour=shared,res=16x16x8,dtype=f16,hwarp=auto",
     "svd:rank=2,res=16x16x16",
     "analytic:lambert+ggx,starts=2",
 ]

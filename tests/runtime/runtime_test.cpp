@@ -167,7 +167,8 @@ TEST_CASE("runtime: every gridded kind agrees with the library (synthetic materi
                              "nmf:rank=2,res=16x16x32,iterations=20,space=cbrt,layout=hd_p",
                              "svd:rank=3,res=16x12x16,colour=shared,space=cos,symmetry=bilateral,dwarp=0.8",
                              "tabular:res=12x12x16,phih=3,symmetry=bilateral,dtype=f16",
-                             "svd:rank=2,res=12x12x16,phih=2,symmetry=none"}) {
+                             "svd:rank=2,res=12x12x16,phih=2,symmetry=none", "tabular:res=16x16x16,dtype=u8log,hwarp=3",
+                             "svd:rank=2,res=16x16x16,space=cos,symmetry=bilateral,dtype=f16,hwarp=auto"}) {
         INFO(spec);
         check_agreement(*compress(source, spec).brdf, 20000);
     }
@@ -316,8 +317,8 @@ TEST_CASE("runtime: bad layouts are refused with a line, never read", "[runtime]
     b[good.size() - 100] ^= 1;
     CHECK_THAT(refused(b, "flipped byte"), Catch::Contains("checksum"));
     b = good;
-    b[8] = 2;  // version
-    CHECK_THAT(refused(b, "newer version"), Catch::Contains("layout version 2"));
+    b[8] = 3;  // version
+    CHECK_THAT(refused(b, "newer version"), Catch::Contains("layout version 3"));
     b = good;
     b[0] = 'X';
     refused(b, "magic");
@@ -375,7 +376,8 @@ TEST_CASE("runtime: a factorisation gives the library's bits at every level this
     // spaces, and slices of a φh stack.
     for (const char* spec : {"svd:rank=3,res=16x12x16,space=log", "nmf:rank=5,res=12x12x16,iterations=10,space=cbrt",
                              "svd:rank=6,res=16x12x16,colour=shared,space=cos,layout=hd_p,symmetry=bilateral",
-                             "svd:rank=2,res=12x12x16,phih=2,symmetry=none"}) {
+                             "svd:rank=2,res=12x12x16,phih=2,symmetry=none", "tabular:res=16x16x16,dtype=u8log,hwarp=3",
+                             "svd:rank=2,res=16x16x16,space=cos,symmetry=bilateral,dtype=f16,hwarp=auto"}) {
         for (detail::Simd level : test::simd_levels()) {
             INFO(spec << ", " << test::simd_label(level));
             const test::SimdCap cap(level);

@@ -15,6 +15,7 @@ namespace {
 
 const Feature kFactored{"factored", 2};
 const Feature kWarpedThetaD{"factored.warped-theta-d", 2};
+const Feature kWarpedThetaH{"factored.warped-theta-h", 7};
 // Readers without it refuse float16 factors by this name rather than misreading them.
 const Feature kFloat16{"factored.float16", 2};
 const Feature kFullPhiD{"factored.full-phi-d", 3};
@@ -26,6 +27,7 @@ std::vector<Feature> needs(const Brdf& brdf) {
     // As for tables: only a warped grid needs the feature, so linear-axis factors stay readable without it.
     std::vector<Feature> out{kFactored};
     if (f->factors().grid.theta_d_warp != 0.0) out.push_back(kWarpedThetaD);
+    if (f->factors().grid.theta_h_warp != 0.0) out.push_back(kWarpedThetaH);
     if (f->factors().dtype == FactorDtype::F16) out.push_back(kFloat16);
     if (f->factors().grid.full_circle()) out.push_back(kFullPhiD);
     if (f->factors().grid.bilateral()) out.push_back(kBilateralPhiD);
@@ -46,7 +48,7 @@ void write(h5::WriteNode& rep, const Brdf& brdf) {
                                    static_cast<std::uint64_t>(g.n_phi_d)};
     rep.attr("grid", std::span<const std::uint64_t>(dims));
     rep.attr("bin_position", std::string(g.position == BinPosition::Centre ? "centre" : "start"));
-    rep.attr("theta_h_axis", std::string("sqrt"));
+    write_theta_h_axis(rep, g);
     write_theta_d_axis(rep, g);
     write_phi_d_axis(rep, g);
     rep.attr("method", std::string(factor_method_name(f.method)));
@@ -146,7 +148,7 @@ void source_info(const Brdf& brdf, SourceInfo& info) {
 }  // namespace
 
 void register_factored(std::vector<const StorageModule*>& out) {
-    static const StorageModule m{"factored", {kFactored, kWarpedThetaD, kFloat16, kFullPhiD, kBilateralPhiD}, &needs, &write, &read, &source_info};
+    static const StorageModule m{"factored", {kFactored, kWarpedThetaD, kWarpedThetaH, kFloat16, kFullPhiD, kBilateralPhiD}, &needs, &write, &read, &source_info};
     out.push_back(&m);
 }
 

@@ -22,6 +22,7 @@ const Feature kFloat32{"tabular.float32", 1};
 const Feature kFloat16{"tabular.float16", 2};
 const Feature kUint8Log{"tabular.uint8-log", 2};
 const Feature kWarpedThetaD{"tabular.warped-theta-d", 2};
+const Feature kWarpedThetaH{"tabular.warped-theta-h", 7};
 const Feature kFullPhiD{"tabular.full-phi-d", 3};
 const Feature kBilateralPhiD{"tabular.bilateral-phi-d", 5};
 
@@ -35,6 +36,7 @@ std::vector<Feature> needs(const Brdf& brdf) {
     // Only a warped grid needs the feature, so linear tables stay readable by readers without it.
     const GridSpec& g = t ? t->table().grid() : c->table().grid();
     if (g.theta_d_warp != 0.0) out.push_back(kWarpedThetaD);
+    if (g.theta_h_warp != 0.0) out.push_back(kWarpedThetaH);
     // Likewise φd over [0, 2π) or folded by the mirror: a reader without the feature refuses the table
     // instead of reading its φd axis as the reciprocal one.
     if (g.full_circle()) out.push_back(kFullPhiD);
@@ -47,7 +49,7 @@ void write_grid(h5::WriteNode& rep, const GridSpec& g) {
                                    static_cast<std::uint64_t>(g.n_phi_d)};
     rep.attr("grid", std::span<const std::uint64_t>(dims));
     rep.attr("bin_position", std::string(position_name(g.position)));
-    rep.attr("theta_h_axis", std::string("sqrt"));
+    write_theta_h_axis(rep, g);
     write_theta_d_axis(rep, g);
     write_phi_d_axis(rep, g);
 }
@@ -200,12 +202,29 @@ double read_theta_d_warp(const h5::ReadNode& rep) {
     return warp;
 }
 
+void write_theta_h_axis(h5::WriteNode& rep, const GridSpec& g) {
+    rep.attr("theta_h_axis", std::string(g.theta_h_warp == 0.0 ? "sqrt" : "warped"));
+    if (g.theta_h_warp != 0.0) rep.attr("theta_h_warp", g.theta_h_warp);
+}
+
+double read_theta_h_warp(const h5::ReadNode& rep) {
+    const auto bad = [&](const std::string& what) { throw FormatError(rep.file(), rep.path() + ": " + what); };
+    const std::string h_axis = rep.str("theta_h_axis");
+    if (h_axis == "sqrt") return 0.0;
+    if (h_axis != "warped") bad("unknown theta_h_axis '" + h_axis + "'");
+    const double s = rep.f64("theta_h_warp");
+    if (!(s >= GridSpec::kMinThetaHWarp && s <= GridSpec::kMaxThetaHWarp))
+        bad("theta_h_warp " + std::to_string(s) + " outside [" + std::to_string(GridSpec::kMinThetaHWarp) + ", " +
+            std::to_string(GridSpec::kMaxThetaHWarp) + "] radians");
+    return s;
+}
+
 void write_phi_d_axis(h5::WriteNode& rep, const GridSpec& g) {
     if (g.full_circle()) rep.attr("phi_d_axis", std::string("full"));
     if (g.bilateral()) rep.attr("phi_d_axis", std::string("bilateral"));
 }
 
-GridSpec read_grid(const h5::ReadNode& rep, bool warped_theta_d) {
+GridSpec read_grid(const h5::ReadNode& rep, bool warped_axes) {
     const auto bad = [&](const std::string& what) { throw FormatError(rep.file(), rep.path() + ": " + what); };
     const std::vector<std::uint64_t> dims = rep.u64s("grid");
     if (dims.size() != 3) bad("attribute 'grid' has " + std::to_string(dims.size()) + " entries, expected 3");
@@ -215,10 +234,10 @@ GridSpec read_grid(const h5::ReadNode& rep, bool warped_theta_d) {
     const std::string position = rep.str("bin_position");
     if (position != "centre" && position != "start") bad("unknown bin_position '" + position + "'");
     const std::string axis = rep.str("theta_h_axis");
-    if (axis != "sqrt") bad("unknown theta_h_axis '" + axis + "'");
+    if (!warped_axes && axis != "sqrt") bad("unknown theta_h_axis '" + axis + "'");
     return {static_cast<int>(dims[0]), static_cast<int>(dims[1]), static_cast<int>(dims[2]),
-            position == "centre" ? BinPosition::Centre : BinPosition::Start, warped_theta_d ? read_theta_d_warp(rep) : 0.0,
-            read_phi_d_symmetry(rep)};
+            position == "centre" ? BinPosition::Centre : BinPosition::Start, warped_axes ? read_theta_d_warp(rep) : 0.0,
+            read_phi_d_symmetry(rep), warped_axes ? read_theta_h_warp(rep) : 0.0};
 }
 
 Symmetry read_phi_d_symmetry(const h5::ReadNode& rep) {
@@ -230,7 +249,8 @@ Symmetry read_phi_d_symmetry(const h5::ReadNode& rep) {
 }
 
 void register_tabular(std::vector<const StorageModule*>& out) {
-    static const StorageModule m{"tabular", {kTabular, kFloat32, kFloat16, kUint8Log, kWarpedThetaD, kFullPhiD, kBilateralPhiD},
+    static const StorageModule m{"tabular", {kTabular, kFloat32, kFloat16, kUint8Log, kWarpedThetaD, kWarpedThetaH, kFullPhiD,
+                                                 kBilateralPhiD},
                                  &needs, &write, &read, &source_info};
     out.push_back(&m);
 }

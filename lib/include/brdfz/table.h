@@ -44,6 +44,23 @@ using runtime::kernels::axis::phi_d_to_u;
 using runtime::kernels::axis::theta_d_to_u;
 using runtime::kernels::axis::theta_h_to_u;
 inline double u_to_theta_h(double u, int n) { return (u / n) * (u / n) * (std::numbers::pi / 2.0); }
+// Inverse of the θh axis warped by s (theta_h_to_u(θh, n, s)); s = 0 the square-root axis.
+inline double u_to_theta_h(double u, int n, double s) {
+    if (s == 0.0) return u_to_theta_h(u, n);
+    const double t = u / n * ((std::numbers::pi / 2.0) / (std::numbers::pi / 2.0 + s));
+    return s * t / (1.0 - t);
+}
+// dθh/du on the θh axis warped by s, in units of π/n²: on the square-root axis (s = 0) u itself.
+inline double theta_h_slope(double u, int n, double s) {
+    if (s == 0.0) return u;
+    const double c = (std::numbers::pi / 2.0) / (std::numbers::pi / 2.0 + s), t = u / n * c;
+    return s * c * n / (std::numbers::pi * (1.0 - t) * (1.0 - t));
+}
+// How much more θh a bin at u spans than a bin of the square-root axis at the same θh: 1 when s = 0.
+inline double theta_h_density(double u, int n, double s) {
+    if (s == 0.0) return 1.0;
+    return theta_h_slope(u, n, s) / (n * std::sqrt(u_to_theta_h(u, n, s) * (2.0 / std::numbers::pi)));
+}
 inline double u_to_theta_d(double u, int n) { return u / n * (std::numbers::pi / 2.0); }
 // Inverse of the warped map by bisection (it is increasing): setup only, never in a lookup.
 double u_to_theta_d(double u, int n, double w);
@@ -70,12 +87,15 @@ struct GridSpec {
     BinPosition position = BinPosition::Centre;
     double theta_d_warp = 0.0;  // axis::theta_d_to_u's w; 0: MERL's linear θd axis
     Symmetry symmetry = Symmetry::Reciprocal;
+    double theta_h_warp = 0.0;  // axis::theta_h_to_u's s, radians; 0: MERL's square-root θh axis
 
     static constexpr int kMaxAxis = 4096;  // bound on any axis, checked before allocating
     // Bound on the bins of any grid, checked before allocating: 2^26 bins, a float32 RGB table of
     // 805,306,368 bytes (MERL's 90x90x180 has 1,458,000 bins).
     static constexpr std::size_t kMaxBins = std::size_t{1} << 26;
     static constexpr double kMaxWarp = 0.95;  // the first θd bin 11° wide at 40 bins (linear: 2.25°)
+    // Bounds of theta_h_warp (radians, when not 0): 0.01° to 45°.
+    static constexpr double kMinThetaHWarp = 0.01 * std::numbers::pi / 180.0, kMaxThetaHWarp = std::numbers::pi / 4.0;
 
     std::size_t bins() const {
         return static_cast<std::size_t>(n_theta_h) * n_theta_d * n_phi_d;
@@ -86,7 +106,9 @@ struct GridSpec {
     // Offset of a bin's sample from its start, in bins.
     double sample_offset() const { return position == BinPosition::Centre ? 0.5 : 0.0; }
     // Angles at which bin (ih, id, ip) is sampled.
-    double theta_h_at(int ih) const { return axis::u_to_theta_h(ih + sample_offset(), n_theta_h); }
+    double theta_h_at(int ih) const { return theta_h_of_u(ih + sample_offset()); }
+    double theta_h_of_u(double u) const { return axis::u_to_theta_h(u, n_theta_h, theta_h_warp); }
+    double theta_h_to_u(double theta_h) const { return axis::theta_h_to_u(theta_h, n_theta_h, theta_h_warp); }
     double theta_d_at(int id) const { return axis::u_to_theta_d(id + sample_offset(), n_theta_d, theta_d_warp); }
     double theta_d_to_u(double theta_d) const { return axis::theta_d_to_u(theta_d, n_theta_d, theta_d_warp); }
     double phi_d_at(int ip) const {
@@ -105,7 +127,8 @@ struct GridSpec {
     bool full_circle() const { return symmetry == Symmetry::None; }
     double phi_d_range() const { return full_circle() ? 2.0 * std::numbers::pi : std::numbers::pi; }
     // Throws ValueError unless every axis is in [1, kMaxAxis], bins() <= kMaxBins (the message gives
-    // the table's bytes) and theta_d_warp in [0, kMaxWarp].
+    // the table's bytes), theta_h_warp 0 or in [kMinThetaHWarp, kMaxThetaHWarp] and theta_d_warp in
+    // [0, kMaxWarp].
     void validate() const;
     std::string str() const;  // "90x90x180"
     bool operator==(const GridSpec&) const = default;

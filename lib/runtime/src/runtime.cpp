@@ -154,6 +154,12 @@ void read_grid(const Sections& s, Object& o) {
     const double w = *s.get<double>(L::kWarp, L::DType::F64, 1);
     if (!(w >= 0.0 && w <= 0.95)) fail(s.where(L::kWarp) + ": θd warp outside [0, 0.95]");
     o.grid.theta_d_warp = w;
+    if (s.has(L::kThetaHWarp)) {
+        const double h = *s.get<double>(L::kThetaHWarp, L::DType::F64, 1);
+        // GridSpec::kMinThetaHWarp, kMaxThetaHWarp: 0.01° to 45°.
+        if (!(h >= 0.01 * k::kPi / 180.0 && h <= k::kPi / 4.0)) fail(s.where(L::kThetaHWarp) + ": θh warp outside [0.01°, 45°]");
+        o.grid.theta_h_warp = h;
+    }
 }
 
 void read_table(const Sections& s, Object& o) {
@@ -322,8 +328,8 @@ void parse(Data& d) {
     d.level = k::simd_level();
     if (d.size < L::kHeaderBytes || std::memcmp(b, L::kMagic, 8) != 0) fail("not a brdfz runtime layout");
     const std::uint32_t version = read_le<std::uint32_t>(b + 8);
-    if (version != L::kVersion)
-        fail("layout version " + std::to_string(version) + ", this runtime reads version " + std::to_string(L::kVersion));
+    if (version < 1 || version > L::kVersion)
+        fail("layout version " + std::to_string(version) + ", this runtime reads versions 1 to " + std::to_string(L::kVersion));
     if (read_le<std::uint32_t>(b + 12) != L::kHeaderBytes) fail("unexpected header size");
     if (read_le<std::uint64_t>(b + 16) != d.size)
         fail("the header says " + std::to_string(read_le<std::uint64_t>(b + 16)) + " bytes, the data has " + std::to_string(d.size));
@@ -346,6 +352,7 @@ void parse(Data& d) {
             fail("section " + std::to_string(i) + " lies outside the data");
         if (!by_object[object].emplace(tag, Section{static_cast<L::DType>(dtype), offset, count}).second)
             fail("section " + std::to_string(i) + " repeats a tag");
+        if (tag == L::kThetaHWarp && version < 2) fail("section HWRP in a version-1 layout (it needs version 2)");
     }
     const Sections root(d, by_object[0], 0);
     if (const Section* desc = root.find(L::kDesc); desc && desc->dtype == L::DType::U8)

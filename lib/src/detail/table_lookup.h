@@ -41,6 +41,11 @@ inline std::string table_shape(const GridSpec& g) {
         std::snprintf(text, sizeof text, ", theta_d warp %g", g.theta_d_warp);
         warp = text;
     }
+    if (g.theta_h_warp != 0.0) {
+        char text[48];
+        std::snprintf(text, sizeof text, ", theta_h warp %.3g deg", g.theta_h_warp * 180.0 / std::numbers::pi);
+        warp += text;
+    }
     return (g.n_phi_d == 1 ? "bivariate " + std::to_string(g.n_theta_h) + "x" + std::to_string(g.n_theta_d)
                            : "tabular " + g.str()) +
            warp + symmetry_suffix(g);
@@ -64,6 +69,7 @@ using runtime::kernels::phi_d_coord;
 using runtime::kernels::phi_d_span;
 using runtime::kernels::Span;
 using runtime::kernels::theta_d_coord;
+using runtime::kernels::theta_h_coord;
 
 template <typename Values>
 inline Rgb read_nearest(const Values& values, std::size_t bin) {

@@ -37,7 +37,7 @@ namespace brdfz::detail {
     const bool sure = (sin_h > kMinSin) & (sin_d > kMinSin);
     const double up = phi_d_coord(g, dy, dx);
     // dz is cosθd: wi is a unit vector in h's frame.
-    return {std::sqrt(theta_h * (2.0 / std::numbers::pi)) * g.n_theta_h, theta_d_coord(g, theta_d, dz),
+    return {theta_h_coord(g, theta_h), theta_d_coord(g, theta_d, dz),
             std::max(up, sure ? 0.0 : kIllConditioned)};
 }
 

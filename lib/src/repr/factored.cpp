@@ -5,7 +5,9 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <cstring>
 #include <limits>
+#include <numbers>
 
 #include "brdfz/errors.h"
 #include "repr/factored_impl.h"
@@ -170,8 +172,11 @@ std::size_t FactoredBrdf::nbytes() const {
 }
 
 std::string FactoredBrdf::describe() const {
-    char warp[48] = "";
+    char warp[96] = "";
     if (f_.grid.theta_d_warp != 0.0) std::snprintf(warp, sizeof warp, ", theta_d warp %g", f_.grid.theta_d_warp);
+    if (f_.grid.theta_h_warp != 0.0)
+        std::snprintf(warp + std::strlen(warp), sizeof warp - std::strlen(warp), ", theta_h warp %.3g deg",
+                      f_.grid.theta_h_warp * 180.0 / std::numbers::pi);
     return std::string(factor_method_name(f_.method)) + " rank " + std::to_string(f_.rank) + ", " +
            factor_space_name(f_.space) + " space, layout " + factor_layout_name(f_.layout) + ", " +
            factor_colour_name(f_.colour) + " colour, on " + f_.grid.str() + " (bin " +

@@ -280,6 +280,8 @@ Data prepare(const Table& table, const FactorOptions& o, int rows, int cols, con
             // On a warped θd axis, each sample stands for dθd/du of the metric's linear θd axis.
             if (g.theta_d_warp != 0.0)
                 weight *= 1.0 / (1.0 - g.theta_d_warp + g.theta_d_warp * std::numbers::pi / 2.0 * std::sin(g.theta_d_at(id)));
+            // On a warped θh axis, dθh/du of the metric's square-root axis.
+            if (g.theta_h_warp != 0.0) weight *= axis::theta_h_density(ih + g.sample_offset(), g.n_theta_h, g.theta_h_warp);
         }
         if (!(weight > 0.0)) continue;
         ++d.valid;

@@ -158,7 +158,7 @@ FactorSampler::FactorSampler(const Factors& f, const FactorSamplerOptions& o) : 
     const GridSpec& g = f.grid;
     const int rows = rows_ = g.n_theta_h, m = f.row_width(), K = o.n_theta_o;
     s_edges_.resize(rows + 1);
-    for (int i = 0; i <= rows; ++i) s_edges_[i] = s_of_theta(axis::u_to_theta_h(i, rows));
+    for (int i = 0; i <= rows; ++i) s_edges_[i] = s_of_theta(g.theta_h_of_u(i));
 
     // Channel c's weight of term j (separate colour: 1 for its own channel's terms), and a_j, their mean.
     std::vector<double> mix(3 * static_cast<std::size_t>(m), 0.0), a(m, 0.0);

@@ -62,6 +62,7 @@ class Grid:
         self.nh, self.nd, self.np = int(g["n_theta_h"]), int(g["n_theta_d"]), int(g["n_phi_d"])
         self.offset = 0.5 if g["position"] == "centre" else 0.0
         self.warp = float(g["theta_d_warp"])
+        self.h_warp = float(g.get("theta_h_warp", 0.0))
         if g["symmetry"] not in ("reciprocal", "none", "bilateral"):
             raise Unsupported(f"a grid with symmetry={g['symmetry']}")
         self.full = g["symmetry"] == "none"
@@ -76,6 +77,12 @@ class Grid:
         if self.warp == 0.0:
             return lin * self.nd
         return ((1.0 - self.warp) * lin + self.warp * (1.0 - cos_d)) * self.nd
+
+    def theta_h_coord(self, theta_h):
+        if self.h_warp == 0.0:
+            return dr.sqrt(theta_h * (2.0 / PI)) * self.nh
+        s = self.h_warp
+        return theta_h / (theta_h + s) * ((PI / 2.0 + s) / (PI / 2.0)) * self.nh
 
     def coords(self, wi, wo):
         """Continuous bin coordinates (uh, ud, up) of a pair above the horizon."""
@@ -98,7 +105,7 @@ class Grid:
         phi_d = half_turn_angle(dr.abs(dy) if self.mirror else dy, dx)  # folded into [0, π]
         if self.full:
             phi_d = phi_d + dr.select(dy < 0.0, PI, 0.0)
-        return (dr.sqrt(theta_h * (2.0 / PI)) * self.nh, self.theta_d_coord(theta_d, dz), phi_d * self.per_radian * self.np)
+        return (self.theta_h_coord(theta_h), self.theta_d_coord(theta_d, dz), phi_d * self.per_radian * self.np)
 
     def spans(self, c):
         uh, ud, up = c

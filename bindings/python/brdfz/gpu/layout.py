@@ -50,8 +50,8 @@ class Layout:
         if len(data) < 64 or data[:8] != MAGIC:
             raise ValueError(f"{path}: not a brdfz runtime layout")
         version, _, size, count, _, kind, _ = struct.unpack_from("<IIQIIII", data, 8)
-        if version != 1:
-            raise ValueError(f"{path}: runtime layout version {version} (this reads 1)")
+        if version not in (1, 2):
+            raise ValueError(f"{path}: runtime layout version {version} (this reads 1 and 2)")
         self.kind = kind
         if kind not in GPU_KINDS:
             raise ValueError(f"{self.path}: the GPU shaders do not evaluate {KIND_NAMES.get(kind, kind)} layouts")
@@ -118,6 +118,7 @@ class Layout:
         for name, v in zip(("n_theta_h", "n_theta_d", "n_phi_d", "centre", "phi_d_axis", "lookup"), grid):
             d[name] = v
         d["theta_d_warp"] = self._array("WARP", "<f8")[0] if self._find("WARP") else 0.0
+        d["theta_h_warp"] = self._array("HWRP", "<f8")[0] if self._find("HWRP") else 0.0
         if kind == 1:
             if self._find("VF32"):
                 d["dtype"], d["values"] = 0, self._offset("VF32")

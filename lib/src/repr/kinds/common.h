@@ -15,6 +15,11 @@ namespace brdfz::kinds {
 
 inline const SpecKey kLookupKey{"lookup", "linear", "linear|nearest: interpolation of the stored grid"};
 inline const SpecKey kWarpKey{"dwarp", "0", "in [0, 0.95]: θd bins narrowing towards grazing (0: linear axis)"};
+inline const SpecKey kThetaHWarpKey{
+    "hwarp", "0",
+    "0|auto|D: the θh axis, square-root (0), or warped by a specular peak of scale D degrees (0.01-45), about half "
+    "its bins within D of the pole; auto: D three half widths of the source's own peak, the square-root axis when "
+    "it has none"};
 inline const SpecKey kSymmetryKey{"symmetry", "reciprocal",
                                   "reciprocal|none: φd over [0, π), a pair and its exchange sharing a bin (their mean), "
                                   "or over [0, 2π), non-reciprocal data kept"};
@@ -56,6 +61,15 @@ void note_tabulation(const Brdf& source, const Tabulated& t, Compressed& out);
 Lookup lookup_option(const ReprSpec& spec);
 // dwarp=W (GridSpec::theta_d_warp).
 double theta_d_warp_option(const ReprSpec& spec);
+// hwarp=auto's scale in peak half widths: chosen on the tune half of the shared RGL files
+// (bench/README.md, "Peak-warped θh axes").
+inline constexpr double kPeakHalfWidths = 3.0;
+// The source's specular peak: the median over θd of the θh at which the luminance, averaged over φd,
+// falls to half its maximum above its value at 30°; 0 when it has no peak there (a maximum not twice
+// that value: a matte material).
+double specular_peak_half_width(const Brdf& source);
+// hwarp=0|auto|D (GridSpec::theta_h_warp, radians), auto's choice for `source` said in `notes`.
+double theta_h_warp_option(const ReprSpec& spec, const Brdf& source, std::vector<std::string>& notes);
 // symmetry=reciprocal|none (GridSpec::symmetry), `fallback` when absent, for the kinds without the
 // bilateral fold: ValueError for symmetry=bilateral, saying `why_not` the kind has it.
 Symmetry symmetry_option(const ReprSpec& spec, const std::string& why_not, Symmetry fallback = Symmetry::Reciprocal);

@@ -49,6 +49,10 @@ Compressed build_factored(FactorMethod method, const Brdf& source, const ReprSpe
     const std::vector<int> res = spec.get_dims("res", {90, 90, 180});
     const double warp = theta_d_warp_option(spec);
     if (warp != 0.0 && !resample) throw ValueError(spec.kind() + ": dwarp= applies to the res= grid; give res= as well");
+    std::vector<std::string> notes;
+    const double h_warp = theta_h_warp_option(spec, source, notes);
+    if (h_warp != 0.0 && !resample)
+        throw ValueError(spec.kind() + ": hwarp= applies to the res= grid; give res= as well");
     if (lsq && !resample)
         throw ValueError(spec.kind() + ": fit=lsq fits the factors on the res= grid to the source; give res= as well");
     spec.finish();
@@ -57,7 +61,7 @@ Compressed build_factored(FactorMethod method, const Brdf& source, const ReprSpe
     const auto factor_on_grid = [&](const Brdf& from, Symmetry s, SamplerKind slice_sampler) {
         Compressed out;
         TabulateOptions tab;
-        tab.grid = GridSpec{res[0], res[1], res[2], BinPosition::Centre, warp, s};
+        tab.grid = GridSpec{res[0], res[1], res[2], BinPosition::Centre, warp, s, h_warp};
         tab.threads = options.threads;
         const Tabulated t = tabulate_noted(from, tab, out);
         FactorOptions slice_options = fo;
@@ -67,8 +71,12 @@ Compressed build_factored(FactorMethod method, const Brdf& source, const ReprSpe
         out.brdf = std::move(factored.brdf);
         return out;
     };
-    if (phih > 1) return build_phi_h(source, phih, parse_phi_h_symmetry(symmetry_text), sampler, factor_on_grid);
-    if (resample) return factor_on_grid(source, symmetry, sampler);
+    if (resample) {
+        Compressed out = phih > 1 ? build_phi_h(source, phih, parse_phi_h_symmetry(symmetry_text), sampler, factor_on_grid)
+                                  : factor_on_grid(source, symmetry, sampler);
+        out.notes.insert(out.notes.begin(), notes.begin(), notes.end());
+        return out;
+    }
     Compressed out;
     fo.sampler = sampler;
     Factored factored = factor(*table, fo);
@@ -93,6 +101,7 @@ std::vector<SpecKey> keys(const char* iterations) {
             {"iterations", iterations, "iteration cap of the factorisation"},
             {"res", "(a table source's own grid, else 90x90x180)", "bins θh x θd x φd the source is tabulated on"},
             kWarpKey,
+            kThetaHWarpKey,
             {"fit", "samples", "samples|lsq: factor the grid's samples, or refit through eval's interpolation (needs res)"},
             {"ss", "2", "fit=lsq: points per bin and axis, 1-16"},
             {"fit_iterations", "20", "fit=lsq: the refit's iteration cap"},

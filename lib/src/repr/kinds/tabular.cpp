@@ -60,13 +60,17 @@ Compressed build_tabular(const Brdf& source, const ReprSpec& spec, const Compres
     const int phih = spec.get_int("phih", 1, 1, PhiHBrdf::kMaxTableSlices);
     const std::string symmetry = phi_h_symmetry_option(spec);
     const SamplerKind sampler = sampler_option(spec);
+    std::vector<std::string> notes;
+    const double h_warp = theta_h_warp_option(spec, source, notes);
     spec.finish();
     const auto table = [&](const Brdf& from, Symmetry s, SamplerKind slice_sampler) {
-        return build_table(from, GridSpec{res[0], res[1], res[2], BinPosition::Centre, warp, s}, {ss, ss, ss}, filter,
-                           weight, dtype, lookup, slice_sampler, options);
+        return build_table(from, GridSpec{res[0], res[1], res[2], BinPosition::Centre, warp, s, h_warp}, {ss, ss, ss},
+                           filter, weight, dtype, lookup, slice_sampler, options);
     };
-    if (phih > 1) return build_phi_h(source, phih, parse_phi_h_symmetry(symmetry), sampler, table);
-    return table(source, parse_symmetry(symmetry), sampler);
+    Compressed out = phih > 1 ? build_phi_h(source, phih, parse_phi_h_symmetry(symmetry), sampler, table)
+                              : table(source, parse_symmetry(symmetry), sampler);
+    out.notes.insert(out.notes.begin(), notes.begin(), notes.end());
+    return out;
 }
 
 Compressed build_bivariate(const Brdf& source, const ReprSpec& spec, const CompressOptions& options) {
@@ -82,19 +86,23 @@ Compressed build_bivariate(const Brdf& source, const ReprSpec& spec, const Compr
     // symmetry=none only spreads its phi values over [0, 2π).
     const Symmetry symmetry = symmetry_option(spec, "a bivariate table averages φd away");
     const SamplerKind sampler = sampler_option(spec);
+    std::vector<std::string> notes;
+    const double h_warp = theta_h_warp_option(spec, source, notes);
     spec.finish();
-    return build_table(source, GridSpec{res[0], res[1], 1, BinPosition::Centre, warp, symmetry}, {ss, ss, phi}, filter,
-                       weight, dtype, lookup, sampler, options);
+    Compressed out = build_table(source, GridSpec{res[0], res[1], 1, BinPosition::Centre, warp, symmetry, h_warp},
+                                 {ss, ss, phi}, filter, weight, dtype, lookup, sampler, options);
+    out.notes.insert(out.notes.begin(), notes.begin(), notes.end());
+    return out;
 }
 
 }  // namespace
 
 void register_tabular(std::vector<ReprKind>& out) {
     out.push_back({"tabular",
-                   "a Rusinkiewicz (θh, θd, φd) table resampled on res, square-root θh axis",
+                   "a Rusinkiewicz (θh, θd, φd) table resampled on res, square-root θh axis (hwarp: warped by a peak)",
                    "",
                    {{"res", "90x90x180", "bins θh x θd x φd"}, kDtype, kLookupKey, kFilter, kSupersample, kWarpKey,
-                    kPhiHSymmetryKey, kPhiHKey, kWeightKey, kSamplerKey},
+                    kThetaHWarpKey, kPhiHSymmetryKey, kPhiHKey, kWeightKey, kSamplerKey},
                    build_tabular});
     out.push_back({"bivariate",
                    "a (θh, θd) table without the φd axis, the source averaged over phi values of φd",
@@ -106,6 +114,7 @@ void register_tabular(std::vector<ReprKind>& out) {
                     kFilter,
                     kSupersample,
                     kWarpKey,
+                    kThetaHWarpKey,
                     kSymmetryKey,
                     kWeightKey,
                     kSamplerKey},

@@ -9,7 +9,10 @@
 namespace brdfz::runtime::layout {
 
 constexpr unsigned char kMagic[8] = {0x89, 'B', 'Z', 'R', 'T', '\r', '\n', 0x1A};
-constexpr std::uint32_t kVersion = 1;
+// The newest version this runtime reads. A writer puts the lowest version whose sections a file uses
+// (2: HWRP), so that a version-1 reader still opens what it can read whole and refuses the rest by
+// number instead of misreading it.
+constexpr std::uint32_t kVersion = 2;
 constexpr std::uint32_t kHeaderBytes = 64;
 constexpr std::uint32_t kSectionBytes = 32;
 constexpr std::uint32_t kAlign = 64;
@@ -50,6 +53,7 @@ constexpr std::uint32_t kDesc = tag("DESC");  // u8[n]: what the material is, fo
 // Gridded kinds.
 constexpr std::uint32_t kGrid = tag("GRID");  // i32[6]: nθh, nθd, nφd, centre (1) or start (0), φd axis, lookup
 constexpr std::uint32_t kWarp = tag("WARP");  // f64[1]: θd warp
+constexpr std::uint32_t kThetaHWarp = tag("HWRP");  // f64[1]: θh warp (radians), only on a warped θh axis
 // Tables.
 constexpr std::uint32_t kValuesF32 = tag("VF32");  // f32[bins·3]
 constexpr std::uint32_t kValuesF16 = tag("VF16");  // f16[bins·3]

@@ -4,8 +4,9 @@
 // and brdfz::runtime call these same functions, so a lookup gives the same bits in both.
 //
 // The functions take any grid type G with the members of the core's GridSpec they read: int
-// n_theta_h, n_theta_d, n_phi_d; double theta_d_warp; sample_offset(), bilateral(), full_circle() and
-// index(ih, id, ip) (brdfz/table.h documents the axes; kernels::Grid below is the runtime's).
+// n_theta_h, n_theta_d, n_phi_d; double theta_h_warp, theta_d_warp; sample_offset(), bilateral(),
+// full_circle() and index(ih, id, ip) (brdfz/table.h documents the axes; kernels::Grid below is the
+// runtime's).
 #pragma once
 
 #include <cmath>
@@ -27,6 +28,7 @@ struct Grid {
     bool centre = true;  // samples at bin centres (else at bin starts)
     double theta_d_warp = 0.0;
     Axis phi_d_axis = Axis::Reciprocal;
+    double theta_h_warp = 0.0;
     double sample_offset() const { return centre ? 0.5 : 0.0; }
     bool bilateral() const { return phi_d_axis == Axis::Bilateral; }
     bool full_circle() const { return phi_d_axis == Axis::None; }
@@ -41,6 +43,16 @@ struct Grid {
 // matches its published lookup bit for bit).
 namespace axis {
 inline double theta_h_to_u(double theta_h, int n) { return theta_h <= 0.0 ? 0.0 : std::sqrt(theta_h / (kPi / 2.0) * n * n); }
+// The θh axis warped by a specular peak's scale s > 0 (radians): u/n = θh/(θh + s) · (π/2 + s)/(π/2), about
+// n/s bins per radian at the pole (the square-root axis: infinitely many at θh = 0, few a degree away);
+// s = 0 is the square-root axis.
+inline double warped_theta_h_to_u(double theta_h, int n, double s) {
+    return theta_h / (theta_h + s) * ((kPi / 2.0 + s) / (kPi / 2.0)) * n;
+}
+inline double theta_h_to_u(double theta_h, int n, double s) {
+    if (s == 0.0) return theta_h_to_u(theta_h, n);
+    return theta_h <= 0.0 ? 0.0 : warped_theta_h_to_u(theta_h, n, s);
+}
 inline double theta_d_to_u(double theta_d, int n) { return theta_d / (kPi * 0.5) * n; }
 // The warped θd axis, w in [0, 0.95]: u/n = (1 − w)·θd/(π/2) + w·(1 − cos θd); w = 0 is the linear axis.
 inline double theta_d_to_u(double theta_d, int n, double w) {
@@ -72,7 +84,8 @@ inline BinCoords bin_coords(const G& g, const Vec3& wi, const Vec3& wo) {
     const Vec3 h = half_vector(wi, wo);
     const Vec3 d = difference_vector(wi, half_frame(h));
     const double phi = std::atan2(d.y, d.x);
-    return {axis::theta_h_to_u(elevation(h), g.n_theta_h), axis::theta_d_to_u(elevation(d), g.n_theta_d, g.theta_d_warp),
+    return {axis::theta_h_to_u(elevation(h), g.n_theta_h, g.theta_h_warp),
+            axis::theta_d_to_u(elevation(d), g.n_theta_d, g.theta_d_warp),
             g.full_circle() ? axis::full_phi_d_to_u(phi, g.n_phi_d)
             : g.bilateral() ? axis::bilateral_phi_d_to_u(phi, g.n_phi_d)
                             : axis::phi_d_to_u(phi, g.n_phi_d)};
@@ -95,6 +108,15 @@ template <typename G>
     const double ud_linear = theta_d * (2.0 / kPi) * g.n_theta_d;
     const double ud_warped = ((1.0 - w) * theta_d * (2.0 / kPi) + w * (1.0 - cos_d)) * g.n_theta_d;
     return w == 0.0 ? ud_linear : ud_warped;
+}
+
+// θh's bin coordinate on the grid's axis: the warped axis a select, as θd's.
+template <typename G>
+[[gnu::always_inline]] inline double theta_h_coord(const G& g, double theta_h) {
+    const double s = g.theta_h_warp;
+    const double uh_root = std::sqrt(theta_h * (2.0 / kPi)) * g.n_theta_h;
+    const double uh_warped = axis::warped_theta_h_to_u(theta_h, g.n_theta_h, s);
+    return s == 0.0 ? uh_root : uh_warped;
 }
 
 // φd's bin coordinate from (y, x), d_y and d_x in any one positive scale: fast_half_turn_angle folds
@@ -125,7 +147,7 @@ template <typename G>
     const double up = phi_d_coord(g, -cr.z * len, s.z * (wi.x * s.x + wi.y * s.y) - wi.z * rxy2);
     constexpr double kMinSin = 1e-6;
     const bool sure = (rxy > kMinSin * len) & (sin_d > kMinSin * len);
-    return {std::sqrt(theta_h * (2.0 / kPi)) * g.n_theta_h, theta_d_coord(g, theta_d, dot(wi, s) / len),
+    return {theta_h_coord(g, theta_h), theta_d_coord(g, theta_d, dot(wi, s) / len),
             std::max(up, sure ? 0.0 : kIllConditioned)};
 }
 
