@@ -184,7 +184,7 @@ TEST_CASE("tables and factors on a warped θh axis: exact for data linear in its
     CHECK_THROWS_WITH(bad.validate(), Catch::Contains("theta_h warp"));
 }
 
-TEST_CASE("hwarp=auto: the source's own peak sets the warp; a matte source keeps the square-root axis", "[warp]") {
+TEST_CASE("hwarp=auto: the source's own peak sets the warp, a matte source keeps the square-root axis", "[warp]") {
     for (const double width : {0.4, 2.0}) {
         INFO("half width " << width << " deg");
         const Peak peak(200.0, width * kDeg);
