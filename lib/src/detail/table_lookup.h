@@ -206,7 +206,11 @@ template <bool Wide, typename Values>
         const Vec3* a = wi + start;
         const Vec3* b = wo + start;
         Rgb* o = out + start;
-        for (std::size_t k = 0; k < m; ++k) coords.set(k, fast_bin_coords(g, a[k], b[k]));
+        if (g.theta_h_warp == 0.0)
+            for (std::size_t k = 0; k < m; ++k)
+                coords.set(k, fast_bin_coords<runtime::kernels::ThetaHAxes::SquareRoot>(g, a[k], b[k]));
+        else
+            for (std::size_t k = 0; k < m; ++k) coords.set(k, fast_bin_coords(g, a[k], b[k]));
         for (std::size_t k = 0; k < m; ++k) above[k] = (a[k].z > 0.0) & (b[k].z > 0.0);
         for (std::size_t k = 0; k < m; ++k)
             if (!above[k]) o[k] = Rgb{};

@@ -78,7 +78,11 @@ template <int W, FactorLayout L, bool Grouped>
         const std::size_t m = std::min(kBlock, n - start);
         const Vec3* a = wi + start;
         const Vec3* b = wo + start;
-        for (std::size_t k = 0; k < m; ++k) coords[k] = detail::fast_bin_coords(g, a[k], b[k]);
+        if (g.theta_h_warp == 0.0)
+            for (std::size_t k = 0; k < m; ++k)
+                coords[k] = detail::fast_bin_coords<runtime::kernels::ThetaHAxes::SquareRoot>(g, a[k], b[k]);
+        else
+            for (std::size_t k = 0; k < m; ++k) coords[k] = detail::fast_bin_coords(g, a[k], b[k]);
         for (std::size_t k = 0; k < m; ++k) above[k] = (a[k].z > 0.0) & (b[k].z > 0.0);
         for (std::size_t k = 0; k < m; ++k)
             if (above[k] & !(coords[k].up <= g.n_phi_d)) [[unlikely]]  // kIllConditioned or NaN

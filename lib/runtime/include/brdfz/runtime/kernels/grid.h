@@ -133,8 +133,12 @@ template <typename G>
     return phi * (full ? 0.5 / kPi : 1.0 / kPi) * g.n_phi_d;
 }
 
+// The θh axes a coordinate loop handles: either, by a select per pair, or the square-root one alone, for
+// batch loops that make the choice once (the warped axis's division costs them a few per cent).
+enum class ThetaHAxes { Any, SquareRoot };
+
 // Always inlined: a call per pair would keep the callers' coordinate loops from vectorising.
-template <typename G>
+template <ThetaHAxes Axes = ThetaHAxes::Any, typename G>
 [[gnu::always_inline]] inline BinCoords fast_bin_coords(const G& g, const Vec3& wi, const Vec3& wo) {
     const Vec3 s = wi + wo;
     const double rxy2 = s.x * s.x + s.y * s.y;
@@ -147,7 +151,9 @@ template <typename G>
     const double up = phi_d_coord(g, -cr.z * len, s.z * (wi.x * s.x + wi.y * s.y) - wi.z * rxy2);
     constexpr double kMinSin = 1e-6;
     const bool sure = (rxy > kMinSin * len) & (sin_d > kMinSin * len);
-    return {theta_h_coord(g, theta_h), theta_d_coord(g, theta_d, dot(wi, s) / len),
+    const double uh =
+        Axes == ThetaHAxes::SquareRoot ? std::sqrt(theta_h * (2.0 / kPi)) * g.n_theta_h : theta_h_coord(g, theta_h);
+    return {uh, theta_d_coord(g, theta_d, dot(wi, s) / len),
             std::max(up, sure ? 0.0 : kIllConditioned)};
 }
 
