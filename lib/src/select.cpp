@@ -66,10 +66,9 @@ std::vector<std::string> default_candidates() {
         // At most Neural-BRDF's 2,700 B, for the error over directions.
         "svd:rank=4,space=log,colour=shared,layout=hd_p,res=20x14x32,fit=lsq,symmetry=none,dtype=f16",  // 2,544
         // Each of the three settings for RGL files over directions again on a θh axis warped by the source's
-        // own specular peak (hwarp=auto, its scale chosen on the tune half), after the square-root one: same
-        // bytes, so --auto takes the warped one only where the plain one misses the budget, and --max-bytes
-        // the closer of the two. The warp lowered the error on most files with a peak, on either half, but
-        // not on all (bench/README.md, "Peak-warped θh axes").
+        // own specular peak (hwarp=auto), after the square-root one: the warp helps most sources with a
+        // sharp peak but not every one, so both are tried. Same bytes, so --auto takes the warped one only
+        // where the plain one misses the budget, and --max-bytes the closer of the two.
         "svd:rank=4,space=log,colour=shared,layout=hd_p,res=20x14x32,fit=lsq,symmetry=none,dtype=f16,hwarp=auto",  // 2,544
         "bivariate:res=32x32,dtype=u8log",                  // 3,144
         // At most 4 KB, chosen among 14 settings on the tune half of the shared RGL files (acrylic_felt_white,

@@ -61,8 +61,8 @@ void note_tabulation(const Brdf& source, const Tabulated& t, Compressed& out);
 Lookup lookup_option(const ReprSpec& spec);
 // dwarp=W (GridSpec::theta_d_warp).
 double theta_d_warp_option(const ReprSpec& spec);
-// hwarp=auto's scale in peak half widths: chosen on the tune half of the shared RGL files
-// (bench/README.md, "Peak-warped θh axes").
+// hwarp=auto's scale in peak half widths: wide enough that the bins beyond the peak still follow the
+// lobe around it, narrow enough that the peak itself spans several bins.
 inline constexpr double kPeakHalfWidths = 3.0;
 // The source's specular peak: the median over θd of the θh at which the luminance, averaged over φd,
 // falls to half its maximum above its value at 30°; 0 when it has no peak there (a maximum not twice
