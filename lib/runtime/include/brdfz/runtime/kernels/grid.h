@@ -110,11 +110,16 @@ template <typename G>
     return w == 0.0 ? ud_linear : ud_warped;
 }
 
+// The θh axes a coordinate loop handles: either, by a select per pair, or the square-root one alone, for
+// batch loops that make the choice once (the warped axis's division costs them a few per cent).
+enum class ThetaHAxes { Any, SquareRoot };
+
 // θh's bin coordinate on the grid's axis: the warped axis a select, as θd's.
-template <typename G>
+template <ThetaHAxes Axes = ThetaHAxes::Any, typename G>
 [[gnu::always_inline]] inline double theta_h_coord(const G& g, double theta_h) {
-    const double s = g.theta_h_warp;
     const double uh_root = std::sqrt(theta_h * (2.0 / kPi)) * g.n_theta_h;
+    if constexpr (Axes == ThetaHAxes::SquareRoot) return uh_root;
+    const double s = g.theta_h_warp;
     const double uh_warped = axis::warped_theta_h_to_u(theta_h, g.n_theta_h, s);
     return s == 0.0 ? uh_root : uh_warped;
 }
@@ -133,10 +138,6 @@ template <typename G>
     return phi * (full ? 0.5 / kPi : 1.0 / kPi) * g.n_phi_d;
 }
 
-// The θh axes a coordinate loop handles: either, by a select per pair, or the square-root one alone, for
-// batch loops that make the choice once (the warped axis's division costs them a few per cent).
-enum class ThetaHAxes { Any, SquareRoot };
-
 // Always inlined: a call per pair would keep the callers' coordinate loops from vectorising.
 template <ThetaHAxes Axes = ThetaHAxes::Any, typename G>
 [[gnu::always_inline]] inline BinCoords fast_bin_coords(const G& g, const Vec3& wi, const Vec3& wo) {
@@ -151,9 +152,7 @@ template <ThetaHAxes Axes = ThetaHAxes::Any, typename G>
     const double up = phi_d_coord(g, -cr.z * len, s.z * (wi.x * s.x + wi.y * s.y) - wi.z * rxy2);
     constexpr double kMinSin = 1e-6;
     const bool sure = (rxy > kMinSin * len) & (sin_d > kMinSin * len);
-    const double uh =
-        Axes == ThetaHAxes::SquareRoot ? std::sqrt(theta_h * (2.0 / kPi)) * g.n_theta_h : theta_h_coord(g, theta_h);
-    return {uh, theta_d_coord(g, theta_d, dot(wi, s) / len),
+    return {theta_h_coord<Axes>(g, theta_h), theta_d_coord(g, theta_d, dot(wi, s) / len),
             std::max(up, sure ? 0.0 : kIllConditioned)};
 }
 
