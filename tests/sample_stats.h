@@ -227,7 +227,8 @@ struct Chi2Setting {
 };
 
 // At each of kThetaODeg: χ² of `samples` draws against the pdf (fails below p_min: callers Bonferroni-
-// correct it for the number of tests they run), ∫ pdf dωi = 1 ± 1% (on the χ² test's quadrature),
+// correct it for the number of tests they run), ∫ pdf dωi = the share of draws that succeed ± 1% (on the
+// χ² test's quadrature),
 // and the sample → pdf round trip with the weight f·cosθi/pdf.
 inline void check_sampler(const Brdf& b, std::size_t samples, double p_min = kViewsLevel, Chi2Setting chi2 = {}) {
     for (double deg : kThetaODeg) {
@@ -235,7 +236,9 @@ inline void check_sampler(const Brdf& b, std::size_t samples, double p_min = kVi
         const Vec3 wo = spherical_direction(deg * M_PI / 180, 0.4);
         const Chi2Result r = chi2_test(b, wo, samples, chi2.cells, 1, chi2.draws, chi2.points);
         CHECK(r.p_value > p_min);
-        CHECK(r.integral == Approx(1.0).margin(0.01));
+        // The probability that a draw succeeds: 1 for most samplers; an RGL file's reflects about microfacet
+        // normals, some of which send it below the horizon (formats/include/brdfz/formats/rgl.h).
+        CHECK(r.integral == Approx(1.0 - static_cast<double>(r.failed) / static_cast<double>(samples)).margin(0.01));
         std::mt19937_64 rng(7);
         std::uniform_real_distribution<double> u(0, 1);
         for (int k = 0; k < 1000; ++k) {
