@@ -6,9 +6,11 @@
 #include <cmath>
 #include <limits>
 #include <numbers>
+#include <utility>
 
 #include "brdfz/errors.h"
 #include "brdfz/formats/rgl.h"
+#include "brdfz/formats/rgl_svd.h"
 #include "brdfz/simd.h"
 #include "aniso.h"
 #include "kernels.h"
@@ -102,9 +104,15 @@ RglBrdf::RglBrdf(Tensors tensors) : tensors_(std::move(tensors)) {
     rgb_ = detail::slices_innermost(by_slice.data(), n_theta, 3 * plane);
 }
 
+RglBrdf::RglBrdf(Tensors tensors, std::shared_ptr<const SvdTensors> stored) : RglBrdf(std::move(tensors)) {
+    if (aniso_) throw ValueError("rgl_svd: isotropic materials only");
+    svd_ = std::move(stored);
+}
+
 RglBrdf::~RglBrdf() = default;
 
 std::size_t RglBrdf::nbytes() const {
+    if (svd_) return svd_->nbytes();
     const Tensors& t = tensors_;
     const std::size_t floats = t.phi_i.size() + t.theta_i.size() + t.ndf.values.size() + t.sigma.values.size() +
                                t.vndf.values.size() + t.luminance.values.size() + t.rgb.values.size();
@@ -115,7 +123,9 @@ std::string RglBrdf::describe() const {
     const Tensors& t = tensors_;
     const auto grid = [](const Grids& g) { return std::to_string(g.rows) + "x" + std::to_string(g.cols); };
     const std::string phi = aniso_ ? "anisotropic rgb " + std::to_string(t.phi_i.size()) + " phi_i x " : "isotropic rgb ";
-    return "rgl " + phi + std::to_string(t.theta_i.size()) + " theta_i x " + grid(t.rgb) + " (vndf " +
+    const std::string stored = svd_ ? "rgl_svd rank " + std::to_string(svd_->rank) + " (float16) of " + std::to_string(svd_->slices) +
+                                          " theta_i slices, expanded to " : "";
+    return stored + "rgl " + phi + std::to_string(t.theta_i.size()) + " theta_i x " + grid(t.rgb) + " (vndf " +
            grid(t.vndf) + ", ndf " + grid(t.ndf) + ", sigma " + grid(t.sigma) + (t.jacobian ? "" : ", no jacobian") +
            (luminance_ ? "" : ", no luminance") + "; Mitsuba 'measured' evaluation and sampling)";
 }

@@ -6,6 +6,9 @@
 #include "brdfz/compress.h"
 #include "brdfz/formats/pca_basis.h"
 #include "brdfz/formats/registry.h"
+#include "brdfz/formats/rgl.h"
+#include "brdfz/formats/rgl_svd.h"
+#include "brdfz/formats/rgl_writer.h"
 #include "brdfz/repr/analytic/model.h"
 #include "brdfz/repr/pca.h"
 #include "brdfz/tabulate.h"
@@ -22,6 +25,7 @@ AnalyticBrdf source() { return AnalyticBrdf("lambert+ggx", {0.3, 0.25, 0.2, 0.6,
 struct KindCase {
     const char* spec;
     bool reciprocal;
+    bool rgl_source = false;  // built from an RGL file's tensors of the source (the kinds that need one)
 };
 
 // One line per representation kind and setting worth its own check. A pca spec names its basis as
@@ -45,7 +49,21 @@ const KindCase kKinds[] = {
     {"svd:rank=2,res=16x16x16,symmetry=bilateral,dtype=f16", false},
     {"tabular:res=16x16x32,dtype=f16,hwarp=auto", true},
     {"svd:rank=2,space=cos,res=16x16x32,hwarp=4", true},
+    {"rgl_svd:rank=4", false, true},
 };
+
+// The source as an RGL-EPFL file holds it (formats/rgl_writer.h), shaped as those files are.
+const rgl::RglBrdf& rgl_source() {
+    static const rgl::RglBrdf file = [] {
+        rgl::WriteOptions shape;
+        shape.n_theta_i = 8;
+        shape.rgb_resolution = 32;
+        rgl::Tensors t = rgl::derive(source(), shape);
+        t.vndf = rgl::derived_vndf(t.theta_i, t.ndf, t.vndf.rows, t.vndf.cols);  // a measurement's (rgl_svd.h)
+        return rgl::RglBrdf(std::move(t));
+    }();
+    return file;
+}
 
 // A basis from a few variations of the source, written where the pca line can name it.
 std::string pca_basis(const fs::path& dir) {
@@ -72,7 +90,9 @@ TEST_CASE("conformance: every representation kind", "[conformance]") {
         std::string spec = c.spec;
         if (const std::size_t at = spec.find("BASIS"); at != std::string::npos) spec.replace(at, 5, basis);
         SECTION(c.spec) {
-            const Compressed built = compress(source(), spec, files);
+            const AnalyticBrdf analytic = source();
+            const Brdf& from = c.rgl_source ? static_cast<const Brdf&>(rgl_source()) : analytic;
+            const Compressed built = compress(from, spec, files);
             const Brdf& b = *built.brdf;
             test::check_conventions(b);
             if (c.reciprocal) test::check_reciprocity(b);
@@ -83,7 +103,7 @@ TEST_CASE("conformance: every representation kind", "[conformance]") {
             if (spec.find("lookup=nearest") != std::string::npos) reading.lookup = Lookup::Nearest;
             test::check_container_round_trip(b, reading);
             // A key the kind does not take is refused, not ignored.
-            CHECK_THROWS_WITH(compress(source(), spec + ",nosuchkey=1", files), Catch::Contains("unknown option(s) nosuchkey"));
+            CHECK_THROWS_WITH(compress(from, spec + ",nosuchkey=1", files), Catch::Contains("unknown option(s) nosuchkey"));
         }
     }
     // Every registered kind has a line.
@@ -106,6 +126,7 @@ TEST_CASE("conformance: every declared key is read by its kind's builder", "[con
             const std::string res = k.name == "bivariate" ? "8x8" : "8x8x16";
             spec += key.name + "=" + key.default_value + (key.name == "res" ? "" : ",res=" + res);
             if (k.name == "analytic") spec = "analytic:lambert," + key.name + "=" + key.default_value + ",starts=1";
+            if (k.name == "rgl_svd") spec = "rgl_svd:" + key.name + "=" + key.default_value;
             INFO(spec);
             try {
                 compress(source(), spec);

@@ -55,7 +55,7 @@ def test_representations_match_the_docs(cli):
     assert block, "docs/repr-specs.md lost its generated table"
     assert block.group(1) == table, "docs/repr-specs.md: paste `brdfz representations --markdown` into it"
     kinds = json.loads(run(cli, "representations", "--json").stdout)
-    assert {k["kind"] for k in kinds} == {"analytic", "bivariate", "nmf", "pca", "svd", "tabular"}
+    assert {k["kind"] for k in kinds} == {"analytic", "bivariate", "nmf", "pca", "rgl_svd", "svd", "tabular"}
     for k in kinds:
         assert k["summary"] and all(key["name"] and key["help"] and key["default"] for key in k["keys"])
         assert f"| `{k['kind']}` |" in table

@@ -170,7 +170,9 @@ def test_a_non_reciprocal_source_gets_candidates_that_keep_phi_d_whole(demo, rgl
     assert brdfz.reciprocity_error(rgl, directions=few).cos_rmse_rel.mean > 10 * brdfz.RECIPROCITY_THRESHOLD
     assert brdfz.is_reciprocal(demo, directions=few) and not brdfz.is_reciprocal(rgl, directions=few)
     plain = brdfz.default_candidates()
-    assert brdfz.default_candidates(demo, directions=few) == plain
+    # The rgl_svd ones are an RGL file's own: the demo's table leaves them out, the RGL file keeps them.
+    rgl_only = [c for c in plain if c.startswith("rgl_svd:")]
+    assert rgl_only and brdfz.default_candidates(demo, directions=few) == [c for c in plain if c not in rgl_only]
     whole = brdfz.default_candidates(rgl, directions=few)
     assert len(whole) == len(plain) and whole != plain
     for spec in whole:

@@ -19,7 +19,7 @@ const Feature kAnisotropic{"rgl.anisotropic", 4};
 
 std::vector<Feature> needs(const Brdf& brdf) {
     const auto* rgl = dynamic_cast<const rgl::RglBrdf*>(&brdf);
-    if (!rgl) return {};
+    if (!rgl || rgl->svd()) return {};  // the compact form is rgl_svd.cpp's
     if (rgl->tensors().phi_i.size() > 1) return {kRgl, kAnisotropic};
     return {kRgl};
 }

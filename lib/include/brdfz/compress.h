@@ -60,6 +60,9 @@ struct ReprKind {
     // Scattered measurements; nullptr when the kind needs a BRDF it can evaluate anywhere.
     Compressed (*build_measurements)(const MeasurementSet& source, const ReprSpec& spec,
                                      const CompressOptions& options) = nullptr;
+    // Whether the kind can be built from this source (rgl_svd: an RGL-EPFL material's own tensors);
+    // nullptr: from any. default_candidates(source) leaves out the kinds that cannot.
+    bool (*applies)(const Brdf& source) = nullptr;
 };
 
 // Every registered kind, in name order.

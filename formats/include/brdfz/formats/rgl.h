@@ -61,6 +61,7 @@ class Marginal2D;     // the VNDF and luminance warps, private to the reader (fo
 struct KernelTables;  // what the batch kernels read (formats/rgl/kernels.h)
 class Anisotropic;    // evaluation of files tabulated over φi too (formats/rgl/aniso.h)
 }
+struct SvdTensors;    // the compact stored form of the `rgl_svd` kind (rgl_svd.h)
 
 // `slices` tables of rows × cols float32 samples, row-major (column index fastest), as stored.
 struct Grids {
@@ -96,15 +97,20 @@ public:
     // no positive value, sampling uses the VNDF warp alone. check_renderable() holds the reader's
     // further rules.
     explicit RglBrdf(Tensors tensors);
+    // The tensors expanded from `stored` (rgl_svd.h: make_svd_brdf), which nbytes() counts and the
+    // container writes instead of the tensors.
+    RglBrdf(Tensors tensors, std::shared_ptr<const SvdTensors> stored);
     ~RglBrdf() override;
     RglBrdf(const RglBrdf&) = delete;
     RglBrdf& operator=(const RglBrdf&) = delete;
 
     const Tensors& tensors() const { return tensors_; }
+    // The compact form this material was expanded from; nullptr for a file's full tensors.
+    const SvdTensors* svd() const { return svd_.get(); }
 
     int channels() const override { return 3; }
-    // Bytes of the float32 tensors kept (theta_i, ndf, sigma, vndf, luminance, rgb); the derived
-    // warp tables are not counted.
+    // Bytes of the float32 tensors kept (theta_i, ndf, sigma, vndf, luminance, rgb), or of the compact
+    // form it was expanded from; the derived warp tables are not counted.
     std::size_t nbytes() const override;
     std::string describe() const override;
     // The largest θi of a slice below 90° (a slice at 90°, to float precision, pads the range: nothing
@@ -124,6 +130,7 @@ private:
     std::vector<float> rgb_;  // the rgb tensor in the kernels' layout (formats/rgl/kernels.h)
     std::unique_ptr<const detail::Anisotropic> aniso_;     // set for nφ >= 2, which then does all the work
     double measured_theta_max_;
+    std::shared_ptr<const SvdTensors> svd_;
 };
 
 struct ReadResult {

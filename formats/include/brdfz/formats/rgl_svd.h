@@ -1,0 +1,69 @@
+// An isotropic RGL-EPFL material kept in its own parameterisation, compactly (the `rgl_svd` kind,
+// docs/repr-specs.md): the file's grids are adapted to the material (its VNDF warp puts the RGB samples
+// where the measured microfacet distribution has its mass), so a sharp specular peak that a
+// Rusinkiewicz grid must resolve is already spread over the whole table. What is stored:
+//   - ndf and sigma as float16 scaled by a power of two (the largest value at most 2^15), one row of
+//     each when their rows are the same;
+//   - the rgb tensor's θi slices up to the first at or beyond 80° (the rest pad the range with copies
+//     of it) as a rank-K product in float16: rows (slice, channel, column x), columns the grid's rows y;
+//     the factorisation weighs each row by the solid angle and cosines its slice covers over θi < 80°
+//     and by the microfacet distribution at the column's θm (power `weight`), so the error falls
+//     where the metrics over directions and a renderer look;
+//   - theta_i and the jacobian flag.
+// What is derived when it is read: vndf from ndf (D(m)·max(0, wi·m) in the unit square's measure, as the
+// RGL-EPFL files' own are: the rgb samples lie where that warp puts them, so a file whose vndf is
+// otherwise, such as brdfz's RGL writer's, is refused) and the luminance tensor from rgb (Rec. 709 Y, as
+// the files compute it), so it samples as the file does.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <memory>
+#include <vector>
+
+#include "brdfz/formats/rgl.h"
+
+namespace brdfz::rgl {
+
+struct SvdTensors {
+    std::vector<float> theta_i;      // the file's, every slice
+    bool jacobian = true;
+    std::size_t ndf_rows = 0, ndf_cols = 0, sigma_rows = 0, sigma_cols = 0;
+    // float16 bits of value · 2^-exponent, rows × cols, or one row when every row is the same (an
+    // isotropic material's)
+    std::vector<std::uint16_t> ndf, sigma;
+    int ndf_exponent = 0, sigma_exponent = 0;
+    std::size_t vndf_rows = 0, vndf_cols = 0;
+    std::size_t slices = 0;          // θi slices factored; slices beyond repeat the last of them
+    std::size_t rows = 0, cols = 0;  // the rgb grid
+    std::size_t rank = 0;
+    std::vector<std::uint16_t> u;    // float16, (slice, channel, column) × rank, row-major
+    std::vector<std::uint16_t> v;    // float16, grid row × rank, row-major
+    bool luminance = true;           // derive a luminance tensor for sampling
+
+    // The stored bytes: every float16 value, theta_i as float32.
+    std::size_t nbytes() const;
+};
+
+inline constexpr std::size_t kMaxSvdRank = 64;
+
+// The vndf tensor an isotropic file's ndf implies, on the file's vndf grid (slices, rows, cols).
+Grids derived_vndf(const std::vector<float>& theta_i, const Grids& ndf, std::size_t rows, std::size_t cols);
+
+// Whether the file's vndf is, as a measurement's, the one its ndf implies: each slice as a density within
+// half its mean density of it (the shared RGL-EPFL files within 0.2, most within 1e-4; the warp brdfz's
+// writer chooses for its samples several times off). The metrics judge what the difference costs.
+bool vndf_is_derived(const Tensors& tensors);
+
+// ValueError for an anisotropic material, one whose vndf is not derived from its ndf, a rank outside [1, min(kMaxSvdRank, the factored matrix's
+// columns)] or a weight power outside [0, 4].
+SvdTensors factor(const Tensors& tensors, std::size_t rank, double weight_power);
+
+// The tensors an RglBrdf evaluates; ValueError for shapes that disagree (as read from a file, checked
+// before allocating).
+Tensors expand(const SvdTensors& stored);
+
+// An RglBrdf of expand(stored) that reports the stored bytes and keeps `stored` for the container.
+std::unique_ptr<RglBrdf> make_svd_brdf(SvdTensors stored);
+
+}  // namespace brdfz::rgl

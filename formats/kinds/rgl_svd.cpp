@@ -1,0 +1,43 @@
+// Kind `rgl_svd`: an isotropic RGL-EPFL material in its own parameterisation, its rgb tensor a
+// weighted low-rank product in float16 (brdfz/formats/rgl_svd.h).
+#include "brdfz/compress.h"
+#include "brdfz/errors.h"
+#include "brdfz/formats/rgl_svd.h"
+
+namespace brdfz::kinds {
+namespace {
+
+bool applies(const Brdf& source) {
+    const auto* file = dynamic_cast<const rgl::RglBrdf*>(&source);
+    return file && !file->svd() && rgl::vndf_is_derived(file->tensors());
+}
+
+Compressed build(const Brdf& source, const ReprSpec& spec, const CompressOptions&) {
+    const int rank = spec.get_int("rank", 9, 1, static_cast<int>(rgl::kMaxSvdRank));
+    const double weight = spec.get_double("weight", 1.0);
+    spec.finish();
+    if (!applies(source))
+        throw ValueError("rgl_svd: the source must be an isotropic RGL-EPFL measurement (a .bsdf file or its .brdfz "
+                         "conversion, its vndf derived from its ndf), not " + source.describe());
+    Compressed out;
+    const auto& file = dynamic_cast<const rgl::RglBrdf&>(source);
+    out.brdf = rgl::make_svd_brdf(rgl::factor(file.tensors(), static_cast<std::size_t>(rank), weight));
+    return out;
+}
+
+}  // namespace
+
+void register_rgl_svd(std::vector<ReprKind>& out) {
+    out.push_back({"rgl_svd",
+                   "an RGL-EPFL material in its own parameterisation (grids placed by its measured microfacet "
+                   "distribution), the rgb tensor a rank-K product in float16; RGL sources only",
+                   "",
+                   {{"rank", "9", "factor rank K, 1-64 (at most the rgb grid's rows)"},
+                    {"weight", "1", "in [0, 4]: the power of the microfacet distribution in the fit's weights (0: "
+                                    "solid angle and cosines only)"}},
+                   build,
+                   nullptr,
+                   applies});
+}
+
+}  // namespace brdfz::kinds
