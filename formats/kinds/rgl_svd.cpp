@@ -13,7 +13,7 @@ bool applies(const Brdf& source) {
 }
 
 Compressed build(const Brdf& source, const ReprSpec& spec, const CompressOptions&) {
-    const int rank = spec.get_int("rank", 9, 1, static_cast<int>(rgl::kMaxSvdRank));
+    const int rank = spec.get_int("rank", 22, 1, static_cast<int>(rgl::kMaxSvdRank));
     const double weight = spec.get_double("weight", 1.0);
     spec.finish();
     if (!applies(source))
@@ -32,7 +32,7 @@ void register_rgl_svd(std::vector<ReprKind>& out) {
                    "an RGL-EPFL material in its own parameterisation (grids placed by its measured microfacet "
                    "distribution), the rgb tensor a rank-K product in float16; RGL sources only",
                    "",
-                   {{"rank", "9", "factor rank K, 1-64 (at most the rgb grid's rows)"},
+                   {{"rank", "22", "factor rank K, 1-96 (at most 3 x the rgb grid's rows)"},
                     {"weight", "1", "in [0, 4]: the power of the microfacet distribution in the fit's weights (0: "
                                     "solid angle and cosines only)"}},
                    build,

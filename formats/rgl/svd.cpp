@@ -162,9 +162,9 @@ SvdTensors factor(const Tensors& t, std::size_t rank, double weight_power) {
         throw ValueError("rgl_svd: the material's vndf is not the one its ndf implies (an RGL-EPFL measurement's is), "
                          "so it cannot be derived when read");
     const std::size_t slices = slices_kept(t.theta_i);
-    const std::size_t rows = t.rgb.rows, cols = t.rgb.cols, m = slices * 3 * cols;
-    if (rank < 1 || rank > std::min({kMaxSvdRank, rows, m}))
-        throw ValueError("rgl_svd: rank must be in [1, " + std::to_string(std::min({kMaxSvdRank, rows, m})) + "]");
+    const std::size_t rows = t.rgb.rows, cols = t.rgb.cols, m = slices * cols, n = 3 * rows;
+    if (rank < 1 || rank > std::min({kMaxSvdRank, n, m}))
+        throw ValueError("rgl_svd: rank must be in [1, " + std::to_string(std::min({kMaxSvdRank, n, m})) + "]");
     SvdTensors s;
     s.theta_i = t.theta_i;
     s.jacobian = t.jacobian;
@@ -177,26 +177,26 @@ SvdTensors factor(const Tensors& t, std::size_t rank, double weight_power) {
     s.slices = slices, s.rows = rows, s.cols = cols, s.rank = rank;
     s.luminance = !t.luminance.values.empty();
 
-    // The weighted matrix: row (slice, channel, column x), column the grid row y.
+    // The weighted matrix: row (slice, column x), column (channel, grid row y).
     const std::vector<double> w = row_weights(t, slices, weight_power);
-    Eigen::MatrixXd a(m, rows);
+    Eigen::MatrixXd a(m, n);
     Eigen::VectorXd root(m);
     for (std::size_t i = 0; i < slices; ++i)
-        for (std::size_t c = 0; c < 3; ++c)
-            for (std::size_t x = 0; x < cols; ++x) {
-                const std::size_t row = (i * 3 + c) * cols + x;
-                root(row) = std::sqrt(w[i * cols + x]);
+        for (std::size_t x = 0; x < cols; ++x) {
+            const std::size_t row = i * cols + x;
+            root(row) = std::sqrt(w[row]);
+            for (std::size_t c = 0; c < 3; ++c)
                 for (std::size_t y = 0; y < rows; ++y)
-                    a(row, y) = root(row) * static_cast<double>(t.rgb.values[((i * 3 + c) * rows + y) * cols + x]);
-            }
+                    a(row, c * rows + y) = root(row) * static_cast<double>(t.rgb.values[((i * 3 + c) * rows + y) * cols + x]);
+        }
     const Eigen::BDCSVD<Eigen::MatrixXd> svd(a, Eigen::ComputeThinU | Eigen::ComputeThinV);
     s.u.resize(m * rank);
-    s.v.resize(rows * rank);
+    s.v.resize(n * rank);
     for (std::size_t row = 0; row < m; ++row)
         for (std::size_t k = 0; k < rank; ++k)
             s.u[row * rank + k] = half_from_float(static_cast<float>(svd.matrixU()(row, k) * svd.singularValues()(k) / root(row)));
-    for (std::size_t y = 0; y < rows; ++y)
-        for (std::size_t k = 0; k < rank; ++k) s.v[y * rank + k] = half_from_float(static_cast<float>(svd.matrixV()(y, k)));
+    for (std::size_t col = 0; col < n; ++col)
+        for (std::size_t k = 0; k < rank; ++k) s.v[col * rank + k] = half_from_float(static_cast<float>(svd.matrixV()(col, k)));
     return s;
 }
 
@@ -206,8 +206,8 @@ Tensors expand(const SvdTensors& s) {
     if (n < 1 || n > kMaxGridSide || !side(s.ndf_rows) || !side(s.ndf_cols) || !side(s.sigma_rows) || !side(s.sigma_cols) ||
         !side(s.vndf_rows) || !side(s.vndf_cols) || !side(s.rows) || !side(s.cols) || s.slices < 1 || s.slices > n ||
         s.rank < 1 || s.rank > kMaxSvdRank || (s.ndf.size() != s.ndf_rows * s.ndf_cols && s.ndf.size() != s.ndf_cols) ||
-        (s.sigma.size() != s.sigma_rows * s.sigma_cols && s.sigma.size() != s.sigma_cols) || s.u.size() != s.slices * 3 * s.cols * s.rank ||
-        s.v.size() != s.rows * s.rank || std::abs(s.ndf_exponent) > 200 || std::abs(s.sigma_exponent) > 200)
+        (s.sigma.size() != s.sigma_rows * s.sigma_cols && s.sigma.size() != s.sigma_cols) || s.u.size() != s.slices * s.cols * s.rank ||
+        s.v.size() != 3 * s.rows * s.rank || std::abs(s.ndf_exponent) > 200 || std::abs(s.sigma_exponent) > 200)
         throw ValueError("rgl_svd: inconsistent shapes");
     Tensors t;
     t.theta_i = s.theta_i;
@@ -227,8 +227,8 @@ Tensors expand(const SvdTensors& s) {
         for (std::size_t c = 0; c < 3; ++c)
             for (std::size_t y = 0; y < rows; ++y)
                 for (std::size_t x = 0; x < cols; ++x) {
-                    const float* a = &u[((from * 3 + c) * cols + x) * s.rank];
-                    const float* b = &v[y * s.rank];
+                    const float* a = &u[(from * cols + x) * s.rank];
+                    const float* b = &v[(c * rows + y) * s.rank];
                     double sum = 0;
                     for (std::size_t k = 0; k < s.rank; ++k) sum += static_cast<double>(a[k]) * b[k];
                     t.rgb.values[((i * 3 + c) * rows + y) * cols + x] = static_cast<float>(sum);

@@ -79,10 +79,12 @@ std::vector<std::string> default_candidates() {
         "svd:rank=6,space=cos,colour=shared,res=32x22x13,dwarp=0.9,fit=lsq,weight=solid,symmetry=bilateral,dtype=f16,hwarp=auto",  // 3,888
         // At most 16 KB for the error over directions (with the 14,560 B one below); the second with the
         // θh rows and rank of sharp specular spikes (chm_mint).
-        // RGL-EPFL files only, in their own parameterisation (sizes at their 8 θi slices to 80°; at 7, 8,992,
-        // 13,216 and 16,032): rank 6, the smallest within 2 % over directions on every file of the tune half
-        // (worst 1.27 %); ranks 9 and 11, the largest within 16 KB at 8 and at 7 slices.
-        "rgl_svd:rank=6",  // 10,144
+        // RGL-EPFL files only, in their own parameterisation (sizes at their 8 θi slices to 80°; at 7, 5,664,
+        // 8,224, 10,784 and 14,624): rank 8, the smallest within 2 % over directions on every file of the tune
+        // half (worst 1.60 %), a ladder up to rank 22, the largest within 16 KB at 8 slices.
+        "rgl_svd:rank=8",   // 6,176
+        "rgl_svd:rank=12",  // 8,992
+        "rgl_svd:rank=16",  // 11,808
         "svd:rank=10,space=cos,colour=shared,res=50x40x14,dwarp=0.9,fit=lsq,weight=solid,symmetry=bilateral,dtype=f16",  // 12,320
         "svd:rank=10,space=cos,colour=shared,res=50x40x14,dwarp=0.9,fit=lsq,weight=solid,symmetry=bilateral,dtype=f16,hwarp=auto",  // 12,320
         "svd:rank=14,space=cos,colour=shared,res=128x28x12,dwarp=0.9,fit=lsq,weight=solid,symmetry=bilateral,dtype=f16",  // 13,160
@@ -93,10 +95,9 @@ std::vector<std::string> default_candidates() {
         // f(wi, wo) and f(wo, wi), 1.5–9.7 % off; the same spec with symmetry=none is within 2 % on each.
         // default_candidates(source) keeps φd whole in this one and those below for such sources.
         "svd:rank=8,space=cos,colour=shared,res=64x48x18,dwarp=0.9,fit=lsq,dtype=f16",  // 14,944
-        "rgl_svd:rank=9",   // 14,944
+        "rgl_svd:rank=22",  // 16,032
         // Reciprocal sources, without a factorisation to build (on those four as the spec above).
         "tabular:res=24x28x8,dtype=u8log,filter=lsq,dwarp=0.8",  // 16,200
-        "rgl_svd:rank=11",  // 18,144
         "tabular:res=16x16x32,dtype=u8log",                 // 24,648
         "tabular:res=32x32x64,dtype=u8log",                 // 196,680
         "tabular:res=45x45x90,dtype=u8log",                 // 546,822

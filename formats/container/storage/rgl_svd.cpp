@@ -2,7 +2,7 @@
 // object keeps; the tensors it evaluates are expanded from it when it is read. Datasets: theta_i
 // (float32 [n]), ndf and sigma (float16 [rows, cols] or [1, cols], the one row repeated to the rows of
 // attributes ndf_shape and sigma_shape, times 2^ndf_exponent, 2^sigma_exponent), u (float16
-// [slices·3·cols, rank]) and v (float16 [rows, rank]); attributes jacobian and luminance (0 or 1),
+// [slices·cols, rank]) and v (float16 [3·rows, rank]); attributes jacobian and luminance (0 or 1),
 // slices, vndf_shape [rows, cols].
 #include <cmath>
 
@@ -35,8 +35,8 @@ void write(h5::WriteNode& rep, const Brdf& brdf) {
     rep.attr("sigma_shape", std::span<const std::uint64_t>(sigma_shape));
     rep.dataset("ndf", h5::DType::F16, {s.ndf.size() / s.ndf_cols, s.ndf_cols}, s.ndf.data());
     rep.dataset("sigma", h5::DType::F16, {s.sigma.size() / s.sigma_cols, s.sigma_cols}, s.sigma.data());
-    rep.dataset("u", h5::DType::F16, {s.slices * 3 * s.cols, s.rank}, s.u.data());
-    rep.dataset("v", h5::DType::F16, {s.rows, s.rank}, s.v.data());
+    rep.dataset("u", h5::DType::F16, {s.slices * s.cols, s.rank}, s.u.data());
+    rep.dataset("v", h5::DType::F16, {3 * s.rows, s.rank}, s.v.data());
 }
 
 // Bound on the values a dataset holds and on the expanded tensors' (floats).
@@ -80,10 +80,10 @@ std::unique_ptr<Brdf> read(const h5::ReadNode& rep, const ReadContext&) {
     const h5::Dataset theta = checked(rep, "theta_i", h5::DType::F32, 1), ndf = checked(rep, "ndf", h5::DType::F16, 2),
                       sigma = checked(rep, "sigma", h5::DType::F16, 2), u = checked(rep, "u", h5::DType::F16, 2),
                       v = checked(rep, "v", h5::DType::F16, 2);
-    s.rows = v.shape()[0], s.rank = v.shape()[1];
-    if (u.shape()[1] != s.rank || s.slices < 1 || u.shape()[0] % (3 * s.slices) != 0)
+    s.rank = v.shape()[1];
+    if (u.shape()[1] != s.rank || s.slices < 1 || u.shape()[0] % s.slices != 0 || v.shape()[0] % 3 != 0)
         throw FormatError(rep.file(), rep.path() + ": the factors' shapes disagree");
-    s.cols = u.shape()[0] / (3 * s.slices);
+    s.rows = v.shape()[0] / 3, s.cols = u.shape()[0] / s.slices;
     // The expansion's own checks bound every side before anything of the tensors' size is allocated.
     const std::uint64_t expanded = theta.count() * (s.vndf_rows * s.vndf_cols + 4 * s.rows * s.cols);
     if (s.rows > 4096 || s.cols > 4096 || expanded > kMaxValues)
@@ -113,8 +113,8 @@ std::unique_ptr<Brdf> read(const h5::ReadNode& rep, const ReadContext&) {
 
 void source_info(const Brdf& brdf, SourceInfo& info) {
     const rgl::SvdTensors& s = *dynamic_cast<const rgl::RglBrdf&>(brdf).svd();
-    info.dims = {s.slices * 3 * s.cols, s.rows, s.rank};
-    info.dims_of = "rgb tensor factors: rows (theta_i slice, channel, column) x columns (grid row), rank";
+    info.dims = {s.slices * s.cols, 3 * s.rows, s.rank};
+    info.dims_of = "rgb tensor factors: rows (theta_i slice, column) x columns (channel, grid row), rank";
     info.has_range = false;
 }
 

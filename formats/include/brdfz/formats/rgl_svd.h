@@ -5,10 +5,10 @@
 //   - ndf and sigma as float16 scaled by a power of two (the largest value at most 2^15), one row of
 //     each when their rows are the same;
 //   - the rgb tensor's θi slices up to the first at or beyond 80° (the rest pad the range with copies
-//     of it) as a rank-K product in float16: rows (slice, channel, column x), columns the grid's rows y;
-//     the factorisation weighs each row by the solid angle and cosines its slice covers over θi < 80°
-//     and by the microfacet distribution at the column's θm (power `weight`), so the error falls
-//     where the metrics over directions and a renderer look;
+//     of it) as a rank-K product in float16: rows (slice, column x), columns (channel, grid row y), so
+//     the channels share the slices' factors; the factorisation weighs each row by the solid angle and
+//     cosines its slice covers over θi < 80° and by the microfacet distribution at the column's θm
+//     (power `weight`), so the error falls where the metrics over directions and a renderer look;
 //   - theta_i and the jacobian flag.
 // What is derived when it is read: vndf from ndf (D(m)·max(0, wi·m) in the unit square's measure, as the
 // RGL-EPFL files' own are: the rgb samples lie where that warp puts them, so a file whose vndf is
@@ -37,15 +37,15 @@ struct SvdTensors {
     std::size_t slices = 0;          // θi slices factored; slices beyond repeat the last of them
     std::size_t rows = 0, cols = 0;  // the rgb grid
     std::size_t rank = 0;
-    std::vector<std::uint16_t> u;    // float16, (slice, channel, column) × rank, row-major
-    std::vector<std::uint16_t> v;    // float16, grid row × rank, row-major
+    std::vector<std::uint16_t> u;    // float16, (slice, column) × rank, row-major
+    std::vector<std::uint16_t> v;    // float16, (channel, grid row) × rank, row-major
     bool luminance = true;           // derive a luminance tensor for sampling
 
     // The stored bytes: every float16 value, theta_i as float32.
     std::size_t nbytes() const;
 };
 
-inline constexpr std::size_t kMaxSvdRank = 64;
+inline constexpr std::size_t kMaxSvdRank = 96;
 
 // The vndf tensor an isotropic file's ndf implies, on the file's vndf grid (slices, rows, cols).
 Grids derived_vndf(const std::vector<float>& theta_i, const Grids& ndf, std::size_t rows, std::size_t cols);
