@@ -50,6 +50,7 @@ hid_t half_type() {
 hid_t file_type(DType t) {
     switch (t) {
         case DType::U8: return H5T_STD_U8LE;
+        case DType::I8: return H5T_STD_I8LE;
         case DType::U16: return H5T_STD_U16LE;
         case DType::F16: return half_type();
         case DType::U32: return H5T_STD_U32LE;
@@ -130,6 +131,7 @@ void keep_compact(hid_t plist, bool links) {
 const char* dtype_name(DType t) {
     switch (t) {
         case DType::U8: return "uint8";
+        case DType::I8: return "int8";
         case DType::U16: return "uint16";
         case DType::U32: return "uint32";
         case DType::U64: return "uint64";
@@ -142,7 +144,7 @@ const char* dtype_name(DType t) {
 
 std::size_t dtype_size(DType t) {
     switch (t) {
-        case DType::U8: return 1;
+        case DType::U8: case DType::I8: return 1;
         case DType::U16: case DType::F16: return 2;
         case DType::U32: case DType::F32: return 4;
         case DType::U64: case DType::F64: return 8;
@@ -565,13 +567,13 @@ Dataset::Dataset(const Reader& reader, Id id, std::string path)
     Id s(H5Dget_space(id_.get()), &H5Sclose);
     if (t.get() < 0 || s.get() < 0) fail("cannot read the dataset's type and shape");
     bool known = false;
-    for (DType c : {DType::U8, DType::U16, DType::U32, DType::U64, DType::F16, DType::F32, DType::F64}) {
+    for (DType c : {DType::U8, DType::I8, DType::U16, DType::U32, DType::U64, DType::F16, DType::F32, DType::F64}) {
         if (H5Tequal(t.get(), file_type(c)) > 0) {
             type_ = c;
             known = true;
         }
     }
-    if (!known) fail("unsupported element type (expected little-endian uint8/16/32/64 or float16/32/64)");
+    if (!known) fail("unsupported element type (expected little-endian uint8/16/32/64, int8 or float16/32/64)");
     const int rank = H5Sget_simple_extent_ndims(s.get());
     if (rank < 1 || rank > 8) fail("unsupported rank " + std::to_string(rank));
     std::vector<hsize_t> dims(rank);

@@ -22,7 +22,7 @@
 
 namespace brdfz::container::h5 {
 
-enum class DType { U8, U16, U32, U64, F16, F32, F64 };  // F16: IEEE binary16, as h5py/numpy float16
+enum class DType { U8, I8, U16, U32, U64, F16, F32, F64 };  // F16: IEEE binary16, as h5py/numpy float16
 const char* dtype_name(DType t);
 std::size_t dtype_size(DType t);
 

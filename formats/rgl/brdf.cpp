@@ -123,7 +123,8 @@ std::string RglBrdf::describe() const {
     const Tensors& t = tensors_;
     const auto grid = [](const Grids& g) { return std::to_string(g.rows) + "x" + std::to_string(g.cols); };
     const std::string phi = aniso_ ? "anisotropic rgb " + std::to_string(t.phi_i.size()) + " phi_i x " : "isotropic rgb ";
-    const std::string stored = svd_ ? "rgl_svd rank " + std::to_string(svd_->rank) + " (float16) of " + std::to_string(svd_->slices) +
+    const std::string stored = svd_ ? "rgl_svd rank " + std::to_string(svd_->rank) +
+                                          (svd_->dtype == SvdDtype::I8 ? " (int8)" : " (float16)") + " of " + std::to_string(svd_->slices) +
                                           " theta_i slices, expanded to " : "";
     return stored + "rgl " + phi + std::to_string(t.theta_i.size()) + " theta_i x " + grid(t.rgb) + " (vndf " +
            grid(t.vndf) + ", ndf " + grid(t.ndf) + ", sigma " + grid(t.sigma) + (t.jacobian ? "" : ", no jacobian") +

@@ -31,6 +31,47 @@ std::vector<std::uint16_t> scaled_half(const std::vector<float>& values, int& ex
     return out;
 }
 
+// float16 bits of a matrix, row-major.
+std::vector<std::uint16_t> halves(const Eigen::MatrixXd& m) {
+    std::vector<std::uint16_t> out(static_cast<std::size_t>(m.size()));
+    for (Eigen::Index r = 0; r < m.rows(); ++r)
+        for (Eigen::Index c = 0; c < m.cols(); ++c) out[r * m.cols() + c] = half_from_float(static_cast<float>(m(r, c)));
+    return out;
+}
+
+// Int8 factors: codes of a matrix, row-major, in blocks of `block` rows, each block's column rounded
+// at its own step (its largest |value| / 127, itself stored as float16 bits of step·2^-exponent, the
+// exponent putting the largest step in (2^14, 2^15], within the ±200 a reader takes): step (row / block,
+// column).
+struct Codes {
+    std::vector<std::int8_t> codes;
+    std::vector<std::uint16_t> steps;
+    int exponent = 0;
+    float step(std::size_t block, std::size_t col, std::size_t cols) const {
+        return std::ldexp(half_to_float(steps[block * cols + col]), exponent);
+    }
+};
+
+Codes int8_codes(const Eigen::MatrixXd& m, Eigen::Index block) {
+    const Eigen::Index blocks = m.rows() / block, cols = m.cols();
+    Eigen::MatrixXd top(blocks, cols);
+    for (Eigen::Index b = 0; b < blocks; ++b)
+        for (Eigen::Index c = 0; c < cols; ++c) top(b, c) = m.block(b * block, c, block, 1).cwiseAbs().maxCoeff() / 127.0;
+    Codes out;
+    const double largest = top.maxCoeff();
+    out.exponent = largest > 0.0 ? std::clamp(static_cast<int>(std::ceil(std::log2(largest / 32768.0))), -200, 200) : 0;
+    out.steps.resize(static_cast<std::size_t>(top.size()));
+    out.codes.resize(static_cast<std::size_t>(m.size()));
+    for (Eigen::Index b = 0; b < blocks; ++b)
+        for (Eigen::Index c = 0; c < cols; ++c) {
+            out.steps[b * cols + c] = half_from_float(static_cast<float>(std::ldexp(top(b, c), -out.exponent)));
+            const double st = out.step(b, c, cols);
+            for (Eigen::Index r = b * block; r < (b + 1) * block; ++r)
+                out.codes[r * cols + c] = static_cast<std::int8_t>(st > 0.0 ? std::clamp(std::round(m(r, c) / st), -127.0, 127.0) : 0.0);
+        }
+    return out;
+}
+
 // The first row alone when every row is the same.
 void one_row_if_uniform(std::vector<std::uint16_t>& bits, std::size_t rows, std::size_t cols) {
     for (std::size_t r = 1; r < rows; ++r)
@@ -152,10 +193,11 @@ bool vndf_is_derived(const Tensors& t) {
 }
 
 std::size_t SvdTensors::nbytes() const {
-    return sizeof(float) * theta_i.size() + 2 * (ndf.size() + sigma.size() + u.size() + v.size());
+    return sizeof(float) * theta_i.size() + 2 * (ndf.size() + sigma.size() + u.size() + v.size() + u_scale.size() + v_scale.size()) +
+           u8.size() + v8.size();
 }
 
-SvdTensors factor(const Tensors& t, std::size_t rank, double weight_power) {
+SvdTensors factor(const Tensors& t, std::size_t rank, double weight_power, SvdDtype dtype) {
     if (t.phi_i.size() > 1) throw ValueError("rgl_svd: an anisotropic RGL material (tabulated over phi_i) is not supported");
     if (!(weight_power >= 0.0 && weight_power <= 4.0)) throw ValueError("rgl_svd: weight must be in [0, 4]");
     if (!vndf_is_derived(t))
@@ -190,13 +232,24 @@ SvdTensors factor(const Tensors& t, std::size_t rank, double weight_power) {
                     a(row, c * rows + y) = root(row) * static_cast<double>(t.rgb.values[((i * 3 + c) * rows + y) * cols + x]);
         }
     const Eigen::BDCSVD<Eigen::MatrixXd> svd(a, Eigen::ComputeThinU | Eigen::ComputeThinV);
-    s.u.resize(m * rank);
-    s.v.resize(n * rank);
-    for (std::size_t row = 0; row < m; ++row)
-        for (std::size_t k = 0; k < rank; ++k)
-            s.u[row * rank + k] = half_from_float(static_cast<float>(svd.matrixU()(row, k) * svd.singularValues()(k) / root(row)));
-    for (std::size_t col = 0; col < n; ++col)
-        for (std::size_t k = 0; k < rank; ++k) s.v[col * rank + k] = half_from_float(static_cast<float>(svd.matrixV()(col, k)));
+    const auto k = static_cast<Eigen::Index>(rank);
+    const Eigen::MatrixXd u = root.cwiseInverse().asDiagonal() * svd.matrixU().leftCols(k) * svd.singularValues().head(k).asDiagonal();
+    s.dtype = dtype;
+    if (dtype == SvdDtype::F16) {
+        s.u = halves(u);
+        s.v = halves(svd.matrixV().leftCols(k));
+        return s;
+    }
+    // int8: u rounded first, then v the weighted least-squares fit to u's rounded values, so that the
+    // product makes up for much of u's rounding.
+    Codes cu = int8_codes(u, static_cast<Eigen::Index>(cols));
+    Eigen::MatrixXd rounded(m, k);
+    for (Eigen::Index r = 0; r < rounded.rows(); ++r)
+        for (Eigen::Index j = 0; j < k; ++j) rounded(r, j) = cu.codes[r * k + j] * static_cast<double>(cu.step(r / cols, j, rank));
+    const Eigen::MatrixXd v = (root.asDiagonal() * rounded).completeOrthogonalDecomposition().solve(a).transpose();
+    Codes cv = int8_codes(v, static_cast<Eigen::Index>(rows));
+    s.u8 = std::move(cu.codes), s.u_scale = std::move(cu.steps), s.u_scale_exponent = cu.exponent;
+    s.v8 = std::move(cv.codes), s.v_scale = std::move(cv.steps), s.v_scale_exponent = cv.exponent;
     return s;
 }
 
@@ -206,9 +259,18 @@ Tensors expand(const SvdTensors& s) {
     if (n < 1 || n > kMaxGridSide || !side(s.ndf_rows) || !side(s.ndf_cols) || !side(s.sigma_rows) || !side(s.sigma_cols) ||
         !side(s.vndf_rows) || !side(s.vndf_cols) || !side(s.rows) || !side(s.cols) || s.slices < 1 || s.slices > n ||
         s.rank < 1 || s.rank > kMaxSvdRank || (s.ndf.size() != s.ndf_rows * s.ndf_cols && s.ndf.size() != s.ndf_cols) ||
-        (s.sigma.size() != s.sigma_rows * s.sigma_cols && s.sigma.size() != s.sigma_cols) || s.u.size() != s.slices * s.cols * s.rank ||
-        s.v.size() != 3 * s.rows * s.rank || std::abs(s.ndf_exponent) > 200 || std::abs(s.sigma_exponent) > 200)
+        (s.sigma.size() != s.sigma_rows * s.sigma_cols && s.sigma.size() != s.sigma_cols) || std::abs(s.ndf_exponent) > 200 ||
+        std::abs(s.sigma_exponent) > 200 || std::abs(s.u_scale_exponent) > 200 || std::abs(s.v_scale_exponent) > 200)
         throw ValueError("rgl_svd: inconsistent shapes");
+    const bool f16 = s.dtype == SvdDtype::F16;
+    const std::size_t u_size = f16 ? s.u.size() : s.u8.size(), v_size = f16 ? s.v.size() : s.v8.size();
+    if (u_size != s.slices * s.cols * s.rank || v_size != 3 * s.rows * s.rank ||
+        (f16 ? !s.u8.empty() || !s.v8.empty() || !s.u_scale.empty() || !s.v_scale.empty()
+             : !s.u.empty() || !s.v.empty() || s.u_scale.size() != s.slices * s.rank || s.v_scale.size() != 3 * s.rank))
+        throw ValueError("rgl_svd: inconsistent factor shapes");
+    for (const auto* steps : {&s.u_scale, &s.v_scale})
+        for (std::uint16_t h : *steps)
+            if (!std::isfinite(half_to_float(h)) || half_to_float(h) < 0.0f) throw ValueError("rgl_svd: a factor's step is not a finite value >= 0");
     Tensors t;
     t.theta_i = s.theta_i;
     t.jacobian = s.jacobian;
@@ -219,9 +281,23 @@ Tensors expand(const SvdTensors& s) {
 
     const std::size_t rows = s.rows, cols = s.cols, plane = rows * cols;
     t.rgb = {3 * n, rows, cols, std::vector<float>(3 * n * plane)};
-    std::vector<float> u(s.u.size()), v(s.v.size());
-    std::transform(s.u.begin(), s.u.end(), u.begin(), half_to_float);
-    std::transform(s.v.begin(), s.v.end(), v.begin(), half_to_float);
+    std::vector<float> u(u_size), v(v_size);
+    if (f16) {
+        std::transform(s.u.begin(), s.u.end(), u.begin(), half_to_float);
+        std::transform(s.v.begin(), s.v.end(), v.begin(), half_to_float);
+    } else {
+        const auto value = [&](std::int8_t code, std::uint16_t step, int exponent) {
+            return static_cast<float>(code) * std::ldexp(half_to_float(step), exponent);
+        };
+        for (std::size_t i = 0; i < u.size(); ++i)
+            u[i] = value(s.u8[i], s.u_scale[(i / s.rank / cols) * s.rank + i % s.rank], s.u_scale_exponent);
+        for (std::size_t i = 0; i < v.size(); ++i)
+            v[i] = value(s.v8[i], s.v_scale[(i / s.rank / rows) * s.rank + i % s.rank], s.v_scale_exponent);
+        // Bounded so that no sum of rank products leaves float's range.
+        for (const auto* f : {&u, &v})
+            for (float x : *f)
+                if (!(std::fabs(x) <= 1e17f)) throw ValueError("rgl_svd: a factor's value is beyond 1e17");
+    }
     for (std::size_t i = 0; i < n; ++i) {
         const std::size_t from = std::min(i, s.slices - 1);
         for (std::size_t c = 0; c < 3; ++c)

@@ -50,6 +50,7 @@ const KindCase kKinds[] = {
     {"tabular:res=16x16x32,dtype=f16,hwarp=auto", true},
     {"svd:rank=2,space=cos,res=16x16x32,hwarp=4", true},
     {"rgl_svd:rank=4", false, true},
+    {"rgl_svd:rank=4,dtype=i8", false, true},
 };
 
 // The source as an RGL-EPFL file holds it (formats/rgl_writer.h), shaped as those files are.

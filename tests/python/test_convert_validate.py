@@ -92,13 +92,13 @@ def test_info_shows_container_metadata(cli, demo_table, tmp_path):
         "format": "merl",
         "sha256": hashlib.sha256(demo_table.read_bytes()).hexdigest(),
     }
-    # Written by a version-8 writer; a float32 table needs only version-1 features.
-    assert c["version"] == 8 and c["min_reader_version"] == 1
+    # Written by a version-9 writer; a float32 table needs only version-1 features.
+    assert c["version"] == 9 and c["min_reader_version"] == 1
     assert "tabular" in [f.split("@")[0] for f in c["features"]]
     assert c["units"] == "1/sr" and c["cosine"] == "excluded"
     assert c["datasets"][0]["path"] == "/representation/values"
     text = run(cli, "info", out).stdout
-    assert "container  version 8 (readers >= 1)" in text and "sha256" in text and "dataset    /representation/values" in text
+    assert "container  version 9 (readers >= 1)" in text and "sha256" in text and "dataset    /representation/values" in text
 
 
 @pytest.mark.parametrize("ext", ALL_FORMATS + [".json"])

@@ -2,8 +2,10 @@
 // object keeps; the tensors it evaluates are expanded from it when it is read. Datasets: theta_i
 // (float32 [n]), ndf and sigma (float16 [rows, cols] or [1, cols], the one row repeated to the rows of
 // attributes ndf_shape and sigma_shape, times 2^ndf_exponent, 2^sigma_exponent), u (float16
-// [slices·cols, rank]) and v (float16 [3·rows, rank]); attributes jacobian and luminance (0 or 1),
-// slices, vndf_shape [rows, cols].
+// [slices·cols, rank]) and v (float16 [3·rows, rank]), or u and v as int8 times steps u_scale (float16
+// [slices, rank]: each slice's in each factor, times 2^u_scale_exponent) and v_scale (float16 [3, rank]:
+// each channel's, times 2^v_scale_exponent);
+// attributes jacobian and luminance (0 or 1), slices, vndf_shape [rows, cols].
 #include <cmath>
 
 #include "brdfz/errors.h"
@@ -14,10 +16,13 @@ namespace brdfz::container::detail {
 namespace {
 
 const Feature kRglSvd{"rgl.svd", 8};
+const Feature kInt8{"rgl.svd.int8", 9};
 
 std::vector<Feature> needs(const Brdf& brdf) {
     const auto* rgl = dynamic_cast<const rgl::RglBrdf*>(&brdf);
-    return rgl && rgl->svd() ? std::vector<Feature>{kRglSvd} : std::vector<Feature>{};
+    if (!rgl || !rgl->svd()) return {};
+    if (rgl->svd()->dtype == rgl::SvdDtype::I8) return {kRglSvd, kInt8};
+    return {kRglSvd};
 }
 
 void write(h5::WriteNode& rep, const Brdf& brdf) {
@@ -35,8 +40,17 @@ void write(h5::WriteNode& rep, const Brdf& brdf) {
     rep.attr("sigma_shape", std::span<const std::uint64_t>(sigma_shape));
     rep.dataset("ndf", h5::DType::F16, {s.ndf.size() / s.ndf_cols, s.ndf_cols}, s.ndf.data());
     rep.dataset("sigma", h5::DType::F16, {s.sigma.size() / s.sigma_cols, s.sigma_cols}, s.sigma.data());
-    rep.dataset("u", h5::DType::F16, {s.slices * s.cols, s.rank}, s.u.data());
-    rep.dataset("v", h5::DType::F16, {3 * s.rows, s.rank}, s.v.data());
+    if (s.dtype == rgl::SvdDtype::F16) {
+        rep.dataset("u", h5::DType::F16, {s.slices * s.cols, s.rank}, s.u.data());
+        rep.dataset("v", h5::DType::F16, {3 * s.rows, s.rank}, s.v.data());
+    } else {
+        rep.dataset("u", h5::DType::I8, {s.slices * s.cols, s.rank}, s.u8.data());
+        rep.dataset("v", h5::DType::I8, {3 * s.rows, s.rank}, s.v8.data());
+        rep.dataset("u_scale", h5::DType::F16, {s.slices, s.rank}, s.u_scale.data());
+        rep.dataset("v_scale", h5::DType::F16, {3, s.rank}, s.v_scale.data());
+        rep.attr("u_scale_exponent", static_cast<double>(s.u_scale_exponent));
+        rep.attr("v_scale_exponent", static_cast<double>(s.v_scale_exponent));
+    }
 }
 
 // Bound on the values a dataset holds and on the expanded tensors' (floats).
@@ -77,10 +91,23 @@ std::unique_ptr<Brdf> read(const h5::ReadNode& rep, const ReadContext&) {
     s.slices = rep.u64("slices");
     s.ndf_exponent = exponent(rep, "ndf_exponent");
     s.sigma_exponent = exponent(rep, "sigma_exponent");
+    s.dtype = rep.dataset("u").type() == h5::DType::I8 ? rgl::SvdDtype::I8 : rgl::SvdDtype::F16;
+    const h5::DType factor_type = s.dtype == rgl::SvdDtype::I8 ? h5::DType::I8 : h5::DType::F16;
     const h5::Dataset theta = checked(rep, "theta_i", h5::DType::F32, 1), ndf = checked(rep, "ndf", h5::DType::F16, 2),
-                      sigma = checked(rep, "sigma", h5::DType::F16, 2), u = checked(rep, "u", h5::DType::F16, 2),
-                      v = checked(rep, "v", h5::DType::F16, 2);
+                      sigma = checked(rep, "sigma", h5::DType::F16, 2), u = checked(rep, "u", factor_type, 2),
+                      v = checked(rep, "v", factor_type, 2);
     s.rank = v.shape()[1];
+    if (s.dtype == rgl::SvdDtype::I8) {
+        const h5::Dataset us = checked(rep, "u_scale", h5::DType::F16, 2), vs = checked(rep, "v_scale", h5::DType::F16, 2);
+        s.u_scale_exponent = exponent(rep, "u_scale_exponent");
+        s.v_scale_exponent = exponent(rep, "v_scale_exponent");
+        if (us.shape()[0] != s.slices || us.shape()[1] != s.rank || vs.shape()[0] != 3 || vs.shape()[1] != s.rank)
+            throw FormatError(rep.file(), rep.path() + ": the factors' shapes disagree");
+        s.u_scale.resize(us.count());
+        us.read(s.u_scale.data());
+        s.v_scale.resize(vs.count());
+        vs.read(s.v_scale.data());
+    }
     if (u.shape()[1] != s.rank || s.slices < 1 || u.shape()[0] % s.slices != 0 || v.shape()[0] % 3 != 0)
         throw FormatError(rep.file(), rep.path() + ": the factors' shapes disagree");
     s.rows = v.shape()[0] / 3, s.cols = u.shape()[0] / s.slices;
@@ -94,10 +121,17 @@ std::unique_ptr<Brdf> read(const h5::ReadNode& rep, const ReadContext&) {
     ndf.read(s.ndf.data());
     s.sigma.resize(sigma.count());
     sigma.read(s.sigma.data());
-    s.u.resize(u.count());
-    u.read(s.u.data());
-    s.v.resize(v.count());
-    v.read(s.v.data());
+    if (s.dtype == rgl::SvdDtype::I8) {
+        s.u8.resize(u.count());
+        u.read(s.u8.data());
+        s.v8.resize(v.count());
+        v.read(s.v8.data());
+    } else {
+        s.u.resize(u.count());
+        u.read(s.u.data());
+        s.v.resize(v.count());
+        v.read(s.v.data());
+    }
     for (std::size_t i = 0; i < s.theta_i.size(); ++i)
         if (!std::isfinite(s.theta_i[i]) || s.theta_i[i] < 0.0f || s.theta_i[i] > 1.6f ||
             (i > 0 && !(s.theta_i[i] > s.theta_i[i - 1])))
@@ -121,7 +155,7 @@ void source_info(const Brdf& brdf, SourceInfo& info) {
 }  // namespace
 
 void register_rgl_svd(std::vector<const StorageModule*>& out) {
-    static const StorageModule m{"rgl_svd", {kRglSvd}, &needs, &write, &read, &source_info};
+    static const StorageModule m{"rgl_svd", {kRglSvd, kInt8}, &needs, &write, &read, &source_info};
     out.push_back(&m);
 }
 

@@ -23,7 +23,7 @@
 namespace brdfz::container {
 
 // The container version this library writes, and the newest it reads.
-inline constexpr std::uint32_t kVersion = 8;
+inline constexpr std::uint32_t kVersion = 9;
 
 // A feature a file uses and the container version that introduced it.
 struct Feature {

@@ -5,7 +5,9 @@
 //   - ndf and sigma as float16 scaled by a power of two (the largest value at most 2^15), one row of
 //     each when their rows are the same;
 //   - the rgb tensor's θi slices up to the first at or beyond 80° (the rest pad the range with copies
-//     of it) as a rank-K product in float16: rows (slice, column x), columns (channel, grid row y), so
+//     of it) as a rank-K product in float16, or in int8 with a step per block of 32 codes (about half
+//     the bytes; the second factor refitted to the first's rounded values): rows (slice, column x),
+//     columns (channel, grid row y), so
 //     the channels share the slices' factors; the factorisation weighs each row by the solid angle and
 //     cosines its slice covers over θi < 80° and by the microfacet distribution at the column's θm
 //     (power `weight`), so the error falls where the metrics over directions and a renderer look;
@@ -25,7 +27,11 @@
 
 namespace brdfz::rgl {
 
+// How the factors are stored.
+enum class SvdDtype { F16, I8 };
+
 struct SvdTensors {
+    using Dtype = SvdDtype;
     std::vector<float> theta_i;      // the file's, every slice
     bool jacobian = true;
     std::size_t ndf_rows = 0, ndf_cols = 0, sigma_rows = 0, sigma_cols = 0;
@@ -37,11 +43,17 @@ struct SvdTensors {
     std::size_t slices = 0;          // θi slices factored; slices beyond repeat the last of them
     std::size_t rows = 0, cols = 0;  // the rgb grid
     std::size_t rank = 0;
-    std::vector<std::uint16_t> u;    // float16, (slice, column) × rank, row-major
-    std::vector<std::uint16_t> v;    // float16, (channel, grid row) × rank, row-major
+    // The factors, (slice, column) × rank and (channel, grid row) × rank, row-major: float16 bits in u
+    // and v, or int8 codes in u8 and v8 times a step per block and factor: u's per slice (u_scale,
+    // slices × rank), v's per channel (v_scale, 3 × rank), float16 bits of step·2^-exponent.
+    Dtype dtype = Dtype::F16;
+    std::vector<std::uint16_t> u, v;
+    std::vector<std::int8_t> u8, v8;
+    std::vector<std::uint16_t> u_scale, v_scale;
+    int u_scale_exponent = 0, v_scale_exponent = 0;
     bool luminance = true;           // derive a luminance tensor for sampling
 
-    // The stored bytes: every float16 value, theta_i as float32.
+    // The stored bytes: every float16 and int8 value, theta_i as float32.
     std::size_t nbytes() const;
 };
 
@@ -57,7 +69,7 @@ bool vndf_is_derived(const Tensors& tensors);
 
 // ValueError for an anisotropic material, one whose vndf is not derived from its ndf, a rank outside [1, min(kMaxSvdRank, the factored matrix's
 // columns)] or a weight power outside [0, 4].
-SvdTensors factor(const Tensors& tensors, std::size_t rank, double weight_power);
+SvdTensors factor(const Tensors& tensors, std::size_t rank, double weight_power, SvdDtype dtype = SvdDtype::F16);
 
 // The tensors an RglBrdf evaluates; ValueError for shapes that disagree (as read from a file, checked
 // before allocating).
