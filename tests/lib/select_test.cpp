@@ -263,7 +263,7 @@ TEST_CASE("a source above the reciprocity threshold gets candidates that keep ph
     CHECK_FALSE(is_reciprocal(skewed, few_directions()));
     // Neither is an RGL file, whose own parameterisation the rgl_svd candidates need.
     std::vector<std::string> plain = default_candidates();
-    CHECK(std::erase_if(plain, [](const std::string& s) { return s.rfind("rgl_svd:", 0) == 0; }) == 4);
+    CHECK(std::erase_if(plain, [](const std::string& s) { return s.rfind("rgl_svd:", 0) == 0; }) == 8);
     CHECK(default_candidates(reciprocal, few_directions()) == plain);
 
     const std::vector<std::string> whole = default_candidates(skewed, few_directions());
