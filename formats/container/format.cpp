@@ -1,6 +1,7 @@
 // The .brdfz container (brdfz/formats/container.h, formats/SPEC.md) in the format registry.
 #include "brdfz/formats/container.h"
 #include "brdfz/formats/registry.h"
+#include "brdfz/formats/rgl_svd.h"
 #include "brdfz/formats/rgl_writer.h"
 #include "brdfz/repr/analytic/coated_diffuse.h"
 #include "brdfz/repr/tabular.h"
@@ -47,6 +48,11 @@ void examples(const std::string& dir) {
     w.rgb_resolution = 4;
     w.ndf_resolution = 4;
     container::write(dir + "/rgl.brdfz", rgl::RglBrdf(rgl::derive(CoatedDiffuse(), w)));
+    // rgl_svd's compact forms, of tensors whose vndf is their ndf's, as a measurement's is.
+    rgl::Tensors measured = rgl::derive(CoatedDiffuse(), w);
+    measured.vndf = rgl::derived_vndf(measured.theta_i, measured.ndf, measured.vndf.rows, measured.vndf.cols);
+    container::write(dir + "/rgl_svd.brdfz", *rgl::make_svd_brdf(rgl::factor(measured, 8, 1.0)));
+    container::write(dir + "/rgl_svd_i8.brdfz", *rgl::make_svd_brdf(rgl::factor(measured, 8, 1.0, rgl::SvdDtype::I8)));
 }
 
 }  // namespace

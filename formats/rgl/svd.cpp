@@ -2,6 +2,7 @@
 #include <Eigen/Dense>
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <numbers>
 #include <string>
 #include <utility>
@@ -218,6 +219,11 @@ SvdTensors factor(const Tensors& t, std::size_t rank, double weight_power, SvdDt
     s.vndf_rows = t.vndf.rows, s.vndf_cols = t.vndf.cols;
     s.slices = slices, s.rows = rows, s.cols = cols, s.rank = rank;
     s.luminance = !t.luminance.values.empty();
+    for (std::size_t c = 0; c < 3; ++c) {
+        s.floor[c] = std::numeric_limits<float>::infinity();
+        for (std::size_t i = 0; i < slices; ++i)
+            for (std::size_t p = 0; p < rows * cols; ++p) s.floor[c] = std::min(s.floor[c], t.rgb.values[(i * 3 + c) * rows * cols + p]);
+    }
 
     // The weighted matrix: row (slice, column x), column (channel, grid row y).
     const std::vector<double> w = row_weights(t, slices, weight_power);
@@ -268,6 +274,8 @@ Tensors expand(const SvdTensors& s) {
         (f16 ? !s.u8.empty() || !s.v8.empty() || !s.u_scale.empty() || !s.v_scale.empty()
              : !s.u.empty() || !s.v.empty() || s.u_scale.size() != s.slices * s.rank || s.v_scale.size() != 3 * s.rank))
         throw ValueError("rgl_svd: inconsistent factor shapes");
+    for (float f : s.floor)
+        if (std::isnan(f) || f == std::numeric_limits<float>::infinity()) throw ValueError("rgl_svd: a channel's floor is NaN or +infinity");
     for (const auto* steps : {&s.u_scale, &s.v_scale})
         for (std::uint16_t h : *steps)
             if (!std::isfinite(half_to_float(h)) || half_to_float(h) < 0.0f) throw ValueError("rgl_svd: a factor's step is not a finite value >= 0");
@@ -307,7 +315,7 @@ Tensors expand(const SvdTensors& s) {
                     const float* b = &v[(c * rows + y) * s.rank];
                     double sum = 0;
                     for (std::size_t k = 0; k < s.rank; ++k) sum += static_cast<double>(a[k]) * b[k];
-                    t.rgb.values[((i * 3 + c) * rows + y) * cols + x] = static_cast<float>(sum);
+                    t.rgb.values[((i * 3 + c) * rows + y) * cols + x] = std::max(static_cast<float>(sum), s.floor[c]);
                 }
     }
     if (s.luminance) {

@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
+#include <limits>
 
 #include "brdfz/compress.h"
 #include "brdfz/errors.h"
@@ -101,15 +102,47 @@ TEST_CASE("rgl_svd: round trip through .brdfz, the stored bytes alone", "[rgl_sv
         REQUIRE(m.svd());
         CHECK(m.nbytes() == c.brdf->nbytes());
         CHECK(std::filesystem::file_size(path) < 4 * c.brdf->nbytes() + 16384);  // not the expanded tensors
-        // int8 factors need a reader of the version that added them.
-        const bool i8 = m.svd()->dtype == rgl::SvdDtype::I8;
-        CHECK(container::read(path).meta.min_reader_version == (i8 ? 9u : 8u));
+        // The floor per channel (and int8 factors) need a reader of the version that added them.
+        CHECK(container::read(path).meta.min_reader_version == 9u);
         for (double t = 0.05; t < 1.5; t += 0.1) {
             const Vec3 wi{std::sin(t), 0.0, std::cos(t)}, wo{-0.6 * std::sin(t), 0.3, std::sqrt(1 - 0.45 * std::sin(t) * std::sin(t))};
             const Rgb a = c.brdf->eval(wi, wo), b = m.eval(wi, wo);
             CHECK(a == b);
         }
     }
+}
+
+TEST_CASE("rgl_svd: the product is not below the source's least value per channel", "[rgl_svd][rgl][container]") {
+    const rgl::RglBrdf file(file_tensors(glossy()));
+    rgl::SvdTensors s = rgl::factor(file.tensors(), 2, 1.0, rgl::SvdDtype::I8);
+    const std::size_t plane = s.rows * s.cols;
+    for (std::size_t c = 0; c < 3; ++c) {
+        float least = 1e30f;
+        for (std::size_t i = 0; i < s.slices; ++i)
+            for (std::size_t p = 0; p < plane; ++p) least = std::min(least, file.tensors().rgb.values[(i * 3 + c) * plane + p]);
+        CHECK(s.floor[c] == least);
+    }
+    const auto below = [&](const rgl::Tensors& t) {
+        std::size_t n = 0;
+        for (std::size_t i = 0; i < t.rgb.values.size(); ++i) n += t.rgb.values[i] < s.floor[(i / plane) % 3];
+        return n;
+    };
+    CHECK(below(rgl::expand(s)) == 0);
+    // Without it (as a file of container version 8 is read) rank 2 undershoots.
+    rgl::SvdTensors unfloored = s;
+    unfloored.floor.fill(-std::numeric_limits<float>::infinity());
+    CHECK(below(rgl::expand(unfloored)) > 0);
+    // Such a file needs only version 8, and reads back unclamped.
+    test::TempDir dir;
+    const std::string path = (dir.path / "v8.brdfz").string();
+    unfloored = rgl::factor(file.tensors(), 2, 1.0);
+    unfloored.floor.fill(-std::numeric_limits<float>::infinity());
+    save(*rgl::make_svd_brdf(unfloored), path);
+    CHECK(container::read(path).meta.min_reader_version == 8u);
+    const auto& back = dynamic_cast<const rgl::RglBrdf&>(*load(path).brdf);
+    CHECK(back.tensors().rgb.values == rgl::expand(unfloored).rgb.values);
+    s.floor[1] = std::numeric_limits<float>::quiet_NaN();
+    CHECK_THROWS_WITH(rgl::expand(s), Catch::Contains("floor"));
 }
 
 TEST_CASE("rgl_svd: sources and settings it cannot take are refused with a reason", "[rgl_svd][rgl]") {

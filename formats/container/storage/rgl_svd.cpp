@@ -5,7 +5,8 @@
 // [slices·cols, rank]) and v (float16 [3·rows, rank]), or u and v as int8 times steps u_scale (float16
 // [slices, rank]: each slice's in each factor, times 2^u_scale_exponent) and v_scale (float16 [3, rank]:
 // each channel's, times 2^v_scale_exponent);
-// attributes jacobian and luminance (0 or 1), slices, vndf_shape [rows, cols].
+// attributes jacobian and luminance (0 or 1), slices, vndf_shape [rows, cols], and rgb_floor [3] (each
+// channel's least value, feature rgl.svd.floor; absent in files of container version 8: no floor).
 #include <cmath>
 
 #include "brdfz/errors.h"
@@ -17,12 +18,16 @@ namespace {
 
 const Feature kRglSvd{"rgl.svd", 8};
 const Feature kInt8{"rgl.svd.int8", 9};
+const Feature kFloor{"rgl.svd.floor", 9};
 
 std::vector<Feature> needs(const Brdf& brdf) {
     const auto* rgl = dynamic_cast<const rgl::RglBrdf*>(&brdf);
     if (!rgl || !rgl->svd()) return {};
-    if (rgl->svd()->dtype == rgl::SvdDtype::I8) return {kRglSvd, kInt8};
-    return {kRglSvd};
+    const rgl::SvdTensors& s = *rgl->svd();
+    std::vector<Feature> out{kRglSvd};
+    if (s.dtype == rgl::SvdDtype::I8) out.push_back(kInt8);
+    if (std::isfinite(s.floor[0]) || std::isfinite(s.floor[1]) || std::isfinite(s.floor[2])) out.push_back(kFloor);
+    return out;
 }
 
 void write(h5::WriteNode& rep, const Brdf& brdf) {
@@ -34,6 +39,10 @@ void write(h5::WriteNode& rep, const Brdf& brdf) {
     rep.attr("vndf_shape", std::span<const std::uint64_t>(vndf_shape));
     rep.attr("ndf_exponent", static_cast<double>(s.ndf_exponent));
     rep.attr("sigma_exponent", static_cast<double>(s.sigma_exponent));
+    if (std::isfinite(s.floor[0]) || std::isfinite(s.floor[1]) || std::isfinite(s.floor[2])) {
+        const double floor[] = {s.floor[0], s.floor[1], s.floor[2]};
+        rep.attr("rgb_floor", std::span<const double>(floor));
+    }
     rep.dataset("theta_i", h5::DType::F32, {s.theta_i.size()}, s.theta_i.data());
     const std::uint64_t ndf_shape[] = {s.ndf_rows, s.ndf_cols}, sigma_shape[] = {s.sigma_rows, s.sigma_cols};
     rep.attr("ndf_shape", std::span<const std::uint64_t>(ndf_shape));
@@ -89,6 +98,14 @@ std::unique_ptr<Brdf> read(const h5::ReadNode& rep, const ReadContext&) {
     shape("ndf_shape", s.ndf_rows, s.ndf_cols);
     shape("sigma_shape", s.sigma_rows, s.sigma_cols);
     s.slices = rep.u64("slices");
+    if (rep.has_attr("rgb_floor")) {
+        const std::vector<double> floor = rep.f64s("rgb_floor");
+        if (floor.size() != 3) throw FormatError(rep.file(), rep.path() + ": attribute 'rgb_floor' is not three values");
+        for (std::size_t c = 0; c < 3; ++c) {
+            if (!(std::fabs(floor[c]) <= 3e38)) throw FormatError(rep.file(), rep.path() + ": attribute 'rgb_floor' is not finite");
+            s.floor[c] = static_cast<float>(floor[c]);
+        }
+    }
     s.ndf_exponent = exponent(rep, "ndf_exponent");
     s.sigma_exponent = exponent(rep, "sigma_exponent");
     s.dtype = rep.dataset("u").type() == h5::DType::I8 ? rgl::SvdDtype::I8 : rgl::SvdDtype::F16;
@@ -155,7 +172,7 @@ void source_info(const Brdf& brdf, SourceInfo& info) {
 }  // namespace
 
 void register_rgl_svd(std::vector<const StorageModule*>& out) {
-    static const StorageModule m{"rgl_svd", {kRglSvd, kInt8}, &needs, &write, &read, &source_info};
+    static const StorageModule m{"rgl_svd", {kRglSvd, kInt8, kFloor}, &needs, &write, &read, &source_info};
     out.push_back(&m);
 }
 

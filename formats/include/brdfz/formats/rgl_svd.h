@@ -12,14 +12,18 @@
 //     cosines its slice covers over θi < 80° and by the microfacet distribution at the column's θm
 //     (power `weight`), so the error falls where the metrics over directions and a renderer look;
 //   - theta_i and the jacobian flag.
+//   - each channel's smallest value in the file's rgb, which the product is clamped to (the files hold
+//     negative values, reproduced as Mitsuba does; a low-rank product undershoots below the rest);
 // What is derived when it is read: vndf from ndf (D(m)·max(0, wi·m) in the unit square's measure, as the
 // RGL-EPFL files' own are: the rgb samples lie where that warp puts them, so a file whose vndf is
 // otherwise, such as brdfz's RGL writer's, is refused) and the luminance tensor from rgb (Rec. 709 Y, as
 // the files compute it), so it samples as the file does.
 #pragma once
 
+#include <array>
 #include <cstddef>
 #include <cstdint>
+#include <limits>
 #include <memory>
 #include <vector>
 
@@ -52,6 +56,10 @@ struct SvdTensors {
     std::vector<std::uint16_t> u_scale, v_scale;
     int u_scale_exponent = 0, v_scale_exponent = 0;
     bool luminance = true;           // derive a luminance tensor for sampling
+    // Per channel, the least value the expanded rgb takes (-infinity: no floor, as files of container
+    // version 8 are read).
+    std::array<float, 3> floor{-std::numeric_limits<float>::infinity(), -std::numeric_limits<float>::infinity(),
+                               -std::numeric_limits<float>::infinity()};
 
     // The stored bytes: every float16 and int8 value, theta_i as float32.
     std::size_t nbytes() const;
