@@ -6,6 +6,7 @@
 #include <cmath>
 #include <filesystem>
 #include <limits>
+#include <optional>
 
 #include "brdfz/compress.h"
 #include "brdfz/errors.h"
@@ -188,15 +189,39 @@ TEST_CASE("rgl_svd: sources and settings it cannot take are refused with a reaso
     CHECK_THROWS_WITH(rgl::expand(s), Catch::Contains("beyond"));
 }
 
-TEST_CASE("rgl_svd holds chm_mint's sharp peak within 2 % over directions at 16 KB", "[rgl_svd][rgl]") {
-    const std::filesystem::path path = test::rgl_file("chm_mint");
+namespace {
+
+// A shared RGL file, or nothing (with a warning) where ../shared is missing.
+std::optional<Loaded> shared_file(const char* name) {
+    const std::filesystem::path path = test::rgl_file(name);
     if (!std::filesystem::exists(path)) {
         WARN("skipped: " << path << " is missing (../shared/data)");
-        return;
+        return std::nullopt;
     }
-    const Loaded loaded = load(path.string());
+    return load(path.string());
+}
+
+// `spec` of the file within `max_bytes` and 2 % over directions, and less than half the error of the svd
+// setting of about its size.
+void check_against_svd(const Loaded& file, const std::string& spec, std::size_t max_bytes, const std::string& svd_spec) {
+    MetricOptions m;
+    m.over = Over::Directions;
+    const Compressed c = compress(*file.brdf, spec);
+    CHECK(c.brdf->nbytes() <= max_bytes);
+    const double error = compare(*file.brdf, *c.brdf, m).cos_rmse_rel.mean;
+    const double svd = compare(*file.brdf, *compress(*file.brdf, svd_spec).brdf, m).cos_rmse_rel.mean;
+    INFO(spec << ", " << c.brdf->nbytes() << " B: " << error << ", the svd " << svd);
+    CHECK(error < 0.02);
+    CHECK(svd > 2 * error);
+}
+
+}  // namespace
+
+TEST_CASE("rgl_svd holds chm_mint's sharp peak within 2 % over directions at 16 KB", "[rgl_svd][rgl]") {
+    const std::optional<Loaded> loaded = shared_file("chm_mint");
+    if (!loaded) return;
     // The vndf and luminance tensors it derives are the file's own (D·cos of ndf; Y of rgb), to float16's rounding.
-    const rgl::Tensors& t = dynamic_cast<const rgl::RglBrdf&>(*loaded.brdf).tensors();
+    const rgl::Tensors& t = dynamic_cast<const rgl::RglBrdf&>(*loaded->brdf).tensors();
     CHECK(rgl::vndf_is_derived(t));
     const rgl::Tensors e = rgl::expand(rgl::factor(t, 96, 1.0));
     REQUIRE(e.luminance.values.size() == t.luminance.values.size());
@@ -204,33 +229,15 @@ TEST_CASE("rgl_svd holds chm_mint's sharp peak within 2 % over directions at 16 
     for (std::size_t i = 0; i < t.luminance.values.size(); ++i)
         top = std::max(top, std::abs(t.luminance.values[i])), worst = std::max(worst, std::abs(e.luminance.values[i] - t.luminance.values[i]));
     CHECK(worst < 2e-3f * top);
-    MetricOptions m;
-    m.over = Over::Directions;
-    const Compressed c = compress(*loaded.brdf, "rgl_svd:rank=22");
-    CHECK(c.brdf->nbytes() <= 16384);
-    const double error = compare(*loaded.brdf, *c.brdf, m).cos_rmse_rel.mean;
     // The best svd at that size is near 5 %.
-    const double svd = compare(*loaded.brdf, *compress(*loaded.brdf, "svd:rank=14,space=cos,colour=shared,res=128x28x12,dwarp=0.9,symmetry=bilateral,dtype=f16").brdf, m).cos_rmse_rel.mean;
-    INFO(c.brdf->nbytes() << " B: " << error << ", the svd " << svd);
-    CHECK(error < 0.02);
-    CHECK(svd > 2 * error);
+    check_against_svd(*loaded, "rgl_svd:rank=22", 16384,
+                      "svd:rank=14,space=cos,colour=shared,res=128x28x12,dwarp=0.9,symmetry=bilateral,dtype=f16");
 }
 
 TEST_CASE("rgl_svd in int8 holds leaf_maple within 2 % over directions in 4 KB", "[rgl_svd][rgl]") {
-    const std::filesystem::path path = test::rgl_file("leaf_maple");
-    if (!std::filesystem::exists(path)) {
-        WARN("skipped: " << path << " is missing (../shared/data)");
-        return;
-    }
-    const Loaded loaded = load(path.string());
-    MetricOptions m;
-    m.over = Over::Directions;
-    const Compressed c = compress(*loaded.brdf, "rgl_svd:rank=9,dtype=i8");
-    CHECK(c.brdf->nbytes() <= 4000);
-    const double error = compare(*loaded.brdf, *c.brdf, m).cos_rmse_rel.mean;
+    const std::optional<Loaded> loaded = shared_file("leaf_maple");
+    if (!loaded) return;
     // The svd candidate of that size (3,888 B).
-    const double svd = compare(*loaded.brdf, *compress(*loaded.brdf, "svd:rank=6,space=cos,colour=shared,res=32x22x13,dwarp=0.9,fit=lsq,weight=solid,symmetry=bilateral,dtype=f16").brdf, m).cos_rmse_rel.mean;
-    INFO(c.brdf->nbytes() << " B: " << error << ", the svd " << svd);
-    CHECK(error < 0.02);
-    CHECK(svd > 2 * error);
+    check_against_svd(*loaded, "rgl_svd:rank=9,dtype=i8", 4000,
+                      "svd:rank=6,space=cos,colour=shared,res=32x22x13,dwarp=0.9,fit=lsq,weight=solid,symmetry=bilateral,dtype=f16");
 }
