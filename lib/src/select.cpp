@@ -76,7 +76,7 @@ std::vector<std::string> default_candidates() {
         // where the plain one misses the budget, and --max-bytes the closer of the two.
         "svd:rank=4,space=log,colour=shared,layout=hd_p,res=20x14x32,fit=lsq,symmetry=none,dtype=f16,hwarp=auto",  // 2,544
         "bivariate:res=32x32,dtype=u8log",                  // 3,144
-        // rgl_svd: rank 8, the smallest within 2 % on every tune file (worst 1.62 %).
+        // rgl_svd: rank 8, the smallest within 2 % on every tune file (worst 1.61 %).
         "rgl_svd:rank=8,dtype=i8",  // 3,536
         // At most 4 KB, chosen among 14 settings on the tune half of the shared RGL files (acrylic_felt_white,
         // cardboard, cc_nothern_aurora, colodur_azure_4e, irid_flake_paint2, paper_white, satin_rosaline) by
