@@ -140,8 +140,8 @@ TEST_CASE("rgl_svd: the product is not below the source's least value per channe
     unfloored.floor.fill(-std::numeric_limits<float>::infinity());
     save(*rgl::make_svd_brdf(unfloored), path);
     CHECK(container::read(path).meta.min_reader_version == 8u);
-    const auto& back = dynamic_cast<const rgl::RglBrdf&>(*load(path).brdf);
-    CHECK(back.tensors().rgb.values == rgl::expand(unfloored).rgb.values);
+    const Loaded loaded = load(path);
+    CHECK(dynamic_cast<const rgl::RglBrdf&>(*loaded.brdf).tensors().rgb.values == rgl::expand(unfloored).rgb.values);
     s.floor[1] = std::numeric_limits<float>::quiet_NaN();
     CHECK_THROWS_WITH(rgl::expand(s), Catch::Contains("floor"));
 }
