@@ -26,7 +26,7 @@ std::vector<Feature> needs(const Brdf& brdf) {
     const rgl::SvdTensors& s = *rgl->svd();
     std::vector<Feature> out{kRglSvd};
     if (s.dtype == rgl::SvdDtype::I8) out.push_back(kInt8);
-    if (std::isfinite(s.floor[0]) || std::isfinite(s.floor[1]) || std::isfinite(s.floor[2])) out.push_back(kFloor);
+    if (s.has_floor()) out.push_back(kFloor);
     return out;
 }
 
@@ -39,7 +39,7 @@ void write(h5::WriteNode& rep, const Brdf& brdf) {
     rep.attr("vndf_shape", std::span<const std::uint64_t>(vndf_shape));
     rep.attr("ndf_exponent", static_cast<double>(s.ndf_exponent));
     rep.attr("sigma_exponent", static_cast<double>(s.sigma_exponent));
-    if (std::isfinite(s.floor[0]) || std::isfinite(s.floor[1]) || std::isfinite(s.floor[2])) {
+    if (s.has_floor()) {
         const double floor[] = {s.floor[0], s.floor[1], s.floor[2]};
         rep.attr("rgb_floor", std::span<const double>(floor));
     }

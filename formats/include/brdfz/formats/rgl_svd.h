@@ -21,6 +21,7 @@
 #pragma once
 
 #include <array>
+#include <cmath>
 #include <cstddef>
 #include <cstdint>
 #include <limits>
@@ -60,6 +61,8 @@ struct SvdTensors {
     // version 8 are read).
     std::array<float, 3> floor{-std::numeric_limits<float>::infinity(), -std::numeric_limits<float>::infinity(),
                                -std::numeric_limits<float>::infinity()};
+
+    bool has_floor() const { return std::isfinite(floor[0]) || std::isfinite(floor[1]) || std::isfinite(floor[2]); }
 
     // The stored bytes: every float16 and int8 value, theta_i as float32.
     std::size_t nbytes() const;
