@@ -19,9 +19,11 @@ inline std::vector<detail::Simd> simd_levels() {
 }
 
 inline const char* simd_label(detail::Simd s) {
-    if (s == detail::Simd::Avx512) return "AVX-512";
-    if (s == detail::Simd::Avx2Fma) return "AVX2";
-    return BRDFZ_X86 ? "SSE2" : "baseline";
+#if BRDFZ_X86
+    return s == detail::Simd::Avx512 ? "AVX-512" : s == detail::Simd::Avx2Fma ? "AVX2" : "SSE2";
+#else
+    return s == detail::Simd::Sve2 ? "SVE2" : s == detail::Simd::Sve ? "SVE" : "baseline";
+#endif
 }
 
 // Caps the level for its scope; no cap again on exit.

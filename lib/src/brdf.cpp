@@ -13,17 +13,14 @@ namespace brdfz {
 Simd simd_level() { return detail::simd_level(); }
 
 const char* simd_name() {
-    switch (detail::simd_level()) {
-        case detail::Simd::Avx512: return "avx512";
-        case detail::Simd::Avx2Fma: return "avx2";
+    const detail::Simd level = detail::simd_level();
 #if BRDFZ_X86
-        default: return "sse2";
+    return level == detail::Simd::Avx512 ? "avx512" : level == detail::Simd::Avx2Fma ? "avx2" : "sse2";
 #elif defined(__aarch64__)
-        default: return "neon";
+    return level == detail::Simd::Sve2 ? "sve2" : level == detail::Simd::Sve ? "sve" : "neon";
 #else
-        default: return "baseline";
+    return "baseline";
 #endif
-    }
 }
 
 namespace {

@@ -8,7 +8,7 @@ namespace brdfz {
 // The widest build the CPU runs, chosen at run time; a kernel without a build at that width runs its
 // next narrower one.
 Simd simd_level();
-// "avx512", "avx2" or "sse2" on x86-64, "neon" on ARM64: simd_level()'s name.
+// "avx512", "avx2" or "sse2" on x86-64, "sve2", "sve" or "neon" on ARM64: simd_level()'s name.
 const char* simd_name();
 
 }  // namespace brdfz

@@ -3,11 +3,16 @@
 // by Builds below, in a [[gnu::flatten]] function carrying that level's attribute; build_for picks the
 // wrapper for the level the CPU allows, at run time.
 //
-// Only x86-64 has levels beyond its baseline (SSE2): AVX2 and AVX-512. Elsewhere (ARM64, whose baseline
-// has NEON) every kernel runs its baseline build and the attributes name no instruction set.
+// Only x86-64 has levels beyond its baseline (SSE2) for these builds: AVX2 and AVX-512. Elsewhere (ARM64,
+// whose baseline has NEON) they run their baseline build and the attributes name no instruction set.
+// The library's Highway kernels (lib/src/detail/hwy_dispatch.h) have ARM64 levels too: SVE and SVE2.
 #pragma once
 
 #include <atomic>
+
+#if defined(__aarch64__) && defined(__linux__)
+#include <sys/auxv.h>
+#endif
 
 #if (defined(__x86_64__) || defined(__i386__)) && (defined(__GNUC__) || defined(__clang__))
 #define BRDFZ_X86 1
@@ -36,9 +41,9 @@
 
 namespace brdfz {
 
-// The kernels' builds, ordered: the baseline (SSE2 on x86-64; on other CPUs the only build, NEON on
-// ARM64), and x86-64's AVX2 and AVX-512 (F, DQ, VL and BW: x86-64-v4).
-enum class Simd { Sse2, Avx2Fma, Avx512 };
+// The kernels' builds, ordered: the baseline (SSE2 on x86-64; NEON on ARM64), and x86-64's AVX2 and
+// AVX-512 (F, DQ, VL and BW: x86-64-v4), which are ARM64's SVE and SVE2.
+enum class Simd { Sse2, Avx2Fma, Avx512, Neon = Sse2, Sve = Avx2Fma, Sve2 = Avx512 };
 
 namespace runtime::kernels {
 
@@ -49,8 +54,25 @@ inline Simd cpu_simd() {
     static const bool avx512 = avx2_fma && __builtin_cpu_supports("avx512f") && __builtin_cpu_supports("avx512dq") &&
                                __builtin_cpu_supports("avx512vl") && __builtin_cpu_supports("avx512bw");
     return avx512 ? Simd::Avx512 : avx2_fma ? Simd::Avx2Fma : Simd::Sse2;
+#elif defined(__aarch64__) && defined(__linux__)
+    // Linux's HWCAP_SVE and HWCAP2_SVE2 bits (asm/hwcap.h), spelled out for C libraries without them.
+    static const bool sve = (getauxval(AT_HWCAP) & (1UL << 22)) != 0;
+    static const bool sve2 = sve && (getauxval(AT_HWCAP2) & (1UL << 1)) != 0;
+    return sve2 ? Simd::Sve2 : sve ? Simd::Sve : Simd::Neon;
 #else
     return Simd::Sse2;
+#endif
+}
+
+// Whether an x86-64 CPU has SSE4.2 and what comes with it (SSSE3, SSE4.1, POPCNT): the baseline level's
+// Highway build (lib/src/detail/hwy_dispatch.h), which CPUs without it run in its scalar form.
+inline bool cpu_has_sse4() {
+#if BRDFZ_X86
+    static const bool sse4 = __builtin_cpu_supports("ssse3") && __builtin_cpu_supports("sse4.1") &&
+                             __builtin_cpu_supports("sse4.2") && __builtin_cpu_supports("popcnt");
+    return sse4;
+#else
+    return false;
 #endif
 }
 
