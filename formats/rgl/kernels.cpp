@@ -1,35 +1,38 @@
 // RglBrdf's batch kernels (kernels.h): the Dupuy-Jakob parameterisation as Mitsuba 3's `measured`
 // plugin evaluates and samples it (rgl.h), over blocks of pairs in passes across arrays of numbers, as
-// the table kernels do (lib/src/detail/table_lookup.h). The arithmetic passes are branch-free, without
-// libm calls, so GCC vectorises them; the table reads between them are written out as vectors of W
-// lanes (2, 4 or 8 doubles: the SSE2, AVX2 and AVX-512 builds), each lane's two θi slices of an entry
-// one 8-byte read (kernels.h).
+// the table kernels do (lib/src/detail/table_lookup.h). Written once and compiled for each of Highway's
+// targets (lib/src/detail/hwy_dispatch.h picks one at run time): the arithmetic passes are branch-free
+// loops without libm calls, which the compiler vectorises for the target; the table reads between them
+// are Highway vectors, each lane's two θi slices of an entry one 8-byte read (kernels.h).
 //
 // Arithmetic is in double over the float32 tables, operation for operation the scalar warps' (Mitsuba's
 // Marginal2D, after Dupuy & Jakob 2018), with two substitutions that vectorise: angles by the
 // polynomial arctangent detail::atan01 (6e-11 relative) instead of asin and atan2, and the sampled
-// normal's sines and cosines from detail::sincos_half_turn (a few ulp) instead of libm's. The unit is
-// compiled without FMA contraction (formats/CMakeLists.txt), so every build gives the same bits, and a
-// pair's result does not depend on the batch it is in.
+// normal's sines and cosines from detail::sincos_half_turn (a few ulp) instead of libm's. Without FMA
+// contraction (brdfz_float), so every target gives the same bits, and a pair's result does not depend
+// on the batch it is in.
 #include "kernels.h"
 
 #include <algorithm>
-#include <bit>
 #include <cmath>
 #include <cstdint>
 #include <cstring>
 #include <limits>
 #include <numbers>
-#include <utility>
 
 #include "detail/fast_math.h"
-#include "detail/simd.h"
 
-// The vectors below live in always-inlined functions of one build each: none crosses a call, so the
-// ABI change GCC notes for wide vectors outside their ISA does not apply.
-#pragma GCC diagnostic ignored "-Wpsabi"
+// Compiled once per Highway target (hwy/foreach_target.h includes this file again for each).
+#undef HWY_TARGET_INCLUDE
+#define HWY_TARGET_INCLUDE "rgl/kernels.cpp"
+#include <hwy/foreach_target.h>  // IWYU pragma: keep
 
+#include <hwy/highway.h>
+
+HWY_BEFORE_NAMESPACE();
 namespace brdfz::rgl::detail {
+namespace HWY_NAMESPACE {
+namespace hn = hwy::HWY_NAMESPACE;
 namespace {
 
 constexpr double kPi = std::numbers::pi;
@@ -80,61 +83,50 @@ constexpr int kBlock = 64;  // pairs per pass, a multiple of every build's lanes
     return denom > 0.0 ? clamp01(2.0 * s / denom) : 0.0;  // 0/0 only on a segment of zero density
 }
 
-// ---- Table reads, W lanes at a time ----
+// ---- Table reads, a vector of lanes at a time ----
 
-template <int W>
-struct Lanes {
-    typedef double D __attribute__((vector_size(8 * W)));
-    typedef std::uint64_t U __attribute__((vector_size(8 * W)));
-    typedef float Pairs __attribute__((vector_size(8 * W)));  // 2W floats: each lane's two
-    typedef float F __attribute__((vector_size(4 * W)));
-};
-
-// The first and second floats of each lane's pair, as doubles.
-template <int W, std::size_t... I>
-[[gnu::always_inline]] inline void split(typename Lanes<W>::Pairs f, typename Lanes<W>::D& first,
-                                         typename Lanes<W>::D& second, std::index_sequence<I...>) {
-    using D = typename Lanes<W>::D;
-    first = __builtin_convertvector(__builtin_shufflevector(f, f, (2 * I)...), D);
-    second = __builtin_convertvector(__builtin_shufflevector(f, f, (2 * I + 1)...), D);
+// The two floats of each lane's 8-byte read (the first at the lower address), as doubles.
+template <class D, class VU>
+HWY_INLINE void split(D tag, VU u, hn::Vec<D>& first, hn::Vec<D>& second) {
+    const hn::Rebind<std::uint32_t, D> du32;
+    const hn::Rebind<float, D> df;
+    first = hn::PromoteTo(tag, hn::BitCast(df, hn::TruncateTo(du32, u)));
+    second = hn::PromoteTo(tag, hn::BitCast(df, hn::TruncateTo(du32, hn::ShiftRight<32>(u))));
 }
 
-// T[idx[k]] and T[idx[k] + 1] of lanes [k0, k0 + W), one 8-byte read each.
-template <int W>
-[[gnu::always_inline]] inline void read_pairs(const float* t, const int* idx, int k0, typename Lanes<W>::D& first,
-                                              typename Lanes<W>::D& second) {
-    typename Lanes<W>::U u;
-    for (int j = 0; j < W; ++j) {
-        std::uint64_t bits;
-        std::memcpy(&bits, t + idx[k0 + j], sizeof bits);
-        u[j] = bits;
-    }
-    split<W>(std::bit_cast<typename Lanes<W>::Pairs>(u), first, second, std::make_index_sequence<W>{});
+// T[idx[k]] and T[idx[k] + 1] for k < m, one 8-byte read each, as bits for the vector loops to load: a
+// gather instruction does not pay on every CPU (AMD's are microcoded).
+HWY_INLINE void read_bits(const float* t, const int* idx, int m, std::uint64_t* bits) {
+    for (int k = 0; k < m; ++k) std::memcpy(bits + k, t + idx[k], sizeof *bits);
 }
 
-// out[k] = (1 − w[k])·T[idx[k]] + w[k]·T[idx[k] + 1] for k < m (a multiple of W): an entry blended between
+// out[k] = (1 − w[k])·T[idx[k]] + w[k]·T[idx[k] + 1] for k < m (whole vectors): an entry blended between
 // a lane's two slices.
-template <int W>
-[[gnu::always_inline]] inline void blend_reads(const float* t, const int* idx, const double* w, int m, double* out) {
-    using D = typename Lanes<W>::D;
-    for (int k = 0; k < m; k += W) {
-        D a, b, wk;
-        read_pairs<W>(t, idx, k, a, b);
-        std::memcpy(&wk, w + k, sizeof wk);
-        const D r = (1.0 - wk) * a + wk * b;
-        std::memcpy(out + k, &r, sizeof r);
+template <class D>
+HWY_INLINE void blend_reads(D tag, const float* t, const int* idx, const double* w, int m, double* out) {
+    const hn::RebindToUnsigned<D> du;
+    std::uint64_t bits[kBlock];
+    read_bits(t, idx, m, bits);
+    const hn::Vec<D> one = hn::Set(tag, 1.0);
+    for (int k = 0; k < m; k += static_cast<int>(hn::Lanes(tag))) {
+        hn::Vec<D> a, b;
+        split(tag, hn::LoadU(du, bits + k), a, b);
+        const hn::Vec<D> wk = hn::LoadU(tag, w + k);
+        hn::StoreU(hn::Add(hn::Mul(hn::Sub(one, wk), a), hn::Mul(wk, b)), tag, out + k);
     }
 }
 
 // first[k] = T[idx[k]], second[k] = T[idx[k] + 1] for k < m: neighbouring samples of one row.
-template <int W>
-[[gnu::always_inline]] inline void pair_reads(const float* t, const int* idx, int m, double* first, double* second) {
-    using D = typename Lanes<W>::D;
-    for (int k = 0; k < m; k += W) {
-        D a, b;
-        read_pairs<W>(t, idx, k, a, b);
-        std::memcpy(first + k, &a, sizeof a);
-        std::memcpy(second + k, &b, sizeof b);
+template <class D>
+HWY_INLINE void pair_reads(D tag, const float* t, const int* idx, int m, double* first, double* second) {
+    const hn::RebindToUnsigned<D> du;
+    std::uint64_t bits[kBlock];
+    read_bits(t, idx, m, bits);
+    for (int k = 0; k < m; k += static_cast<int>(hn::Lanes(tag))) {
+        hn::Vec<D> a, b;
+        split(tag, hn::LoadU(du, bits + k), a, b);
+        hn::StoreU(a, tag, first + k);
+        hn::StoreU(b, tag, second + k);
     }
 }
 
@@ -183,8 +175,8 @@ struct Points {
 };
 
 // Bilinear interpolation of one table (no slices) at the points.
-template <int W>
-[[gnu::always_inline]] inline void bilinear_pass(const GridTable& g, const double* x, const double* y, int m,
+template <class D>
+[[gnu::always_inline]] inline void bilinear_pass(D tag, const GridTable& g, const double* x, const double* y, int m,
                                                  double* out) {
     int i0[kBlock], i1[kBlock];
     double fx[kBlock], fy[kBlock], v00[kBlock], v01[kBlock], v10[kBlock], v11[kBlock];
@@ -192,28 +184,28 @@ template <int W>
         const Patch q = locate(x[k], y[k], g.rows, g.cols);
         i0[k] = q.iy * g.cols + q.ix, i1[k] = i0[k] + g.cols, fx[k] = q.fx, fy[k] = q.fy;
     }
-    pair_reads<W>(g.values, i0, m, v00, v01);
-    pair_reads<W>(g.values, i1, m, v10, v11);
+    pair_reads(tag, g.values, i0, m, v00, v01);
+    pair_reads(tag, g.values, i1, m, v10, v11);
     for (int k = 0; k < m; ++k) out[k] = lerp(lerp(v00[k], v01[k], fx[k]), lerp(v10[k], v11[k], fx[k]), fy[k]);
 }
 
 // The four corners of each point's patch in a stack of slices-innermost tables (rows × cols entries),
 // blended between the lane's slices: d[0] at (ix, iy), d[1] at (ix + 1, iy), d[2] at (ix, iy + 1), d[3]
 // at (ix + 1, iy + 1).
-template <int W>
-[[gnu::always_inline]] inline void corner_reads(const float* t, int cols, int stride, const Slices& s,
+template <class D>
+[[gnu::always_inline]] inline void corner_reads(D tag, const float* t, int cols, int stride, const Slices& s,
                                                 const int* entry, int m, double (&d)[4][kBlock]) {
     int idx[4][kBlock];
     for (int k = 0; k < m; ++k) {
         const int e = entry[k] * stride + s.lower[k];
         idx[0][k] = e, idx[1][k] = e + stride, idx[2][k] = e + cols * stride, idx[3][k] = e + (cols + 1) * stride;
     }
-    for (int c = 0; c < 4; ++c) blend_reads<W>(t, idx[c], s.w, m, d[c]);
+    for (int c = 0; c < 4; ++c) blend_reads(tag, t, idx[c], s.w, m, d[c]);
 }
 
 // The warp's density at the points (integrating to 1 over [0, 1]²), blended between each lane's slices.
-template <int W>
-[[gnu::always_inline]] inline void density_pass(const WarpTables& w, const Slices& s, const double* px,
+template <class D>
+[[gnu::always_inline]] inline void density_pass(D tag, const WarpTables& w, const Slices& s, const double* px,
                                                 const double* py, int m, double* out) {
     int entry[kBlock];
     double fx[kBlock], fy[kBlock], d[4][kBlock];
@@ -221,15 +213,15 @@ template <int W>
         const Patch q = locate(px[k], py[k], w.rows, w.cols);
         entry[k] = q.iy * w.cols + q.ix, fx[k] = q.fx, fy[k] = q.fy;
     }
-    corner_reads<W>(w.data, w.cols, w.stride, s, entry, m, d);
+    corner_reads(tag, w.data, w.cols, w.stride, s, entry, m, d);
     for (int k = 0; k < m; ++k) out[k] = lerp(lerp(d[0][k], d[1][k], fx[k]), lerp(d[2][k], d[3][k], fx[k]), fy[k]);
 }
 
 // The inverse of the warp's sample (the CDF transform p ↦ (F(x | y), F(y))) and its density, at the
 // points (x, y), blended between each lane's slices: the RGB tables are read at the VNDF warp's inverse
 // of the microfacet normal, and pdf() needs the density there.
-template <int W>
-[[gnu::always_inline]] inline void invert_pass(const WarpTables& w, const Slices& s, const double* px,
+template <class D>
+[[gnu::always_inline]] inline void invert_pass(D tag, const WarpTables& w, const Slices& s, const double* px,
                                                const double* py, int m, Points& out) {
     const int R = w.rows, C = w.cols, NC = C - 1, S = w.stride;
     const double width = 1.0 / static_cast<double>(C - 1), height = 1.0 / static_cast<double>(R - 1);
@@ -245,12 +237,12 @@ template <int W>
         fx[k] = q.fx, fy[k] = q.fy, has_left[k] = q.ix > 0 ? 1.0 : 0.0, has_below[k] = q.iy > 0 ? 1.0 : 0.0;
     }
     double d[4][kBlock], c_left[2][kBlock], r[2][kBlock], m_below[kBlock];
-    corner_reads<W>(w.data, C, S, s, entry, m, d);
+    corner_reads(tag, w.data, C, S, s, entry, m, d);
     for (int j = 0; j < 2; ++j) {
-        blend_reads<W>(w.cond, left[j], s.w, m, c_left[j]);
-        blend_reads<W>(w.cond, end[j], s.w, m, r[j]);
+        blend_reads(tag, w.cond, left[j], s.w, m, c_left[j]);
+        blend_reads(tag, w.cond, end[j], s.w, m, r[j]);
     }
-    blend_reads<W>(w.marg, below, s.w, m, m_below);
+    blend_reads(tag, w.marg, below, s.w, m, m_below);
     for (int k = 0; k < m; ++k) {
         // Density along the patch's left and right edges, at the point's height.
         const double c0 = lerp(d[0][k], d[2][k], fy[k]), c1 = lerp(d[1][k], d[3][k], fy[k]);
@@ -273,8 +265,8 @@ template <int W>
 // the column, then the position inside the patch, where the density is linear in x. Each CDF search
 // finds the largest cell j with cdf(j) < u (0 if none), as a branch-free binary search in one pass per
 // halving (the halvings depend on the cell count alone).
-template <int W>
-[[gnu::always_inline]] inline void sample_pass(const WarpTables& w, const Slices& s, int m, Points& p) {
+template <class D>
+[[gnu::always_inline]] inline void sample_pass(D tag, const WarpTables& w, const Slices& s, int m, Points& p) {
     const int R = w.rows, C = w.cols, NC = C - 1, S = w.stride;
     const double width = 1.0 / static_cast<double>(C - 1), height = 1.0 / static_cast<double>(R - 1);
     double ux[kBlock], uy[kBlock], fy[kBlock], target[kBlock], v0[kBlock], v1[kBlock];
@@ -288,7 +280,7 @@ template <int W>
     for (int len = R - 1; len > 1;) {
         const int half = len / 2;
         for (int k = 0; k < m; ++k) idx0[k] = (iy[k] + half - 1) * S + s.lower[k];
-        blend_reads<W>(w.marg, idx0, s.w, m, v0);
+        blend_reads(tag, w.marg, idx0, s.w, m, v0);
         for (int k = 0; k < m; ++k) {
             const bool up = v0[k] < uy[k];
             iy[k] = up ? iy[k] + half : iy[k];
@@ -298,8 +290,8 @@ template <int W>
     }
     for (int k = 0; k < m; ++k) idx0[k] = (iy[k] * NC + NC - 1) * S + s.lower[k], idx1[k] = idx0[k] + NC * S;  // row totals
     double r0[kBlock], r1[kBlock];
-    blend_reads<W>(w.cond, idx0, s.w, m, r0);
-    blend_reads<W>(w.cond, idx1, s.w, m, r1);
+    blend_reads(tag, w.cond, idx0, s.w, m, r0);
+    blend_reads(tag, w.cond, idx1, s.w, m, r1);
     for (int k = 0; k < m; ++k) {
         fy[k] = invert_partial_integral((uy[k] - below[k]) / height, r0[k], r1[k]);
         target[k] = ux[k] * lerp(r0[k], r1[k], fy[k]);
@@ -308,8 +300,8 @@ template <int W>
     for (int len = C - 1; len > 1;) {
         const int half = len / 2;
         for (int k = 0; k < m; ++k) idx0[k] = (iy[k] * NC + ix[k] + half - 1) * S + s.lower[k], idx1[k] = idx0[k] + NC * S;
-        blend_reads<W>(w.cond, idx0, s.w, m, v0);
-        blend_reads<W>(w.cond, idx1, s.w, m, v1);
+        blend_reads(tag, w.cond, idx0, s.w, m, v0);
+        blend_reads(tag, w.cond, idx1, s.w, m, v1);
         for (int k = 0; k < m; ++k) {
             const double v = lerp(v0[k], v1[k], fy[k]);
             const bool right = v < target[k];
@@ -321,7 +313,7 @@ template <int W>
     int entry[kBlock];
     for (int k = 0; k < m; ++k) entry[k] = iy[k] * C + ix[k];
     double d[4][kBlock];
-    corner_reads<W>(w.data, C, S, s, entry, m, d);
+    corner_reads(tag, w.data, C, S, s, entry, m, d);
     for (int k = 0; k < m; ++k) {
         const double c0 = lerp(d[0][k], d[2][k], fy[k]), c1 = lerp(d[1][k], d[3][k], fy[k]);
         const double fx = invert_partial_integral((target[k] - before[k]) / width, c0, c1);
@@ -342,10 +334,11 @@ struct Pairs {
                         // doubles does not vectorise (SSE2 has no 64-bit integer compare)
 };
 
-// m rounded up to whole vectors of W lanes.
-template <int W>
-[[gnu::always_inline]] inline int whole(int m) {
-    return (m + W - 1) / W * W;
+// m rounded up to whole vectors.
+template <class D>
+[[gnu::always_inline]] inline int whole(D tag, int m) {
+    const int w = static_cast<int>(hn::Lanes(tag));
+    return (m + w - 1) / w * w;
 }
 
 // Pairs [0, m) into the block, `a` the conditioning direction; ok where both are finite and above the
@@ -394,22 +387,22 @@ struct Geometry {
 // microfacet normal m = normalize(wi + wo) through the inverse of the VNDF warp at θi to a point of the
 // RGB tables, scaled by D(m) / (4σ(wi)) with the file's jacobian flag, and by 1 / cosθo (the data hold
 // f·cosθo).
-template <int W>
-[[gnu::always_inline]] inline void eval_block(const KernelTables& t, const Pairs& p, int m, int mw, double* out_r,
+template <class D>
+[[gnu::always_inline]] inline void eval_block(D tag, const KernelTables& t, const Pairs& p, int m, int mw, double* out_r,
                                               double* out_g, double* out_b) {
     Geometry g;
     Slices s;
     Points pts;
     geometry_pass(p, mw, g);
     slice_pass(t, g.theta_a, mw, s);
-    invert_pass<W>(t.vndf, s, g.um_x, g.um_y, mw, pts);
+    invert_pass(tag, t.vndf, s, g.um_x, g.um_y, mw, pts);
     double scale[kBlock];
     for (int k = 0; k < mw; ++k) scale[k] = 1.0 / p.bz[k];
     if (t.jacobian) {
         double d[kBlock], sigma[kBlock], ui_x[kBlock], ui_y[kBlock];
         for (int k = 0; k < mw; ++k) ui_x[k] = u_of_theta(g.theta_a[k]), ui_y[k] = u_of_phi(g.phi_a[k]);
-        bilinear_pass<W>(t.ndf, g.um_x, g.um_y, mw, d);
-        bilinear_pass<W>(t.sigma, ui_x, ui_y, mw, sigma);
+        bilinear_pass(tag, t.ndf, g.um_x, g.um_y, mw, d);
+        bilinear_pass(tag, t.sigma, ui_x, ui_y, mw, sigma);
         for (int k = 0; k < mw; ++k) scale[k] *= d[k] / (4.0 * sigma[k]);
     }
     // RGB: each point's three channels (kernels.h: channel by channel, slices innermost), the patch's
@@ -427,7 +420,7 @@ template <int W>
             const int e = (entry[k] + c) * S + s.lower[k];
             idx[0][k] = e, idx[1][k] = e + 3 * S, idx[2][k] = e + 3 * C * S, idx[3][k] = e + 3 * (C + 1) * S;
         }
-        for (int j = 0; j < 4; ++j) blend_reads<W>(t.rgb, idx[j], s.w, mw, d[c][j]);
+        for (int j = 0; j < 4; ++j) blend_reads(tag, t.rgb, idx[j], s.w, mw, d[c][j]);
     }
     double* out[3] = {out_r, out_g, out_b};
     for (int c = 0; c < 3; ++c)
@@ -439,15 +432,15 @@ template <int W>
         }
 }
 
-template <int W>
-[[gnu::always_inline]] inline void eval_passes(const KernelTables& t, const Vec3* wi, const Vec3* wo, Rgb* out,
+template <class D>
+[[gnu::always_inline]] inline void eval_passes(D tag, const KernelTables& t, const Vec3* wi, const Vec3* wo, Rgb* out,
                                                std::size_t n) {
     Pairs p;
     double r[kBlock], g[kBlock], b[kBlock];
     for (std::size_t start = 0; start < n; start += kBlock) {
-        const int m = static_cast<int>(std::min<std::size_t>(kBlock, n - start)), mw = whole<W>(m);
+        const int m = static_cast<int>(std::min<std::size_t>(kBlock, n - start)), mw = whole(tag, m);
         load_pairs(wi + start, wo + start, m, mw, p);
-        eval_block<W>(t, p, m, mw, r, g, b);
+        eval_block(tag, t, p, m, mw, r, g, b);
         for (int k = 0; k < m; ++k) out[start + k] = {r[k], g[k], b[k]};
     }
 }
@@ -461,8 +454,8 @@ template <int W>
 
 // The density of sample() (rgl.h): the warps conditioned on wo (the block's a), at the point the
 // luminance warp must have produced (the VNDF warp's inverse of m), over the Jacobian.
-template <int W>
-[[gnu::always_inline]] inline void pdf_passes(const KernelTables& t, const Vec3* wo, const Vec3* wi, double* out,
+template <class D>
+[[gnu::always_inline]] inline void pdf_passes(D tag, const KernelTables& t, const Vec3* wo, const Vec3* wi, double* out,
                                               std::size_t n) {
     Pairs p;
     Geometry g;
@@ -470,13 +463,13 @@ template <int W>
     Points q;
     double lum[kBlock];
     for (std::size_t start = 0; start < n; start += kBlock) {
-        const int m = static_cast<int>(std::min<std::size_t>(kBlock, n - start)), mw = whole<W>(m);
+        const int m = static_cast<int>(std::min<std::size_t>(kBlock, n - start)), mw = whole(tag, m);
         load_pairs(wo + start, wi + start, m, mw, p);
         geometry_pass(p, mw, g);
         slice_pass(t, g.theta_a, mw, s);
-        invert_pass<W>(t.vndf, s, g.um_x, g.um_y, mw, q);
+        invert_pass(tag, t.vndf, s, g.um_x, g.um_y, mw, q);
         if (t.luminance.data)
-            density_pass<W>(t.luminance, s, q.x, q.y, mw, lum);
+            density_pass(tag, t.luminance, s, q.x, q.y, mw, lum);
         else
             for (int k = 0; k < mw; ++k) lum[k] = 1.0;
         for (int k = 0; k < m; ++k) {
@@ -491,8 +484,8 @@ template <int W>
 // sample(): the luminance warp (conditioned on wo's θ) maps u to a point of the VNDF warp's square, the
 // VNDF warp maps that to m in unit coordinates, and wo is reflected about m (rgl.h); u in Mitsuba's
 // order, its sample2 swapped. The weight is f(wi, wo)·cosθi / pdf, f from the eval block.
-template <int W>
-[[gnu::always_inline]] inline void sample_passes(const KernelTables& t, const Vec3* wo, const std::array<double, 2>* u,
+template <class D>
+[[gnu::always_inline]] inline void sample_passes(D tag, const KernelTables& t, const Vec3* wo, const std::array<double, 2>* u,
                                                  BrdfSample* out, std::size_t n) {
     Pairs p, e;
     Slices s;
@@ -500,7 +493,7 @@ template <int W>
     double theta_o[kBlock], cos_o[kBlock], sin_o[kBlock], pdf_l[kBlock];
     double r[kBlock], g[kBlock], b[kBlock], pdf[kBlock];
     for (std::size_t start = 0; start < n; start += kBlock) {
-        const int m = static_cast<int>(std::min<std::size_t>(kBlock, n - start)), mw = whole<W>(m);
+        const int m = static_cast<int>(std::min<std::size_t>(kBlock, n - start)), mw = whole(tag, m);
         for (int k = 0; k < m; ++k) {
             const Vec3& w = wo[start + k];
             const double u1 = u[start + k][0], u2 = u[start + k][1];
@@ -520,12 +513,12 @@ template <int W>
         }
         slice_pass(t, theta_o, mw, s);
         if (t.luminance.data) {
-            sample_pass<W>(t.luminance, s, mw, q);
+            sample_pass(tag, t.luminance, s, mw, q);
             for (int k = 0; k < mw; ++k) pdf_l[k] = q.pdf[k];
         } else {
             for (int k = 0; k < mw; ++k) pdf_l[k] = 1.0;
         }
-        sample_pass<W>(t.vndf, s, mw, q);
+        sample_pass(tag, t.vndf, s, mw, q);
         for (int k = 0; k < mw; ++k) {
             // m from its unit coordinates: θm = u_θ²·π/2, azimuth (2u_φ − 1)π from wo's.
             const ::brdfz::detail::SinCos2 th = ::brdfz::detail::sincos_half_turn(q.x[k] * q.x[k] * (kPi / 2.0));
@@ -546,7 +539,7 @@ template <int W>
             e.bx[k] = ok ? p.bx[k] : 0.0, e.by[k] = ok ? p.by[k] : 0.0, e.bz[k] = ok ? p.bz[k] : 1.0;
             e.ok[k] = ok ? 1.0 : 0.0;
         }
-        eval_block<W>(t, e, m, mw, r, g, b);
+        eval_block(tag, t, e, m, mw, r, g, b);
         for (int k = 0; k < m; ++k) {
             BrdfSample& o = out[start + k];
             if (!(e.ok[k] > 0.0)) {
@@ -559,59 +552,71 @@ template <int W>
     }
 }
 
-// The kernels' builds (runtime/kernels/simd.h: Builds), 2, 4 and 8 lanes wide, and a one-lane build for
-// fewer pairs than a vector holds (one call at a time): the same operations, so the same bits, without
-// computing the unused lanes.
-constexpr int lanes_at(Simd s) { return s == Simd::Avx512 ? 8 : s == Simd::Avx2Fma ? 4 : 2; }
-
-enum class Op { Eval, Pdf, Sample };
-// One: the one-lane build.
-template <Op O, bool One>
-struct Kernel {
-    static constexpr bool kAvx512 = true, kFma = false;
-    template <Simd S, typename... A>
-    static void run(A... a) {
-        constexpr int W = One ? 1 : lanes_at(S);
-        if constexpr (O == Op::Eval) eval_passes<W>(a...);
-        else if constexpr (O == Op::Pdf) pdf_passes<W>(a...);
-        else sample_passes<W>(a...);
-    }
-};
-
-// The build for n pairs at the level asked for: the one-lane build below a vector's worth of pairs.
-template <Op O, typename Signature>
-Signature* pick(Simd simd, std::size_t n) {
-    using runtime::kernels::Builds;
-    return n < static_cast<std::size_t>(lanes_at(simd)) ? Builds<Kernel<O, true>, Signature>::baseline
-                                                         : Builds<Kernel<O, false>, Signature>::at(simd);
-}
+// Fewer pairs than a vector holds (one call at a time) run one lane: the same operations, so the same
+// bits, without computing the unused lanes.
+using Full = hn::ScalableTag<double>;
+using One = hn::CappedTag<double, 1>;
 
 }  // namespace
 
-void sample_warp(const WarpTables& w, int slice, double* x, double* y, double* pdf, std::size_t n) {
+void EvalPairs(const KernelTables& t, const Vec3* wi, const Vec3* wo, Rgb* out, std::size_t n) {
+    if (n < hn::Lanes(Full())) eval_passes(One(), t, wi, wo, out, n);
+    else eval_passes(Full(), t, wi, wo, out, n);
+}
+
+void PdfPairs(const KernelTables& t, const Vec3* wo, const Vec3* wi, double* out, std::size_t n) {
+    if (n < hn::Lanes(Full())) pdf_passes(One(), t, wo, wi, out, n);
+    else pdf_passes(Full(), t, wo, wi, out, n);
+}
+
+void SamplePairs(const KernelTables& t, const Vec3* wo, const std::array<double, 2>* u, BrdfSample* out,
+                 std::size_t n) {
+    if (n < hn::Lanes(Full())) sample_passes(One(), t, wo, u, out, n);
+    else sample_passes(Full(), t, wo, u, out, n);
+}
+
+void SampleWarp(const WarpTables& w, int slice, double* x, double* y, double* pdf, std::size_t n) {
+    const Full tag;
     Slices s;
     Points p;
     for (int k = 0; k < kBlock; ++k) s.lower[k] = slice, s.w[k] = 0.0;
     for (std::size_t start = 0; start < n; start += kBlock) {
-        const int m = static_cast<int>(std::min<std::size_t>(kBlock, n - start)), mw = whole<2>(m);
+        const int m = static_cast<int>(std::min<std::size_t>(kBlock, n - start)), mw = whole(tag, m);
         for (int k = 0; k < mw; ++k) p.x[k] = k < m ? x[start + k] : 0.0, p.y[k] = k < m ? y[start + k] : 0.0;
-        sample_pass<2>(w, s, mw, p);
+        sample_pass(tag, w, s, mw, p);
         for (int k = 0; k < m; ++k) x[start + k] = p.x[k], y[start + k] = p.y[k], pdf[start + k] = p.pdf[k];
     }
 }
 
+}  // namespace HWY_NAMESPACE
+}  // namespace brdfz::rgl::detail
+HWY_AFTER_NAMESPACE();
+
+#if HWY_ONCE
+#include "detail/hwy_dispatch.h"
+
+namespace brdfz::rgl::detail {
+
+void sample_warp(const WarpTables& w, int slice, double* x, double* y, double* pdf, std::size_t n) {
+    static const auto builds = BRDFZ_HWY_BUILDS(SampleWarp);
+    builds.at(::brdfz::detail::simd_level())(w, slice, x, y, pdf, n);
+}
+
 void eval_pairs(Simd simd, const KernelTables& t, const Vec3* wi, const Vec3* wo, Rgb* out, std::size_t n) {
-    pick<Op::Eval, void(const KernelTables&, const Vec3*, const Vec3*, Rgb*, std::size_t)>(simd, n)(t, wi, wo, out, n);
+    static const auto builds = BRDFZ_HWY_BUILDS(EvalPairs);
+    builds.at(simd)(t, wi, wo, out, n);
 }
 
 void pdf_pairs(Simd simd, const KernelTables& t, const Vec3* wo, const Vec3* wi, double* out, std::size_t n) {
-    pick<Op::Pdf, void(const KernelTables&, const Vec3*, const Vec3*, double*, std::size_t)>(simd, n)(t, wo, wi, out, n);
+    static const auto builds = BRDFZ_HWY_BUILDS(PdfPairs);
+    builds.at(simd)(t, wo, wi, out, n);
 }
 
 void sample_pairs(Simd simd, const KernelTables& t, const Vec3* wo, const std::array<double, 2>* u,
                   BrdfSample* out, std::size_t n) {
-    pick<Op::Sample, void(const KernelTables&, const Vec3*, const std::array<double, 2>*, BrdfSample*, std::size_t)>(
-        simd, n)(t, wo, u, out, n);
+    static const auto builds = BRDFZ_HWY_BUILDS(SamplePairs);
+    builds.at(simd)(t, wo, u, out, n);
 }
 
 }  // namespace brdfz::rgl::detail
+#endif  // HWY_ONCE

@@ -1,5 +1,5 @@
 // RglBrdf's batch kernels (formats/rgl/kernels.cpp): eval, pdf and sample with its weight over arrays
-// of pairs, built for SSE2, AVX2 and AVX-512 and run at the level asked for (brdfz/simd.h).
+// of pairs, built for each of Highway's targets and run at the level asked for (brdfz/simd.h).
 // One call at a time runs them on one pair, so a pair's result does not depend on its batch.
 //
 // Tables blended between two θi slices store the slices innermost: entry i of slice s at i·stride + s,
