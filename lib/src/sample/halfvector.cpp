@@ -1,3 +1,8 @@
+// The half-vector sampler. Its block kernel (draw_lanes) is compiled for each of Highway's targets
+// (hwy/foreach_target.h includes this file again for each; lib/src/detail/hwy_dispatch.h picks one at
+// run time), the rest once.
+#ifndef BRDFZ_SAMPLE_HALFVECTOR_ONCE
+#define BRDFZ_SAMPLE_HALFVECTOR_ONCE
 #include "brdfz/sample/halfvector.h"
 
 #include <algorithm>
@@ -278,19 +283,34 @@ Cell exact_cell(const StackView& v, int slice, double u1, double u2) {
     }
 }
 
-// The kernel's builds (runtime/kernels/simd.h: Builds). The AVX2 one has no FMA, whose contraction
-// would round differently from draw(); AVX-512 has FMA, but the library is built without contraction
-// (brdfz_float): all give draw()'s results to the bit.
-struct DrawKernel {
-    static constexpr bool kAvx512 = true, kFma = false;
-    template <Simd>
-    static void run(const SamplerView& v, const StackView& st, const detail::SinCosTable& table, const Vec3* wo,
-                    const std::array<double, 2>* u, std::size_t n, HalfVectorSampler::Draws& out) {
-        draw_lanes(v, st, table, wo, u, n, out);
-    }
-};
-
 }  // namespace
+}  // namespace brdfz
+#endif  // BRDFZ_SAMPLE_HALFVECTOR_ONCE
+
+#undef HWY_TARGET_INCLUDE
+#define HWY_TARGET_INCLUDE "sample/halfvector.cpp"
+#include <hwy/foreach_target.h>  // IWYU pragma: keep
+
+#include <hwy/highway.h>
+
+HWY_BEFORE_NAMESPACE();
+namespace brdfz::HWY_NAMESPACE {
+
+// draw_lanes for the target, whole (flatten: its loops vectorise only where nothing in them is a call).
+// Without FMA contraction (brdfz_float), so every target gives draw()'s bits.
+[[gnu::flatten]] void DrawLanes(const SamplerView& v, const StackView& st, const detail::SinCosTable& table,
+                                const Vec3* wo, const std::array<double, 2>* u, std::size_t n,
+                                HalfVectorSampler::Draws& out) {
+    draw_lanes(v, st, table, wo, u, n, out);
+}
+
+}  // namespace brdfz::HWY_NAMESPACE
+HWY_AFTER_NAMESPACE();
+
+#if HWY_ONCE
+#include "detail/hwy_dispatch.h"
+
+namespace brdfz {
 
 HalfVectorSampler::HalfVectorSampler(const Brdf& brdf, const HalfVectorSamplerOptions& o) : options_(o) {
     // draw_block indexes the slices' stacked tables with ints.
@@ -383,10 +403,9 @@ HalfVectorSampler::Draw HalfVectorSampler::draw(const Vec3& wo, double u1, doubl
 
 void HalfVectorSampler::draw_block(const Vec3* wo, const std::array<double, 2>* u, std::size_t n, Draws& out) const {
     const SamplerView v{options_.cosine_share, theta_o_.back(), static_cast<int>(theta_o_.size())};
-    using Signature = void(const SamplerView&, const StackView&, const detail::SinCosTable&, const Vec3*,
-                           const std::array<double, 2>*, std::size_t, Draws&);
-    runtime::kernels::Builds<DrawKernel, Signature>::at(detail::simd_level())(v, first_, detail::half_turn_sincos(), wo, u,
-                                                                               n, out);
+    static const auto builds = BRDFZ_HWY_BUILDS(DrawLanes);
+    builds.at(detail::simd_level())(v, first_, detail::half_turn_sincos(), wo, u, n, out);
 }
 
 }  // namespace brdfz
+#endif  // HWY_ONCE
