@@ -1,8 +1,9 @@
 // Which Highway build of a kernel runs at a level (brdfz/simd.h): the one place that maps brdfz's
 // levels to Highway's targets. A kernel file compiles its body once per target (hwy/foreach_target.h,
-// the targets the root CMakeLists.txt's brdfz_simd enables) and, in its HWY_ONCE part, takes its
-// builds with BRDFZ_HWY_BUILDS(Fn) and calls HwyBuilds::at(level). Highway's own HWY_EXPORT and
-// HWY_DYNAMIC_DISPATCH are not used: they call into libhwy.so, which brdfz does not link.
+// the targets the root CMakeLists.txt's brdfz_simd enables; level_of(HWY_TARGET) is the level a target
+// serves) and, in its HWY_ONCE part, takes its builds with BRDFZ_HWY_BUILDS(Fn) and calls
+// HwyBuilds::at(level). Highway's own HWY_EXPORT and HWY_DYNAMIC_DISPATCH are not used: they call into
+// libhwy.so, which brdfz does not link.
 //
 //   level          x86-64                          ARM64
 //   Sse2 (Neon)    SSE4, or SCALAR on a CPU        NEON
@@ -14,11 +15,21 @@
 // its instructions; a target the compiler did not build falls to the next narrower one.
 #pragma once
 
-#include <hwy/highway.h>
+#include <cstdint>
+#include <type_traits>
+
+#include <hwy/detect_targets.h>
 
 #include "detail/simd.h"
 
 namespace brdfz::detail {
+
+// The level a Highway target's build serves, for kernels whose body depends on it (their lane counts).
+constexpr Simd level_of(std::int64_t target) {
+    if (target == HWY_AVX3 || target == HWY_SVE2) return Simd::Avx512;
+    if (target == HWY_AVX2 || target == HWY_SVE) return Simd::Avx2Fma;
+    return Simd::Sse2;
+}
 
 template <typename Fn>
 struct HwyBuilds {
@@ -41,7 +52,7 @@ struct HwyBuilds {
 }  // namespace brdfz::detail
 
 // The builds of Fn, a function declared in each target's namespace (HWY_NAMESPACE) of the including
-// file; null where a target was not compiled. Only after foreach_target.h's passes (in `#if HWY_ONCE`).
+// file; null where a target was not compiled. Only after hwy/highway.h, in the file's `#if HWY_ONCE` part.
 #define BRDFZ_HWY_BUILDS(Fn)                                                                              \
     ::brdfz::detail::HwyBuilds<std::remove_pointer_t<decltype(HWY_CHOOSE_FALLBACK(Fn))>> {                \
         HWY_CHOOSE_FALLBACK(Fn), HWY_CHOOSE_SSE4(Fn), HWY_CHOOSE_AVX2(Fn), HWY_CHOOSE_AVX3(Fn), HWY_CHOOSE_SVE(Fn), \

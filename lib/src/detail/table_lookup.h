@@ -108,23 +108,6 @@ template <bool Wide, typename Values>
     return read_linear<Wide>(g, values, linear_corners(g, c, wi, wo));
 }
 
-// Its builds (runtime/kernels/simd.h: Builds), as the batch kernels': the AVX2 one blends the corners in
-// one register, without FMA, so both give the same bits.
-template <typename Values>
-struct EvalOneKernel {
-    static constexpr bool kAvx512 = false, kFma = false;
-    template <Simd S>
-    static Rgb run(const GridSpec& g, const Values& values, Lookup lookup, const Vec3& wi, const Vec3& wo) {
-        return eval_one<S != Simd::Sse2>(g, values, lookup, wi, wo);
-    }
-};
-
-template <typename Values>
-Rgb eval_table(const GridSpec& g, const Values& values, Lookup lookup, const Vec3& wi, const Vec3& wo) {
-    using Signature = Rgb(const GridSpec&, const Values&, Lookup, const Vec3&, const Vec3&);
-    return runtime::kernels::Builds<EvalOneKernel<Values>, Signature>::at(simd_level())(g, values, lookup, wi, wo);
-}
-
 // Batch kernels (eval_table_batch, and sample_table_batch's weights) work in blocks of pairs, in passes
 // over arrays of numbers, not of structs, so that the branch-free passes vectorise. As many pairs as
 // the sampler draws at once (HalfVectorSampler::kBlock).
@@ -218,25 +201,6 @@ template <bool Wide, typename Values>
             g, values, lookup, coords, above, m, [a](std::size_t k) -> const Vec3& { return a[k]; }, b,
             [o](std::size_t k, const Rgb& f) { o[k] = f; });
     }
-}
-
-// The kernel's builds (runtime/kernels/simd.h: Builds); the AVX2 one without FMA, so that both give
-// eval_table's results to the bit.
-template <typename Values>
-struct EvalBatchKernel {
-    static constexpr bool kAvx512 = false, kFma = false;
-    template <Simd S>
-    static void run(const GridSpec& g, const Values& values, Lookup lookup, const Vec3* wi, const Vec3* wo, Rgb* out,
-                    std::size_t n) {
-        eval_table_passes<S != Simd::Sse2>(g, values, lookup, wi, wo, out, n);
-    }
-};
-
-template <typename Values>
-void eval_table_batch(const GridSpec& g, const Values& values, Lookup lookup, const Vec3* wi, const Vec3* wo,
-                      Rgb* out, std::size_t n) {
-    using Signature = void(const GridSpec&, const Values&, Lookup, const Vec3*, const Vec3*, Rgb*, std::size_t);
-    runtime::kernels::Builds<EvalBatchKernel<Values>, Signature>::at(simd_level())(g, values, lookup, wi, wo, out, n);
 }
 
 }  // namespace brdfz::detail

@@ -70,26 +70,6 @@ template <bool Wide, typename Values>
     return s;
 }
 
-// Its builds (runtime/kernels/simd.h: Builds), as the batch kernel's below: the AVX2 one blends the
-// corners in one register.
-template <typename Values>
-struct SampleOneKernel {
-    static constexpr bool kAvx512 = false, kFma = false;
-    template <Simd S>
-    static BrdfSample run(const GridSpec& g, const Values& values, Lookup lookup, const HalfVectorSampler& sampler,
-                          const Vec3& wo, double u1, double u2) {
-        return sample_one<S != Simd::Sse2>(g, values, lookup, sampler, wo, u1, u2);
-    }
-};
-
-template <typename Values>
-BrdfSample sample_table(const GridSpec& g, const Values& values, Lookup lookup, const HalfVectorSampler& sampler,
-                        const Vec3& wo, double u1, double u2) {
-    using Signature = BrdfSample(const GridSpec&, const Values&, Lookup, const HalfVectorSampler&, const Vec3&, double, double);
-    return runtime::kernels::Builds<SampleOneKernel<Values>, Signature>::at(simd_level())(g, values, lookup, sampler, wo,
-                                                                                          u1, u2);
-}
-
 // Brdf::sample_batch: blocks of draws in passes, as eval_table_batch does for pairs: (1) the draws
 // (HalfVectorSampler::draw_block), (2) their bin coordinates, (3) the table reads (lookup_block) and the
 // weights. Each result is sample_table's, bit for bit.
@@ -124,27 +104,6 @@ template <bool Wide, typename Values>
         for (std::size_t k = 0; k < m; ++k)
             if (!ok[k]) s[k] = {};
     }
-}
-
-// The kernel's builds (runtime/kernels/simd.h: Builds); the AVX2 one without FMA, so that both give
-// sample_table's results to the bit.
-template <typename Values>
-struct SampleBatchKernel {
-    static constexpr bool kAvx512 = false, kFma = false;
-    template <Simd S>
-    static void run(const GridSpec& g, const Values& values, Lookup lookup, const HalfVectorSampler& sampler,
-                    const Vec3* wo, const std::array<double, 2>* u, BrdfSample* out, std::size_t n) {
-        sample_table_passes<S != Simd::Sse2>(g, values, lookup, sampler, wo, u, out, n);
-    }
-};
-
-template <typename Values>
-void sample_table_batch(const GridSpec& g, const Values& values, Lookup lookup, const HalfVectorSampler& sampler,
-                        const Vec3* wo, const std::array<double, 2>* u, BrdfSample* out, std::size_t n) {
-    using Signature = void(const GridSpec&, const Values&, Lookup, const HalfVectorSampler&, const Vec3*,
-                           const std::array<double, 2>*, BrdfSample*, std::size_t);
-    runtime::kernels::Builds<SampleBatchKernel<Values>, Signature>::at(simd_level())(g, values, lookup, sampler, wo, u,
-                                                                                      out, n);
 }
 
 }  // namespace brdfz::detail

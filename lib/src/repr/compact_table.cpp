@@ -11,7 +11,7 @@
 #include "brdfz/errors.h"
 #include "brdfz/runtime/kernels/values.h"
 #include "detail/table_lookup.h"
-#include "detail/table_sample.h"
+#include "repr/table_kernels.h"
 
 namespace brdfz {
 namespace {

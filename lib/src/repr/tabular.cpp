@@ -3,19 +3,10 @@
 #include <memory>
 
 #include "brdfz/errors.h"
-#include "brdfz/runtime/kernels/values.h"
 #include "detail/table_lookup.h"
-#include "detail/table_sample.h"
+#include "repr/table_kernels.h"
 
 namespace brdfz {
-namespace {
-
-// Table's float32 values (the runtime's policy), readable as four floats a bin (Table pads its storage).
-struct Float32Values : runtime::kernels::Float32Values {
-    const float* floats(std::size_t bin) const { return data + 3 * bin; }
-};
-
-}  // namespace
 
 Lookup parse_lookup(const std::string& name) {
     if (name == "nearest") return Lookup::Nearest;
@@ -47,24 +38,24 @@ std::string TabularBrdf::describe() const {
 }
 
 Rgb TabularBrdf::eval_above(const Vec3& wi, const Vec3& wo) const {
-    return detail::eval_table(table_.grid(), Float32Values{{table_.data()}}, lookup(), wi, wo);
+    return detail::eval_table(table_.grid(), detail::TableFloat32Values{{table_.data()}}, lookup(), wi, wo);
 }
 
 void TabularBrdf::eval_batch(const Vec3* wi, const Vec3* wo, Rgb* out, std::size_t n) const {
-    detail::eval_table_batch(table_.grid(), Float32Values{{table_.data()}}, lookup(), wi, wo, out, n);
+    detail::eval_table_batch(table_.grid(), detail::TableFloat32Values{{table_.data()}}, lookup(), wi, wo, out, n);
 }
 
 // The fine sampler's weight comes with the draw (detail/table_sample.h), so sample() does not evaluate
 // it again; the compact sampler's is the eval kernel's (Brdf::sample, Brdf::sample_batch).
 BrdfSample TabularBrdf::sample_above(const Vec3& wo, double u1, double u2) const {
     if (const HalfVectorSampler* fine = sampler().fine())
-        return detail::sample_table(table_.grid(), Float32Values{{table_.data()}}, lookup(), *fine, wo, u1, u2);
+        return detail::sample_table(table_.grid(), detail::TableFloat32Values{{table_.data()}}, lookup(), *fine, wo, u1, u2);
     return sample_compact(wo, u1, u2);
 }
 
 void TabularBrdf::sample_batch(const Vec3* wo, const std::array<double, 2>* u, BrdfSample* out, std::size_t n) const {
     if (const HalfVectorSampler* fine = sampler().fine())
-        return detail::sample_table_batch(table_.grid(), Float32Values{{table_.data()}}, lookup(), *fine, wo, u, out, n);
+        return detail::sample_table_batch(table_.grid(), detail::TableFloat32Values{{table_.data()}}, lookup(), *fine, wo, u, out, n);
     Brdf::sample_batch(wo, u, out, n);
 }
 
