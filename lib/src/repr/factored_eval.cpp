@@ -1,9 +1,15 @@
-// FactoredBrdf's batch eval kernel (factored.h), built for SSE2, for AVX2 + FMA and for AVX-512.
+// FactoredBrdf's batch eval kernel (factored.h), compiled for each Highway target (foreach_target.h
+// includes this file again for each; detail/hwy_dispatch.h picks one at run time). The file contracts
+// to FMA (lib/CMakeLists.txt, brdfz_contract_fma): its AVX2 and AVX-512 builds do, as brdfz::runtime's
+// builds of the same kernel (runtime/kernels/factored.h) at those levels.
+#ifndef BRDFZ_REPR_FACTORED_EVAL_ONCE
+#define BRDFZ_REPR_FACTORED_EVAL_ONCE
 #include <algorithm>
 #include <cstring>
 #include <type_traits>
 
 #include "brdfz/runtime/kernels/factored.h"
+#include "detail/hwy_dispatch.h"
 #include "detail/table_lookup.h"
 #include "repr/factored_impl.h"
 
@@ -118,35 +124,59 @@ template <int W, FactorLayout L, bool Grouped>
     }
 }
 
-// The kernel's builds (runtime/kernels/simd.h: Builds). Single-pair eval runs the same one as the batch
-// (bit for bit: FMA contraction makes the SSE2 build's results differ from the others' in the last bits).
-// The AVX-512 one blends 8 floats per step as the AVX2 one (the factors' padding is the same), and runs
-// the coordinates and the inverse transform 8 doubles wide.
+// A kernel's layout and grouping as one type: BRDFZ_HWY_BUILDS takes one template argument.
 template <FactorLayout L, bool Grouped>
-struct EvalKernel {
-    static constexpr bool kAvx512 = true, kFma = true;
-    template <Simd S>
-    static void run(const FactorView& f, FactorSpace space, const Vec3* wi, const Vec3* wo, Rgb* out, std::size_t n,
-                    std::uint64_t& clamped) {
-        eval_pairs<S == Simd::Sse2 ? 4 : 8, L, Grouped>(f, space, wi, wo, out, n, clamped);
-    }
+struct Shape {
+    static constexpr FactorLayout kLayout = L;
+    static constexpr bool kGrouped = Grouped;
 };
 
-template <bool Grouped>
-void eval_kernel(detail::Simd simd, FactorLayout layout, const FactorView& f, FactorSpace space, const Vec3* wi,
-                 const Vec3* wo, Rgb* out, std::size_t n, std::uint64_t& clamped) {
-    using Signature = void(const FactorView&, FactorSpace, const Vec3*, const Vec3*, Rgb*, std::size_t, std::uint64_t&);
-    using runtime::kernels::Builds;
-    const auto kernel = layout == FactorLayout::HxDP ? Builds<EvalKernel<FactorLayout::HxDP, Grouped>, Signature>::at(simd)
-                                                     : Builds<EvalKernel<FactorLayout::HDxP, Grouped>, Signature>::at(simd);
-    kernel(f, space, wi, wo, out, n, clamped);
+}  // namespace
+}  // namespace brdfz
+#endif  // BRDFZ_REPR_FACTORED_EVAL_ONCE
+
+#undef HWY_TARGET_INCLUDE
+#define HWY_TARGET_INCLUDE "repr/factored_eval.cpp"
+#include <hwy/foreach_target.h>  // IWYU pragma: keep
+
+#include <hwy/highway.h>
+
+HWY_BEFORE_NAMESPACE();
+namespace brdfz::HWY_NAMESPACE {
+
+// The kernel for the target: factor_lanes(level) floats per blend step, as brdfz::runtime's build at the
+// level, so both give the same bits (factored.h). Single-pair eval runs the same build as the batch.
+template <typename S>
+[[gnu::flatten]] void EvalPairs(const FactorView& f, FactorSpace space, const Vec3* wi, const Vec3* wo, Rgb* out,
+                                std::size_t n, std::uint64_t& clamped) {
+    constexpr int W = static_cast<int>(runtime::kernels::factor_lanes(detail::level_of(HWY_TARGET)));
+    eval_pairs<W, S::kLayout, S::kGrouped>(f, space, wi, wo, out, n, clamped);
+}
+
+}  // namespace brdfz::HWY_NAMESPACE
+HWY_AFTER_NAMESPACE();
+
+#if HWY_ONCE
+namespace brdfz {
+namespace {
+
+template <FactorLayout L, bool Grouped>
+void eval_kernel(detail::Simd simd, const FactorView& f, FactorSpace space, const Vec3* wi, const Vec3* wo, Rgb* out,
+                 std::size_t n, std::uint64_t& clamped) {
+    using S = Shape<L, Grouped>;
+    static const auto builds = BRDFZ_HWY_BUILDS(EvalPairs<S>);
+    builds.at(simd)(f, space, wi, wo, out, n, clamped);
 }
 
 }  // namespace
 
 void detail::eval_factors(Simd simd, FactorLayout layout, const FactorView& f, FactorSpace space, const Vec3* wi,
                           const Vec3* wo, Rgb* out, std::size_t n, std::uint64_t& clamped) {
-    (f.grouped ? eval_kernel<true> : eval_kernel<false>)(simd, layout, f, space, wi, wo, out, n, clamped);
+    const bool h = layout == FactorLayout::HxDP;
+    const auto kernel = f.grouped ? (h ? eval_kernel<FactorLayout::HxDP, true> : eval_kernel<FactorLayout::HDxP, true>)
+                                  : (h ? eval_kernel<FactorLayout::HxDP, false> : eval_kernel<FactorLayout::HDxP, false>);
+    kernel(simd, f, space, wi, wo, out, n, clamped);
 }
 
 }  // namespace brdfz
+#endif  // HWY_ONCE

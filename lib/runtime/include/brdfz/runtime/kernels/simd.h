@@ -50,7 +50,9 @@ namespace runtime::kernels {
 // The widest level this CPU runs.
 inline Simd cpu_simd() {
 #if BRDFZ_X86
-    static const bool avx2_fma = __builtin_cpu_supports("avx2") && __builtin_cpu_supports("fma");
+    // BMI1 and BMI2 come with every AVX2 CPU; the library's AVX2 builds (Highway's target) may use them.
+    static const bool avx2_fma = __builtin_cpu_supports("avx2") && __builtin_cpu_supports("fma") &&
+                                 __builtin_cpu_supports("bmi") && __builtin_cpu_supports("bmi2");
     static const bool avx512 = avx2_fma && __builtin_cpu_supports("avx512f") && __builtin_cpu_supports("avx512dq") &&
                                __builtin_cpu_supports("avx512vl") && __builtin_cpu_supports("avx512bw");
     return avx512 ? Simd::Avx512 : avx2_fma ? Simd::Avx2Fma : Simd::Sse2;
