@@ -3,11 +3,13 @@
 
     bench/interleave.py --rounds 5 --a "OLD/bench/rgl_batch FILE" --b "NEW/bench/rgl_batch FILE"
 
-Each command prints a table whose rows are `CASE  numbers... | CPU-ms ...` (rgl_batch, factored_eval) or
-`  file | r1 | r2 ...` ratio rows (vs_mitsuba.py's "ratios per file"). For every case and column the
-ratio A / B of each round is taken; the report is the median of those ratios and their range (for times,
-> 1: B faster; for vs_mitsuba's brdfz ÷ measured ratios, < 1: B faster). Commands run through the shell,
-so an environment assignment (PYTHONPATH=...) may lead them.
+Each command prints a table whose rows are `CASE  numbers... | CPU-ms ...` (rgl_batch, factored_eval),
+`  file | r1 | r2 ...` ratio rows (vs_mitsuba.py's "ratios per file"), `CASE ... median T ms` rows
+(tabular_eval, compact_eval) or sample's `sample() (...), WHERE: R M samples/s ..., R' M/s in blocks`
+lines (taken as times per sample and per draw). For every case and column the ratio A / B of each round
+is taken; the report is the median of those ratios and their range (for times, > 1: B faster; for
+vs_mitsuba's brdfz ÷ measured ratios, < 1: B faster). Commands run through the shell, so an environment
+assignment (PYTHONPATH=...) may lead them.
 """
 import argparse
 import re
@@ -22,6 +24,17 @@ def figures(text: str) -> dict:
     """{(case, column): value} from one run's output."""
     out = {}
     for line in text.splitlines():
+        median = re.match(rf"\s*(\S.*?)\s+median\s+({NUMBER}) ms", line)
+        if median:  # CASE ... median T ms
+            out[(re.sub(r"\s+", " ", median.group(1)), "ms")] = float(median.group(2))
+            continue
+        sampled = re.match(rf"\s*sample\(\) \(.*?\), (.*?): ({NUMBER}) M samples/s", line)
+        if sampled:  # sample's speed lines, as ns per sample and per draw
+            out[(f"sample(), {sampled.group(1)}", "ns")] = 1e3 / float(sampled.group(2))
+            blocks = re.search(rf"({NUMBER}) M/s in blocks", line)
+            if blocks:
+                out[(f"draw in blocks, {sampled.group(1)}", "ns")] = 1e3 / float(blocks.group(1))
+            continue
         if "|" not in line:
             continue
         left, _, right = line.partition("|")
