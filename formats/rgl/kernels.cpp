@@ -1,9 +1,9 @@
 // RglBrdf's batch kernels (kernels.h): the Dupuy-Jakob parameterisation as Mitsuba 3's `measured`
 // plugin evaluates and samples it (rgl.h), over blocks of pairs in passes across arrays of numbers, as
 // the table kernels do (lib/src/detail/table_lookup.h). Written once and compiled for each of Highway's
-// targets (lib/src/detail/hwy_dispatch.h picks one at run time): the arithmetic passes are branch-free
-// loops without libm calls, which the compiler vectorises for the target; the table reads between them
-// are Highway vectors, each lane's two θi slices of an entry one 8-byte read (kernels.h).
+// targets (lib/runtime/src/hwy_dispatch.h picks one at run time): the arithmetic passes are
+// branch-free loops without libm calls, which the compiler vectorises for the target; the table reads
+// between them are Highway vectors, each lane's two θi slices of an entry one 8-byte read (kernels.h).
 //
 // Arithmetic is in double over the float32 tables, operation for operation the scalar warps' (Mitsuba's
 // Marginal2D, after Dupuy & Jakob 2018), with two substitutions that vectorise: angles by the
@@ -21,6 +21,7 @@
 #include <numbers>
 
 #include "detail/fast_math.h"
+#include "detail/simd.h"
 
 // Compiled once per Highway target (hwy/foreach_target.h includes this file again for each).
 #undef HWY_TARGET_INCLUDE
@@ -593,7 +594,7 @@ void SampleWarp(const WarpTables& w, int slice, double* x, double* y, double* pd
 HWY_AFTER_NAMESPACE();
 
 #if HWY_ONCE
-#include "detail/hwy_dispatch.h"
+#include "hwy_dispatch.h"
 
 namespace brdfz::rgl::detail {
 

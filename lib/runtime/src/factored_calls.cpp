@@ -1,20 +1,36 @@
+// The factored eval's builds (factored_calls.h), one per Highway target: foreach_target.h includes this
+// file again for each, and hwy_dispatch.h picks one.
+#ifndef BRDFZ_RUNTIME_FACTORED_CALLS_ONCE
+#define BRDFZ_RUNTIME_FACTORED_CALLS_ONCE
 #include "factored_calls.h"
+#include "hwy_dispatch.h"
+#endif  // BRDFZ_RUNTIME_FACTORED_CALLS_ONCE
 
+#undef HWY_TARGET_INCLUDE
+#define HWY_TARGET_INCLUDE "factored_calls.cpp"
+#include <hwy/foreach_target.h>  // IWYU pragma: keep
+
+#include <hwy/highway.h>
+
+HWY_BEFORE_NAMESPACE();
+namespace brdfz::runtime::detail::HWY_NAMESPACE {
+
+// factor_lanes(level) floats per blend step, as the library's build of the kernel for the target.
+[[gnu::flatten]] void FactoredEval(const kernels::FactorView& f, const Vec3& wi, const Vec3& wo, double* out) {
+    constexpr int kLanes = static_cast<int>(kernels::factor_lanes(kernels::level_of(HWY_TARGET)));
+    kernels::eval_factored<kLanes>(f, wi, wo, out);
+}
+
+}  // namespace brdfz::runtime::detail::HWY_NAMESPACE
+HWY_AFTER_NAMESPACE();
+
+#if HWY_ONCE
 namespace brdfz::runtime::detail {
-namespace {
-
-struct FactoredEval {
-    static constexpr bool kAvx512 = true, kFma = true;  // the core's kernel's builds
-    template <Simd S>
-    static void run(const kernels::FactorView& f, const Vec3& wi, const Vec3& wo, double* out) {
-        kernels::eval_factored<static_cast<int>(kernels::factor_lanes(S))>(f, wi, wo, out);
-    }
-};
-
-}  // namespace
 
 FactoredEvalFn* factored_eval_build(Simd level) {
-    return kernels::Builds<FactoredEval, void(const kernels::FactorView&, const Vec3&, const Vec3&, double*)>::at(level);
+    static const auto builds = BRDFZ_HWY_BUILDS(FactoredEval);
+    return builds.at(level);
 }
 
 }  // namespace brdfz::runtime::detail
+#endif  // HWY_ONCE

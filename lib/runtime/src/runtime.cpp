@@ -1,3 +1,7 @@
+// brdfz::runtime. Its calls are compiled for each Highway target (hwy/foreach_target.h includes this file
+// again for each; hwy_dispatch.h picks one when a material opens), the rest once.
+#ifndef BRDFZ_RUNTIME_ONCE
+#define BRDFZ_RUNTIME_ONCE
 #include "brdfz/runtime/runtime.h"
 
 #include <algorithm>
@@ -29,6 +33,7 @@
 #include "brdfz/runtime/kernels/values.h"
 #include "brdfz/runtime/layout.h"
 #include "factored_calls.h"
+#include "hwy_dispatch.h"
 
 namespace brdfz::runtime {
 namespace detail {
@@ -499,48 +504,55 @@ Sample64 sample64(const Data* d, const Vec3& wo, double u1, double u2) noexcept 
     return s;
 }
 
-// The calls' builds (kernels/simd.h: Builds), each flattened into one body of its kind's code: the
-// lookups and the sampler run faster with AVX2 (as the library's one-pair table call); without FMA it
-// gives the baseline's bits. A factorisation's eval is its own build's (factored_calls.h), the library's
-// to the bit. An analytic model's eval is not flattened: its lobe mixture, every family inlined into one
-// body, runs slower.
-template <typename Leaf>
-struct EvalCall {
-    static constexpr bool kAvx512 = false, kFma = false;
-    template <Simd S>
-    static Rgb64 run(const Data* d, const Vec3& wi, const Vec3& wo) noexcept {
-        return eval64<Leaf, S != Simd::Sse2>(d, wi, wo);
-    }
-};
-struct PdfCall {
-    [[maybe_unused]] static constexpr bool kAvx512 = false, kFma = false;  // CallTables takes its builds directly
-    template <Simd>
-    static double run(const Data* d, const Vec3& wo, const Vec3& wi) noexcept {
-        return pdf64(d, wo, wi);
-    }
-};
-template <typename Leaf>
-struct SampleCall {
-    static constexpr bool kAvx512 = false, kFma = false;
-    template <Simd S>
-    static Sample64 run(const Data* d, const Vec3& wo, double u1, double u2) noexcept {
-        return sample64<Leaf, S != Simd::Sse2>(d, wo, u1, u2);
-    }
-};
+}  // namespace
+}  // namespace detail
+}  // namespace brdfz::runtime
+#endif  // BRDFZ_RUNTIME_ONCE
 
-template <typename Leaf>
-struct CallTables {
-    using E = k::Builds<EvalCall<Leaf>, Rgb64(const Data*, const Vec3&, const Vec3&)>;
-    using P = k::Builds<PdfCall, double(const Data*, const Vec3&, const Vec3&)>;
-    using S = k::Builds<SampleCall<Leaf>, Sample64(const Data*, const Vec3&, double, double)>;
-    static constexpr bool kLobes = std::is_same_v<Leaf, LobesLeaf>;
-    static constexpr Calls base{kLobes ? eval64<Leaf> : E::baseline, P::baseline, S::baseline};
-    static constexpr Calls avx2{kLobes ? eval64<Leaf> : E::avx2, P::avx2, S::avx2};
-};
+#undef HWY_TARGET_INCLUDE
+#define HWY_TARGET_INCLUDE "runtime.cpp"
+#include <hwy/foreach_target.h>  // IWYU pragma: keep
 
+#include <hwy/highway.h>
+
+HWY_BEFORE_NAMESPACE();
+namespace brdfz::runtime::detail::HWY_NAMESPACE {
+
+// The calls for the target, each flattened into one body of its kind's code: the lookups and the
+// sampler run faster in the wider builds (as the library's one-pair table call); without FMA they give
+// the baseline's bits. A factorisation's eval is its own build's (factored_calls.h), the library's to
+// the bit.
+constexpr bool kWide = kernels::level_of(HWY_TARGET) != Simd::Sse2;
+template <typename Leaf>
+[[gnu::flatten]] Rgb64 Eval(const Data* d, const Vec3& wi, const Vec3& wo) noexcept {
+    return eval64<Leaf, kWide>(d, wi, wo);
+}
+[[gnu::flatten]] double Pdf(const Data* d, const Vec3& wo, const Vec3& wi) noexcept { return pdf64(d, wo, wi); }
+template <typename Leaf>
+[[gnu::flatten]] Sample64 Sample(const Data* d, const Vec3& wo, double u1, double u2) noexcept {
+    return sample64<Leaf, kWide>(d, wo, u1, u2);
+}
+
+}  // namespace brdfz::runtime::detail::HWY_NAMESPACE
+HWY_AFTER_NAMESPACE();
+
+#if HWY_ONCE
+namespace brdfz::runtime {
+namespace detail {
+namespace {
+
+// The calls of one kind at each level. An analytic model's eval is not flattened: its lobe mixture,
+// every family inlined into one body, runs slower.
 template <typename Leaf>
 const Calls* calls_of(Simd level) {
-    return k::build_for(level, &CallTables<Leaf>::base, &CallTables<Leaf>::avx2);
+    static const auto eval = BRDFZ_HWY_BUILDS(Eval<Leaf>);
+    static const auto pdf = BRDFZ_HWY_BUILDS(Pdf);
+    static const auto sample = BRDFZ_HWY_BUILDS(Sample<Leaf>);
+    static const auto at = [](Simd s) {
+        return Calls{std::is_same_v<Leaf, LobesLeaf> ? eval64<Leaf> : eval.at(s), pdf.at(s), sample.at(s)};
+    };
+    static const Calls calls[] = {at(Simd::Sse2), at(Simd::Avx2Fma), at(Simd::Avx512)};
+    return &calls[static_cast<int>(level)];
 }
 
 // The call table of the root's kind (a φh stack's: its slices' kind, where they share one).
@@ -657,3 +669,4 @@ void Material::sample(const Float3* wo, const float* u, Sample32* out, std::size
 }
 
 }  // namespace brdfz::runtime
+#endif  // HWY_ONCE

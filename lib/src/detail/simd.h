@@ -1,5 +1,5 @@
-// The kernels' builds and their dispatch are the runtime's (brdfz/runtime/kernels/simd.h), one place
-// for the library and brdfz::runtime.
+// The kernels' levels are the runtime's (brdfz/runtime/kernels/simd.h), one place for the library and
+// brdfz::runtime.
 #pragma once
 
 #include "brdfz/runtime/kernels/simd.h"
@@ -7,7 +7,6 @@
 namespace brdfz::detail {
 
 using ::brdfz::Simd;
-using runtime::kernels::build_for;
 using runtime::kernels::simd_cap;
 using runtime::kernels::simd_level;
 

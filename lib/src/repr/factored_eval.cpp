@@ -1,7 +1,7 @@
 // FactoredBrdf's batch eval kernel (factored.h), compiled for each Highway target (foreach_target.h
-// includes this file again for each; detail/hwy_dispatch.h picks one at run time). The file contracts
-// to FMA (lib/CMakeLists.txt, brdfz_contract_fma): its AVX2 and AVX-512 builds do, as brdfz::runtime's
-// builds of the same kernel (runtime/kernels/factored.h) at those levels.
+// includes this file again for each; lib/runtime/src/hwy_dispatch.h picks one at run time). The file
+// contracts to FMA (lib/CMakeLists.txt, brdfz_contract_fma): its AVX2 and AVX-512 builds do, as
+// brdfz::runtime's builds of the same kernel (runtime/kernels/factored.h) at those levels.
 #ifndef BRDFZ_REPR_FACTORED_EVAL_ONCE
 #define BRDFZ_REPR_FACTORED_EVAL_ONCE
 #include <algorithm>
@@ -9,7 +9,7 @@
 #include <type_traits>
 
 #include "brdfz/runtime/kernels/factored.h"
-#include "detail/hwy_dispatch.h"
+#include "hwy_dispatch.h"
 #include "detail/table_lookup.h"
 #include "repr/factored_impl.h"
 
@@ -149,7 +149,8 @@ namespace brdfz::HWY_NAMESPACE {
 template <typename S>
 [[gnu::flatten]] void EvalPairs(const FactorView& f, FactorSpace space, const Vec3* wi, const Vec3* wo, Rgb* out,
                                 std::size_t n, std::uint64_t& clamped) {
-    constexpr int W = static_cast<int>(runtime::kernels::factor_lanes(detail::level_of(HWY_TARGET)));
+    using namespace runtime::kernels;
+    constexpr int W = static_cast<int>(factor_lanes(level_of(HWY_TARGET)));
     eval_pairs<W, S::kLayout, S::kGrouped>(f, space, wi, wo, out, n, clamped);
 }
 

@@ -1,11 +1,12 @@
 // The table kernels (table_kernels.h) compiled for each Highway target: foreach_target.h includes this
-// file again for each, and detail/hwy_dispatch.h picks one at run time. Without FMA contraction
-// (brdfz_float), so every target gives the same bits as the one-pair calls and brdfz::runtime.
+// file again for each, and lib/runtime/src/hwy_dispatch.h picks one at run time. Without FMA
+// contraction (brdfz_float), so every target gives the same bits as the one-pair calls and
+// brdfz::runtime.
 #ifndef BRDFZ_REPR_TABLE_KERNELS_ONCE
 #define BRDFZ_REPR_TABLE_KERNELS_ONCE
 #include "repr/table_kernels.h"
 
-#include "detail/hwy_dispatch.h"
+#include "hwy_dispatch.h"
 #include "detail/table_lookup.h"
 #include "detail/table_sample.h"
 #endif  // BRDFZ_REPR_TABLE_KERNELS_ONCE
@@ -22,7 +23,7 @@ namespace brdfz::detail::HWY_NAMESPACE {
 // Whether the corners' blend holds the three channels in one vector of four doubles (grid.h's
 // blend_linear_vectors), as brdfz::runtime's builds above the baseline level do; two of two doubles in
 // the baseline's. The same bits either way.
-constexpr bool kWide = level_of(HWY_TARGET) != Simd::Sse2;
+constexpr bool kWide = runtime::kernels::level_of(HWY_TARGET) != Simd::Sse2;
 
 // Each kernel whole for the target (flatten: its loops vectorise only where nothing in them is a call).
 template <typename Values>

@@ -1,7 +1,7 @@
 // The Rusinkiewicz tables' kernels (TabularBrdf, CompactTableBrdf): eval and sample with its weight, one
 // pair and in batches, for each of the library's Values policies. Their bodies are detail/table_lookup.h's
 // and detail/table_sample.h's; table_kernels.cpp compiles them for each Highway target and runs the one
-// for simd_level() (detail/hwy_dispatch.h).
+// for simd_level() (lib/runtime/src/hwy_dispatch.h).
 #pragma once
 
 #include <array>

@@ -1,6 +1,6 @@
 // The half-vector sampler. Its block kernel (draw_lanes) is compiled for each of Highway's targets
-// (hwy/foreach_target.h includes this file again for each; lib/src/detail/hwy_dispatch.h picks one at
-// run time), the rest once.
+// (hwy/foreach_target.h includes this file again for each; lib/runtime/src/hwy_dispatch.h picks one
+// at run time), the rest once.
 #ifndef BRDFZ_SAMPLE_HALFVECTOR_ONCE
 #define BRDFZ_SAMPLE_HALFVECTOR_ONCE
 #include "brdfz/sample/halfvector.h"
@@ -308,7 +308,7 @@ namespace brdfz::HWY_NAMESPACE {
 HWY_AFTER_NAMESPACE();
 
 #if HWY_ONCE
-#include "detail/hwy_dispatch.h"
+#include "hwy_dispatch.h"
 
 namespace brdfz {
 

@@ -11,8 +11,9 @@
 //   Avx2Fma (Sve)  AVX2                            SVE
 //   Avx512 (Sve2)  AVX3 (AVX-512 F, VL, DQ, BW)    SVE2
 //
-// A level's CPU test is cpu_simd()'s (runtime/kernels/simd.h), so a build runs only where the CPU has
-// its instructions; a target the compiler did not build falls to the next narrower one.
+// A level's CPU test is cpu_simd()'s (brdfz/runtime/kernels/simd.h), so a build runs only where the CPU has
+// its instructions; a target the compiler did not build falls to the next narrower one. Private to the
+// library and brdfz::runtime (on their include path through the root CMakeLists.txt's brdfz_simd).
 #pragma once
 
 #include <cstdint>
@@ -20,9 +21,9 @@
 
 #include <hwy/detect_targets.h>
 
-#include "detail/simd.h"
+#include "brdfz/runtime/kernels/simd.h"
 
-namespace brdfz::detail {
+namespace brdfz::runtime::kernels {
 
 // The level a Highway target's build serves, for kernels whose body depends on it (their lane counts).
 constexpr Simd level_of(std::int64_t target) {
@@ -45,16 +46,16 @@ struct HwyBuilds {
         if (level >= Simd::Sve2 && sve2) return sve2;
         if (level >= Simd::Avx2Fma && avx2) return avx2;
         if (level >= Simd::Sve && sve) return sve;
-        return sse4 && runtime::kernels::cpu_has_sse4() ? sse4 : fallback;
+        return sse4 && cpu_has_sse4() ? sse4 : fallback;
     }
 };
 
-}  // namespace brdfz::detail
+}  // namespace brdfz::runtime::kernels
 
 // The builds of Fn, a function declared in each target's namespace (HWY_NAMESPACE) of the including
 // file; null where a target was not compiled. Only after hwy/highway.h, in the file's `#if HWY_ONCE` part.
 #define BRDFZ_HWY_BUILDS(Fn)                                                                              \
-    ::brdfz::detail::HwyBuilds<std::remove_pointer_t<decltype(HWY_CHOOSE_FALLBACK(Fn))>> {                \
+    ::brdfz::runtime::kernels::HwyBuilds<std::remove_pointer_t<decltype(HWY_CHOOSE_FALLBACK(Fn))>> {                \
         HWY_CHOOSE_FALLBACK(Fn), HWY_CHOOSE_SSE4(Fn), HWY_CHOOSE_AVX2(Fn), HWY_CHOOSE_AVX3(Fn), HWY_CHOOSE_SVE(Fn), \
             HWY_CHOOSE_SVE2(Fn)                                                                           \
     }
