@@ -335,7 +335,7 @@ TEST_CASE("runtime: bad layouts are refused with a line, never read", "[runtime]
     CHECK_THAT(rt::Material::open("/nonexistent/x.brdfzrt", &error) ? std::string() : error, Catch::Contains("/nonexistent/x.brdfzrt"));
 }
 
-TEST_CASE("runtime: every build this CPU runs gives the baseline build's bits", "[runtime][qemu]") {
+TEST_CASE("runtime: every build this CPU runs gives the baseline build's bits", "[runtime][kernels][qemu]") {
     const CoatedDiffuse source = coated(0.08);
     // Named, not bound: the lambda below captures them (clang 14 cannot capture structured bindings).
     const auto views = test::random_views(5000, 3);

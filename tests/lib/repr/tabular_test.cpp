@@ -277,7 +277,7 @@ TEST_CASE("lookups on a warped θd axis read the samples where the axis puts the
 // give the one-pair eval's values, bit for bit, for float32 tables (both lookups) and compact tables, on
 // a table with invalid bins, for pairs that take the kernel's fallbacks (φd ill-conditioned: wi = wo, the
 // normal) and for bad input.
-TEST_CASE("table eval batches: each value is the one-pair eval's, in both builds", "[tabular][compact][qemu]") {
+TEST_CASE("table eval batches: each value is the one-pair eval's, in both builds", "[tabular][compact][kernels][qemu]") {
     Table t(GridSpec{});
     for (std::size_t b = 0; b < t.bins(); ++b) {
         const double v = 1.0 + std::sin(0.001 * static_cast<double>(b));

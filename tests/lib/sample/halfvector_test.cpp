@@ -393,7 +393,7 @@ TEST_CASE("table sample_batch: each result is the one-at-a-time sample, and bad 
 // draw_block searches the CDFs across draws in two steps of the guided scan and hands longer scans
 // (and cell coordinates needing a nudge) to Piecewise2D::sample: every draw must still be draw()'s,
 // angles included, in both builds. A near-specular table has the steepest CDFs (the longest scans).
-TEST_CASE("HalfVectorSampler::draw_block: each draw is draw()'s, in every build", "[sample][tabular][qemu]") {
+TEST_CASE("HalfVectorSampler::draw_block: each draw is draw()'s, in every build", "[sample][tabular][kernels][qemu]") {
     const TabularBrdf t = tabulated(0.02);
     const HalfVectorSampler& sampler = *t.sampler().fine();
     auto [wo, us] = random_views(20000, 31);
