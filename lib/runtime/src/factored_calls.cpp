@@ -12,13 +12,14 @@
 
 #include <hwy/highway.h>
 
+#include "factor_lanes-inl.h"
+
 HWY_BEFORE_NAMESPACE();
 namespace brdfz::runtime::detail::HWY_NAMESPACE {
 
-// factor_lanes(level) floats per blend step, as the library's build of the kernel for the target.
+// The target's sums, as the library's build of the kernel for the target.
 [[gnu::flatten]] void FactoredEval(const kernels::FactorView& f, const Vec3& wi, const Vec3& wo, double* out) {
-    constexpr int kLanes = static_cast<int>(kernels::factor_lanes(kernels::level_of(HWY_TARGET)));
-    kernels::eval_factored<kLanes>(f, wi, wo, out);
+    kernels::eval_factored<kernels::HWY_NAMESPACE::FactorLanes>(f, wi, wo, out);
 }
 
 }  // namespace brdfz::runtime::detail::HWY_NAMESPACE

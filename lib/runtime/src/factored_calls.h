@@ -1,6 +1,6 @@
-// The factored eval's builds (kernels/factored.h), compiled apart from the rest of the runtime: like the
-// core's kernel, with FMA contraction (CMakeLists.txt: brdfz_contract_fma), so that a material gives the
-// library's bits at every level.
+// The factored eval's builds (kernels/factored.h), one per Highway target, with the sums of the core's
+// kernel (lib/runtime/src/factor_lanes-inl.h), so that a material gives the library's bits at every
+// level.
 #pragma once
 
 #include "brdfz/runtime/kernels/factored.h"

@@ -410,8 +410,8 @@ std::shared_ptr<const Data> parsed(std::unique_ptr<Data> d, std::string* error) 
     return nullptr;
 }
 
-// The evaluators of one kind of object, for a pair above the horizon (eval<Wide>(o, wi, wo, f); Wide:
-// in a build with AVX2). Each call table below is built for one of them, so that a material's calls
+// The evaluators of one kind of object, for a pair above the horizon (eval<Blend>(o, wi, wo, f); Blend:
+// a table's blend across channels, grid.h's ScalarBlend or a target's BlendLanes). Each call table below is built for one of them, so that a material's calls
 // hold only its own kind's code.
 template <typename Values, bool Nearest>
 struct TableLeaf {
@@ -420,37 +420,37 @@ struct TableLeaf {
         else if constexpr (std::is_same_v<Values, k::HalfValues>) return {o.codes, o.half_scale};
         else return {o.codes, o.lut};
     }
-    template <bool Wide>
+    template <typename Blend>
     static void eval(const Object& o, const Vec3& wi, const Vec3& wo, double f[3]) {
         const k::BinCoords c = k::fast_bin_coords(o.grid, wi, wo);
         if constexpr (Nearest)
             k::read_nearest(values(o), k::nearest_bin(o.grid, c, wi, wo), f);
         else
-            k::blend_linear_vectors<Wide>(o.grid, values(o), k::linear_corners(o.grid, c, wi, wo), f);
+            Blend::blend(o.grid, values(o), k::linear_corners(o.grid, c, wi, wo), f);
     }
 };
 struct FactoredLeaf {
-    template <bool Wide>
+    template <typename Blend>
     static void eval(const Object& o, const Vec3& wi, const Vec3& wo, double f[3]) { o.factored_eval(o.factors, wi, wo, f); }
 };
 struct LobesLeaf {
-    template <bool Wide>
+    template <typename Blend>
     static void eval(const Object& o, const Vec3& wi, const Vec3& wo, double f[3]) { k::lobe_mixture_eval(o.lobes, wi, wo, f); }
 };
 // Any object but a φh stack (the slices of one).
 struct AnyLeaf {
-    template <bool Wide, bool Nearest>
+    template <typename Blend, bool Nearest>
     static void table(const Object& o, const Vec3& wi, const Vec3& wo, double f[3]) {
-        if (o.f32) return TableLeaf<k::Float32Values, Nearest>::template eval<Wide>(o, wi, wo, f);
-        if (o.half) return TableLeaf<k::HalfValues, Nearest>::template eval<Wide>(o, wi, wo, f);
-        return TableLeaf<k::LogU8Values, Nearest>::template eval<Wide>(o, wi, wo, f);
+        if (o.f32) return TableLeaf<k::Float32Values, Nearest>::template eval<Blend>(o, wi, wo, f);
+        if (o.half) return TableLeaf<k::HalfValues, Nearest>::template eval<Blend>(o, wi, wo, f);
+        return TableLeaf<k::LogU8Values, Nearest>::template eval<Blend>(o, wi, wo, f);
     }
-    template <bool Wide>
+    template <typename Blend>
     static void eval(const Object& o, const Vec3& wi, const Vec3& wo, double f[3]) {
         switch (o.kind) {
-            case L::Kind::Table: return o.nearest ? table<Wide, true>(o, wi, wo, f) : table<Wide, false>(o, wi, wo, f);
-            case L::Kind::Factored: return FactoredLeaf::eval<Wide>(o, wi, wo, f);
-            case L::Kind::Analytic: return LobesLeaf::eval<Wide>(o, wi, wo, f);
+            case L::Kind::Table: return o.nearest ? table<Blend, true>(o, wi, wo, f) : table<Blend, false>(o, wi, wo, f);
+            case L::Kind::Factored: return FactoredLeaf::eval<Blend>(o, wi, wo, f);
+            case L::Kind::Analytic: return LobesLeaf::eval<Blend>(o, wi, wo, f);
             case L::Kind::PhiH: break;  // never a slice: parse refuses stacks of stacks
         }
         f[0] = f[1] = f[2] = 0.0;
@@ -458,10 +458,10 @@ struct AnyLeaf {
 };
 
 // f of the root for a pair above the horizon; Leaf evaluates the root, or a φh stack's slices.
-template <typename Leaf, bool Wide>
+template <typename Leaf, typename Blend>
 void eval_root(const Data& d, const Vec3& wi, const Vec3& wo, double f[3]) {
     const Object& o = d.root;
-    if (o.kind != L::Kind::PhiH) return Leaf::template eval<Wide>(o, wi, wo, f);
+    if (o.kind != L::Kind::PhiH) return Leaf::template eval<Blend>(o, wi, wo, f);
     const k::PhiHPick pick = k::phi_h_pick(o.bilateral, o.count, wi, wo);
     f[0] = f[1] = f[2] = 0.0;
     if (!pick.ok) return;
@@ -469,16 +469,16 @@ void eval_root(const Data& d, const Vec3& wi, const Vec3& wo, double f[3]) {
     if (pick.mirrored) a.y = -a.y, b.y = -b.y;
     double x[3], y[3];
     // Slices are tables or factorisations, whose own eval is 0 below the horizon (never here).
-    Leaf::template eval<Wide>(d.slices[o.first + pick.k0], a, b, x);
-    Leaf::template eval<Wide>(d.slices[o.first + pick.k1], a, b, y);
+    Leaf::template eval<Blend>(d.slices[o.first + pick.k0], a, b, x);
+    Leaf::template eval<Blend>(d.slices[o.first + pick.k1], a, b, y);
     for (int c = 0; c < 3; ++c) f[c] = x[c] * (1.0 - pick.t) + y[c] * pick.t;
 }
 
 // The calls on prepared directions (Calls' contract).
-template <typename Leaf, bool Wide = false>
+template <typename Leaf, typename Blend = k::ScalarBlend>
 Rgb64 eval64(const Data* d, const Vec3& wi, const Vec3& wo) noexcept {
     Rgb64 f;
-    eval_root<Leaf, Wide>(*d, wi, wo, f.data());
+    eval_root<Leaf, Blend>(*d, wi, wo, f.data());
     return f;
 }
 
@@ -487,7 +487,7 @@ double pdf64(const Data* d, const Vec3& wo, const Vec3& wi) noexcept {
     return k::compact_pdf(d->sampler, wo, wi);
 }
 
-template <typename Leaf, bool Wide>
+template <typename Leaf, typename Blend>
 Sample64 sample64(const Data* d, const Vec3& wo, double u1, double u2) noexcept {
     Sample64 s;
     if (!d->has_sampler) {
@@ -499,7 +499,7 @@ Sample64 sample64(const Data* d, const Vec3& wo, double u1, double u2) noexcept 
     }
     if (!(s.wi.z > 0.0 && s.pdf > 0.0 && s.pdf < std::numeric_limits<double>::infinity())) return {};
     double f[3];
-    eval_root<Leaf, Wide>(*d, s.wi, wo, f);
+    eval_root<Leaf, Blend>(*d, s.wi, wo, f);
     for (int c = 0; c < 3; ++c) s.weight[c] = f[c] * s.wi.z / s.pdf;  // the library's arithmetic
     return s;
 }
@@ -515,6 +515,8 @@ Sample64 sample64(const Data* d, const Vec3& wo, double u1, double u2) noexcept 
 
 #include <hwy/highway.h>
 
+#include "blend_lanes-inl.h"
+
 HWY_BEFORE_NAMESPACE();
 namespace brdfz::runtime::detail::HWY_NAMESPACE {
 
@@ -522,15 +524,15 @@ namespace brdfz::runtime::detail::HWY_NAMESPACE {
 // sampler run faster in the wider builds (as the library's one-pair table call); without FMA they give
 // the baseline's bits. A factorisation's eval is its own build's (factored_calls.h), the library's to
 // the bit.
-constexpr bool kWide = kernels::level_of(HWY_TARGET) != Simd::Sse2;
+using Blend = kernels::HWY_NAMESPACE::BlendLanes;
 template <typename Leaf>
 [[gnu::flatten]] Rgb64 Eval(const Data* d, const Vec3& wi, const Vec3& wo) noexcept {
-    return eval64<Leaf, kWide>(d, wi, wo);
+    return eval64<Leaf, Blend>(d, wi, wo);
 }
 [[gnu::flatten]] double Pdf(const Data* d, const Vec3& wo, const Vec3& wi) noexcept { return pdf64(d, wo, wi); }
 template <typename Leaf>
 [[gnu::flatten]] Sample64 Sample(const Data* d, const Vec3& wo, double u1, double u2) noexcept {
-    return sample64<Leaf, kWide>(d, wo, u1, u2);
+    return sample64<Leaf, Blend>(d, wo, u1, u2);
 }
 
 }  // namespace brdfz::runtime::detail::HWY_NAMESPACE

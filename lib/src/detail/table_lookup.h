@@ -78,11 +78,12 @@ inline Rgb read_nearest(const Values& values, std::size_t bin) {
     return f;
 }
 
-// The linear blend across channels (the runtime's, kernels/grid.h), as an Rgb.
-template <bool Wide, typename Values>
+// The linear blend across channels, as an Rgb. Blend: a target's BlendLanes (lib/runtime/src/
+// blend_lanes-inl.h, the runtime's too), whose blend gives grid.h's blend_linear's bits.
+template <typename Blend, typename Values>
 [[gnu::always_inline]] inline Rgb read_linear(const GridSpec& g, const Values& values, const Corners& k) {
     Rgb f;
-    runtime::kernels::blend_linear_vectors<Wide>(g, values, k, f.data());
+    Blend::blend(g, values, k, f.data());
     return f;
 }
 
@@ -100,12 +101,12 @@ template <typename Values>
 }
 
 // f_r for one pair above the horizon.
-template <bool Wide, typename Values>
+template <typename Blend, typename Values>
 [[gnu::always_inline]] inline Rgb eval_one(const GridSpec& g, const Values& values, Lookup lookup, const Vec3& wi,
                                            const Vec3& wo) {
     const BinCoords c = fast_bin_coords(g, wi, wo);
     if (lookup == Lookup::Nearest) return read_nearest(values, nearest_bin(g, c, wi, wo));
-    return read_linear<Wide>(g, values, linear_corners(g, c, wi, wo));
+    return read_linear<Blend>(g, values, linear_corners(g, c, wi, wo));
 }
 
 // Batch kernels (eval_table_batch, and sample_table_batch's weights) work in blocks of pairs, in passes
@@ -129,7 +130,7 @@ struct BlockCoords {
 // lookup's arithmetic is too long for the core to run ahead to the next pair's table read, so every
 // cache miss stalled in turn. Pairs without use[k] are skipped; wi(k) and wo[k] are the pair, for the
 // fallbacks. Each f is eval_table's, bit for bit.
-template <bool Wide, typename Values, typename Wi, typename Emit>
+template <typename Blend, typename Values, typename Wi, typename Emit>
 [[gnu::always_inline]] inline void lookup_block(const GridSpec& g, const Values& values, Lookup lookup,
                                                 const BlockCoords& c, const bool* use, std::size_t m, Wi wi,
                                                 const Vec3* wo, Emit emit) {
@@ -174,12 +175,12 @@ template <bool Wide, typename Values, typename Wi, typename Emit>
     for (std::size_t k = 0; k < m; ++k) {
         if (k + kLinearAhead < m) prefetch(k + kLinearAhead);
         if (use[k])
-            emit(k, read_linear<Wide>(g, values, {{h0[k], h1[k], ht[k]}, {d0[k], d1[k], dt[k]}, {p0[k], p1[k], pt[k]}}));
+            emit(k, read_linear<Blend>(g, values, {{h0[k], h1[k], ht[k]}, {d0[k], d1[k], dt[k]}, {p0[k], p1[k], pt[k]}}));
     }
 }
 
 // Blocks of pairs: their coordinates (vectorised), then lookup_block.
-template <bool Wide, typename Values>
+template <typename Blend, typename Values>
 [[gnu::always_inline]] inline void eval_table_passes(const GridSpec& g, const Values& values, Lookup lookup,
                                                      const Vec3* wi, const Vec3* wo, Rgb* out, std::size_t n) {
     BlockCoords coords;
@@ -197,7 +198,7 @@ template <bool Wide, typename Values>
         for (std::size_t k = 0; k < m; ++k) above[k] = (a[k].z > 0.0) & (b[k].z > 0.0);
         for (std::size_t k = 0; k < m; ++k)
             if (!above[k]) o[k] = Rgb{};
-        lookup_block<Wide>(
+        lookup_block<Blend>(
             g, values, lookup, coords, above, m, [a](std::size_t k) -> const Vec3& { return a[k]; }, b,
             [o](std::size_t k, const Rgb& f) { o[k] = f; });
     }

@@ -57,7 +57,7 @@ inline void set_weight(BrdfSample& s, const Rgb& f) {
 }
 
 // One sample with its weight, for wo above the horizon and u in [0, 1)² (Brdf::sample_above).
-template <bool Wide, typename Values>
+template <typename Blend, typename Values>
 [[gnu::always_inline]] inline BrdfSample sample_one(const GridSpec& g, const Values& values, Lookup lookup,
                                                     const HalfVectorSampler& sampler, const Vec3& wo, double u1,
                                                     double u2) {
@@ -66,14 +66,14 @@ template <bool Wide, typename Values>
     if (!Brdf::usable(s)) return {};
     const BinCoords c = draw_bin_coords(g, d, wo);
     set_weight(s, lookup == Lookup::Nearest ? read_nearest(values, nearest_bin(g, c, s.wi, wo))
-                                            : read_linear<Wide>(g, values, linear_corners(g, c, s.wi, wo)));
+                                            : read_linear<Blend>(g, values, linear_corners(g, c, s.wi, wo)));
     return s;
 }
 
 // Brdf::sample_batch: blocks of draws in passes, as eval_table_batch does for pairs: (1) the draws
 // (HalfVectorSampler::draw_block), (2) their bin coordinates, (3) the table reads (lookup_block) and the
 // weights. Each result is sample_table's, bit for bit.
-template <bool Wide, typename Values>
+template <typename Blend, typename Values>
 [[gnu::always_inline]] inline void sample_table_passes(const GridSpec& g, const Values& values, Lookup lookup,
                                                        const HalfVectorSampler& sampler, const Vec3* wo,
                                                        const std::array<double, 2>* u, BrdfSample* out,
@@ -97,7 +97,7 @@ template <bool Wide, typename Values>
         for (std::size_t k = 0; k < m; ++k)
             if (ok[k] && !d.half[k]) coords.set(k, fast_bin_coords(g, wi(k), w[k]));
         // Each sample is written once, whole, with its weight.
-        lookup_block<Wide>(g, values, lookup, coords, ok, m, wi, w, [s, &d, &wi](std::size_t k, const Rgb& f) {
+        lookup_block<Blend>(g, values, lookup, coords, ok, m, wi, w, [s, &d, &wi](std::size_t k, const Rgb& f) {
             s[k] = {wi(k), d.pdf[k], {}};
             set_weight(s[k], f);
         });

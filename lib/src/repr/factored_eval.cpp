@@ -1,7 +1,6 @@
 // FactoredBrdf's batch eval kernel (factored.h), compiled for each Highway target (foreach_target.h
-// includes this file again for each; lib/runtime/src/hwy_dispatch.h picks one at run time). The file
-// contracts to FMA (lib/CMakeLists.txt, brdfz_contract_fma): its AVX2 and AVX-512 builds do, as
-// brdfz::runtime's builds of the same kernel (runtime/kernels/factored.h) at those levels.
+// includes this file again for each; lib/runtime/src/hwy_dispatch.h picks one at run time). Its sums are
+// the target's FactorLanes (lib/runtime/src/factor_lanes-inl.h), brdfz::runtime's too.
 #ifndef BRDFZ_REPR_FACTORED_EVAL_ONCE
 #define BRDFZ_REPR_FACTORED_EVAL_ONCE
 #include <algorithm>
@@ -53,24 +52,22 @@ template <FactorLayout L>
     for (int c = 0; c < CornersOf<L>::kColumns; ++c) out.c[c][k] = cols[c], out.cw[c][k] = cw[c];
 }
 
-// Pair i's transform-space values, W floats a step (runtime/kernels/factored.h: factor_sums, the
-// runtime's own).
-template <int W, bool Grouped, typename Corners>
+// Pair i's transform-space values (Sums: runtime/kernels/factored.h's sums policy).
+template <typename Sums, bool Grouped, typename Corners>
 [[gnu::always_inline]] inline void blend(const FactorView& f, const Corners& k, std::size_t i, float y[3]) {
     constexpr int NR = Corners::kRows, NC = Corners::kColumns;
     int rows[NR], cols[NC];
     float rw[NR], cw[NC];
     for (int r = 0; r < NR; ++r) rows[r] = k.r[r][i], rw[r] = k.rw[r][i];
     for (int c = 0; c < NC; ++c) cols[c] = k.c[c][i], cw[c] = k.cw[c][i];
-    runtime::kernels::factor_sums<W, Grouped, NR, NC>(f, rows, rw, cols, cw, y);
+    Sums::template sums<Grouped, NR, NC>(f, rows, rw, cols, cw, y);
 }
 
 // Blocks of pairs in passes, as the tabular kernel: (1) the coordinates, branch-free so the compiler
 // vectorises them (the rare pairs whose φd they flag as ill-conditioned recomputed exactly); (2) the
 // corners, branch-free and vectorised too, and the prefetches of the factor rows when they miss the
-// cache; (3) the blends; (4) the inverse transform, vectorised over the block. W: the blend's floats
-// per step.
-template <int W, FactorLayout L, bool Grouped>
+// cache; (3) the blends; (4) the inverse transform, vectorised over the block.
+template <typename Sums, FactorLayout L, bool Grouped>
 [[gnu::always_inline]] inline void eval_pairs(const FactorView& f, FactorSpace space, const Vec3* wi, const Vec3* wo,
                                               Rgb* out, std::size_t n, std::uint64_t& clamped) {
     const GridSpec& g = f.grid;
@@ -115,7 +112,7 @@ template <int W, FactorLayout L, bool Grouped>
                 for (const auto& c : corners.c) __builtin_prefetch(f.v + static_cast<std::size_t>(c[k]) * f.width);
         for (std::size_t k = 0; k < m; ++k) {
             if (above[k])
-                blend<W, Grouped>(f, corners, k, y + 3 * k);
+                blend<Sums, Grouped>(f, corners, k, y + 3 * k);
             else
                 y[3 * k] = y[3 * k + 1] = y[3 * k + 2] = 0.0f;  // gives the value 0, not counted
         }
@@ -141,17 +138,18 @@ struct Shape {
 
 #include <hwy/highway.h>
 
+#include "factor_lanes-inl.h"
+
 HWY_BEFORE_NAMESPACE();
 namespace brdfz::HWY_NAMESPACE {
 
-// The kernel for the target: factor_lanes(level) floats per blend step, as brdfz::runtime's build at the
-// level, so both give the same bits (factored.h). Single-pair eval runs the same build as the batch.
+// The kernel for the target, with brdfz::runtime's sums for the target, so both give the same bits
+// (factored.h). Single-pair eval runs the same build as the batch.
 template <typename S>
 [[gnu::flatten]] void EvalPairs(const FactorView& f, FactorSpace space, const Vec3* wi, const Vec3* wo, Rgb* out,
                                 std::size_t n, std::uint64_t& clamped) {
-    using namespace runtime::kernels;
-    constexpr int W = static_cast<int>(factor_lanes(level_of(HWY_TARGET)));
-    eval_pairs<W, S::kLayout, S::kGrouped>(f, space, wi, wo, out, n, clamped);
+    eval_pairs<runtime::kernels::HWY_NAMESPACE::FactorLanes, S::kLayout, S::kGrouped>(f, space, wi, wo, out, n,
+                                                                                       clamped);
 }
 
 }  // namespace brdfz::HWY_NAMESPACE

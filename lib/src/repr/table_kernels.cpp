@@ -17,34 +17,34 @@
 
 #include <hwy/highway.h>
 
+#include "blend_lanes-inl.h"
+
 HWY_BEFORE_NAMESPACE();
 namespace brdfz::detail::HWY_NAMESPACE {
 
-// Whether the corners' blend holds the three channels in one vector of four doubles (grid.h's
-// blend_linear_vectors), as brdfz::runtime's builds above the baseline level do; two of two doubles in
-// the baseline's. The same bits either way.
-constexpr bool kWide = runtime::kernels::level_of(HWY_TARGET) != Simd::Sse2;
+// The corners' blend across channels, as brdfz::runtime's build for the target blends them.
+using Blend = runtime::kernels::HWY_NAMESPACE::BlendLanes;
 
 // Each kernel whole for the target (flatten: its loops vectorise only where nothing in them is a call).
 template <typename Values>
 [[gnu::flatten]] Rgb EvalOne(const GridSpec& g, const Values& values, Lookup lookup, const Vec3& wi, const Vec3& wo) {
-    return eval_one<kWide>(g, values, lookup, wi, wo);
+    return eval_one<Blend>(g, values, lookup, wi, wo);
 }
 template <typename Values>
 [[gnu::flatten]] void EvalBatch(const GridSpec& g, const Values& values, Lookup lookup, const Vec3* wi, const Vec3* wo,
                                 Rgb* out, std::size_t n) {
-    eval_table_passes<kWide>(g, values, lookup, wi, wo, out, n);
+    eval_table_passes<Blend>(g, values, lookup, wi, wo, out, n);
 }
 template <typename Values>
 [[gnu::flatten]] BrdfSample SampleOne(const GridSpec& g, const Values& values, Lookup lookup,
                                       const HalfVectorSampler& sampler, const Vec3& wo, double u1, double u2) {
-    return sample_one<kWide>(g, values, lookup, sampler, wo, u1, u2);
+    return sample_one<Blend>(g, values, lookup, sampler, wo, u1, u2);
 }
 template <typename Values>
 [[gnu::flatten]] void SampleBatch(const GridSpec& g, const Values& values, Lookup lookup,
                                   const HalfVectorSampler& sampler, const Vec3* wo, const std::array<double, 2>* u,
                                   BrdfSample* out, std::size_t n) {
-    sample_table_passes<kWide>(g, values, lookup, sampler, wo, u, out, n);
+    sample_table_passes<Blend>(g, values, lookup, sampler, wo, u, out, n);
 }
 
 }  // namespace brdfz::detail::HWY_NAMESPACE

@@ -3,15 +3,17 @@
 // the factor rows blended in float at a pair's interpolation corners, their products summed per channel
 // with the colour mix, clamped to the data's ceiling, and the transform space inverted.
 //
-// W floats a step: 4 in the baseline build, 8 in the AVX2 and AVX-512 ones, whose sources are compiled
-// with FMA contraction (the only kernels that are): the sums of shared-colour svd factors cancel (terms
-// up to 10^5 times their sum), so those builds differ from the baseline by more than float rounding of
-// the value, but the library and the runtime, running the same build, agree to the bit.
+// The sums are the costly part: factor_sums_reference below is their scalar reference, and each
+// Highway target's build (lib/runtime/src/factor_lanes-inl.h) gives its bits. W floats a step: 8 in
+// x86-64's AVX2 and AVX-512 builds, which fuse their multiply-adds, 4 elsewhere. The sums of
+// shared-colour svd factors cancel (terms up to 10^5 times their sum), so the fused builds differ from
+// the others by more than float rounding of the value; every build without fusion, ARM64's too, gives
+// the same bits, and the library and the runtime, running the same build, agree to the bit.
 #pragma once
 
 #include <algorithm>
+#include <cmath>
 #include <cstddef>
-#include <cstring>
 
 #include "brdfz/runtime/kernels/grid.h"
 #include "brdfz/runtime/kernels/math.h"
@@ -20,8 +22,23 @@
 
 namespace brdfz::runtime::kernels {
 
-// Floats per blend step of a level's build; factor rows are zero-padded to a multiple of it.
-constexpr std::size_t factor_lanes(Simd s) { return s >= Simd::Avx2Fma ? 8 : 4; }
+// Floats per blend step of a level's build (one 256-bit vector in x86-64's AVX2 and AVX-512 builds;
+// ARM64's SVE vectors may be 128 bits); factor rows are zero-padded to a multiple of it.
+constexpr std::size_t factor_lanes([[maybe_unused]] Simd s) {
+#if defined(__x86_64__) || defined(_M_X64)
+    return s >= Simd::Avx2Fma ? 8 : 4;
+#else
+    return 4;
+#endif
+}
+// Whether a level's build fuses the sums' multiply-adds: x86-64's builds whose CPU test includes FMA.
+constexpr bool factor_fused([[maybe_unused]] Simd s) {
+#if defined(__x86_64__) || defined(_M_X64)
+    return s >= Simd::Avx2Fma;
+#else
+    return false;
+#endif
+}
 
 struct FactorView {
     Grid grid;
@@ -40,128 +57,62 @@ struct FactorView {
     float ceiling[3] = {0, 0, 0};  // the data's largest value per channel, in the transform space
 };
 
-// W floats in one SSE2, AVX or NEON register where the compiler has vector types (GCC, Clang), an array
-// elsewhere. Only inside always-inlined code: no such vector crosses a call, so the ABI note GCC gives
-// for 8-float vectors outside AVX code does not apply.
-#if defined(__GNUC__)
-#pragma GCC diagnostic push
-#pragma GCC diagnostic ignored "-Wpsabi"
-template <int W>
-struct FloatLanesOf;
-template <>
-struct FloatLanesOf<4> {
-    typedef float type __attribute__((vector_size(16)));
-};
-template <>
-struct FloatLanesOf<8> {
-    typedef float type __attribute__((vector_size(32)));
-};
-template <int W>
-using FloatLanes = typename FloatLanesOf<W>::type;
-#else
-template <int W>
-struct FloatLanes {
-    float lane[W];
-    float operator[](int l) const { return lane[l]; }
-    friend FloatLanes operator*(float s, FloatLanes a) {
-        for (float& x : a.lane) x *= s;
-        return a;
-    }
-    friend FloatLanes operator*(FloatLanes a, const FloatLanes& b) {
-        for (int l = 0; l < W; ++l) a.lane[l] *= b.lane[l];
-        return a;
-    }
-    FloatLanes& operator+=(const FloatLanes& b) {
-        for (int l = 0; l < W; ++l) lane[l] += b.lane[l];
-        return *this;
-    }
-};
-#endif
-
-template <int W>
-[[gnu::always_inline]] inline FloatLanes<W> load_lanes(const float* p) {
-    FloatLanes<W> v;
-    std::memcpy(&v, p, sizeof v);  // unaligned: one movups
-    return v;
-}
-
-// The lane sums of three vectors, each pairwise: ((x0 + x1) + (x2 + x3)), the halves of 8 lanes added
-// first. With vector types, as adds of shuffled vectors (a scalar sum per vector takes three times the
-// instructions).
-#if defined(__GNUC__)
-[[gnu::always_inline]] inline void lane_sums(const FloatLanes<4> (&a)[3], float s[3]) {
-    const auto hadd = [](FloatLanes<4> x, FloatLanes<4> y) {
-        return __builtin_shufflevector(x, y, 0, 2, 4, 6) + __builtin_shufflevector(x, y, 1, 3, 5, 7);
-    };
-    const FloatLanes<4> t = hadd(hadd(a[0], a[1]), hadd(a[2], a[2]));
-    s[0] = t[0], s[1] = t[1], s[2] = t[2];
-}
-[[gnu::always_inline]] inline void lane_sums(const FloatLanes<8> (&a)[3], float s[3]) {
-    FloatLanes<4> h[3];
-    for (int i = 0; i < 3; ++i)
-        h[i] = __builtin_shufflevector(a[i], a[i], 0, 1, 2, 3) + __builtin_shufflevector(a[i], a[i], 4, 5, 6, 7);
-    lane_sums(h, s);
-}
-#else
-template <int W>
-inline void lane_sums(const FloatLanes<W> (&a)[3], float s[3]) {
-    for (int i = 0; i < 3; ++i) {
-        float h[4];
-        for (int l = 0; l < 4; ++l) h[l] = W == 8 ? a[i][l] + a[i][l + 4] : a[i][l];
-        s[i] = (h[0] + h[1]) + (h[2] + h[3]);
-    }
-}
-#endif
-
 // The channel values y[3], in the transform space, at a pair's corners: NR rows of U and NC of V (2 and
 // 4 in the layout h_dp, 4 and 2 in hd_p) and their weights, fixed at compile time so that the blends
 // unroll. y_c = Σ_j mix_cj · (Σ_r rw_r U[r][j]) · (Σ_c cw_c V[c][j]), clamped to the ceiling; padded
 // columns add exact zeros. The float sums are within ~1e-7 of the factors' magnitude, as the float32
 // factors themselves.
+//
+// The reference's order, which the vector builds keep: W lanes, lane l summing the columns l, l + W, ...
+// (Fused: each product-and-sum one fused multiply-add); then each lane set summed pairwise,
+// ((x0 + x1) + (x2 + x3)), the halves of 8 lanes added first. Grouped (separate colour of rank 3 or 4):
+// channel c's products are the 4 floats from 4c, summed without the mix.
 // View: FactorView, or the core's view of its own padded copies (the same members).
-template <int W, bool Grouped, int NR, int NC, typename View>
-[[gnu::always_inline]] inline void factor_sums(const View& f, const int* rows, const float* rw, const int* cols,
-                                               const float* cw, float y[3]) {
-    using V = FloatLanes<W>;
-    const float* u[NR];
-    const float* v[NC];
-    for (int r = 0; r < NR; ++r) u[r] = f.u + static_cast<std::size_t>(rows[r]) * f.width;
-    for (int q = 0; q < NC; ++q) v[q] = f.v + static_cast<std::size_t>(cols[q]) * f.width;
-    // p = the product at columns [j, j + W). By reference: a vector returned by value would cross a call
-    // in the ABI of the level's instruction set.
-    const auto product = [&](std::size_t j, V& p) {
-        V a = rw[0] * load_lanes<W>(u[0] + j), b = cw[0] * load_lanes<W>(v[0] + j);
-        for (int r = 1; r < NR; ++r) a += rw[r] * load_lanes<W>(u[r] + j);
-        for (int q = 1; q < NC; ++q) b += cw[q] * load_lanes<W>(v[q] + j);
-        p = a * b;
+template <int W, bool Fused, bool Grouped, int NR, int NC, typename View>
+inline void factor_sums_reference(const View& f, const int* rows, const float* rw, const int* cols, const float* cw,
+                                  float y[3]) {
+    const auto mul_add = [](float m, float x, float a) { return Fused ? std::fma(m, x, a) : m * x + a; };
+    // The product at column j.
+    const auto product = [&](std::size_t j) {
+        const float* u0 = f.u + static_cast<std::size_t>(rows[0]) * f.width;
+        const float* v0 = f.v + static_cast<std::size_t>(cols[0]) * f.width;
+        float a = rw[0] * u0[j], b = cw[0] * v0[j];
+        for (int r = 1; r < NR; ++r) a = mul_add(rw[r], f.u[static_cast<std::size_t>(rows[r]) * f.width + j], a);
+        for (int q = 1; q < NC; ++q) b = mul_add(cw[q], f.v[static_cast<std::size_t>(cols[q]) * f.width + j], b);
+        return a * b;
     };
+    const auto pairwise = [](const float* x) { return (x[0] + x[1]) + (x[2] + x[3]); };
     float s[3];
     if constexpr (Grouped) {
-        // The 3 groups of 4 floats, in whole steps.
-        constexpr std::size_t kSteps = (12 + W - 1) / W;
-        float g[kSteps * W];
-        for (std::size_t step = 0; step < kSteps; ++step) {
-            V p;
-            product(step * W, p);
-            std::memcpy(g + step * W, &p, sizeof p);
+        for (int ch = 0; ch < 3; ++ch) {
+            float g[4];
+            for (int l = 0; l < 4; ++l) g[l] = product(4 * static_cast<std::size_t>(ch) + l);
+            s[ch] = pairwise(g);
         }
-        const FloatLanes<4> groups[3] = {load_lanes<4>(g), load_lanes<4>(g + 4), load_lanes<4>(g + 8)};
-        lane_sums(groups, s);
     } else {
-        V acc[3] = {};
-        for (std::size_t j = 0; j < f.width; j += W) {
-            V p;
-            product(j, p);
-            for (int ch = 0; ch < 3; ++ch) acc[ch] += load_lanes<W>(f.mix + ch * f.width + j) * p;
+        for (int ch = 0; ch < 3; ++ch) {
+            float acc[W] = {};
+            for (std::size_t j = 0; j < f.width; j += W)
+                for (int l = 0; l < W; ++l) acc[l] = mul_add(f.mix[ch * f.width + j + l], product(j + l), acc[l]);
+            if constexpr (W == 8)
+                for (int l = 0; l < 4; ++l) acc[l] += acc[l + 4];
+            s[ch] = pairwise(acc);
         }
-        lane_sums(acc, s);
     }
     // At most the data's largest value: bins without data can reconstruct far beyond it (factor.h).
     for (int ch = 0; ch < 3; ++ch) y[ch] = std::min(s[ch], f.ceiling[ch]);
 }
-#if defined(__GNUC__)
-#pragma GCC diagnostic pop
-#endif
+
+// factor_sums_reference as a sums policy, which eval_factored and the core's kernel take: this one, or
+// a target's vector build (lib/runtime/src/factor_lanes-inl.h, FactorLanes).
+template <int W, bool Fused>
+struct ReferenceSums {
+    static constexpr int kLanes = W;
+    template <bool Grouped, int NR, int NC, typename View>
+    static void sums(const View& f, const int* rows, const float* rw, const int* cols, const float* cw, float y[3]) {
+        factor_sums_reference<W, Fused, Grouped, NR, NC>(f, rows, rw, cols, cw, y);
+    }
+};
 
 // A pair's corners as factor rows and columns with their weights: the 2-D axis' four (outer span a,
 // inner span b, `inner` samples along b) and the 1-D axis' two.
@@ -180,8 +131,9 @@ inline double from_factor_space(int space, float y) {
     return space == layout::kSpaceLog ? expm1_nonneg_f(pos) : space == layout::kSpaceCbrt ? static_cast<double>(pos) * pos * pos : pos;
 }
 
-// f for a pair above the horizon, in the build of W lanes (the view's width a multiple of W).
-template <int W>
+// f for a pair above the horizon, with a sums policy (ReferenceSums, or a target's FactorLanes; the
+// view's width a multiple of its kLanes).
+template <typename Sums>
 [[gnu::always_inline]] inline void eval_factored(const FactorView& f, const Vec3& wi, const Vec3& wo, double out[3]) {
     const Grid& g = f.grid;
     BinCoords c = fast_bin_coords(g, wi, wo);
@@ -194,11 +146,11 @@ template <int W>
     if (f.layout == layout::kLayoutHxDP) {
         factor_corners_1d(h, rows, rw);
         factor_corners_2d(d, p, g.n_phi_d, cols, cw);
-        f.grouped ? factor_sums<W, true, 2, 4>(f, rows, rw, cols, cw, y) : factor_sums<W, false, 2, 4>(f, rows, rw, cols, cw, y);
+        f.grouped ? Sums::template sums<true, 2, 4>(f, rows, rw, cols, cw, y) : Sums::template sums<false, 2, 4>(f, rows, rw, cols, cw, y);
     } else {
         factor_corners_2d(h, d, g.n_theta_d, rows, rw);
         factor_corners_1d(p, cols, cw);
-        f.grouped ? factor_sums<W, true, 4, 2>(f, rows, rw, cols, cw, y) : factor_sums<W, false, 4, 2>(f, rows, rw, cols, cw, y);
+        f.grouped ? Sums::template sums<true, 4, 2>(f, rows, rw, cols, cw, y) : Sums::template sums<false, 4, 2>(f, rows, rw, cols, cw, y);
     }
     for (int ch = 0; ch < 3; ++ch) out[ch] = from_factor_space(f.space, y[ch]);
 }

@@ -12,7 +12,6 @@
 #include <cmath>
 #include <cstddef>
 #include <cstdint>
-#include <cstring>
 #include <type_traits>
 #include <utility>
 
@@ -248,7 +247,7 @@ template <typename G, typename Visit>
 
 // The blend of the eight corners, channel by channel: invalid samples (NaN) contribute neither value nor
 // weight; a pair whose corners are all invalid is 0. Values provides load(bin, float v[3]). The scalar
-// reference of blend_linear_vectors.
+// reference of the vector builds (lib/runtime/src/blend_lanes-inl.h), which give its bits.
 template <typename G, typename Values>
 inline void blend_linear(const G& g, const Values& values, const Corners& k, double f[3]) {
     double sum[3] = {0.0, 0.0, 0.0}, wsum[3] = {0.0, 0.0, 0.0};
@@ -264,80 +263,21 @@ inline void blend_linear(const G& g, const Values& values, const Corners& k, dou
     for (int c = 0; c < 3; ++c) f[c] = wsum[c] > 0.0 ? sum[c] / wsum[c] : 0.0;
 }
 
+// blend_linear as a blend policy, which the table kernels take: this one, or a target's vector build
+// (lib/runtime/src/blend_lanes-inl.h, BlendLanes).
+struct ScalarBlend {
+    template <typename G, typename Values>
+    static void blend(const G& g, const Values& values, const Corners& k, double f[3]) {
+        blend_linear(g, values, k, f);
+    }
+};
+
 // Whether a Values policy's bins are three floats in memory, readable as four (floats(bin); the core's
-// tables pad their storage): a corner then loads as one vector instead of lane by lane.
+// tables pad their storage): the vector builds then load a corner as one vector instead of lane by lane.
 template <typename Values, typename = void>
 struct FloatBins : std::false_type {};
 template <typename Values>
 struct FloatBins<Values, std::void_t<decltype(std::declval<const Values&>().floats(std::size_t{}))>> : std::true_type {};
-
-#if defined(__GNUC__)
-// blend_linear across channels, as vectors of doubles (GCC and clang vector extensions): the three
-// channels and a spare lane in one AVX register (Wide, for builds with AVX2), or in two SSE2 registers.
-// Within one function, so no such vector crosses a call (whose ABI depends on the instruction set).
-// Each channel's arithmetic is blend_linear's (the same products, the same order of sums), so the result
-// is its own to the bit.
-namespace lanes {
-typedef double Doubles2 __attribute__((vector_size(16)));
-typedef std::int64_t Mask2 __attribute__((vector_size(16)));
-typedef double Doubles4 __attribute__((vector_size(32)));
-typedef std::int64_t Mask4 __attribute__((vector_size(32)));
-typedef float Floats4 __attribute__((vector_size(16)));
-
-// A bin's values as kParts vectors (the last lane spare, its content unused).
-template <bool Wide, typename Values, typename V>
-[[gnu::always_inline]] inline void load_bin(const Values& values, std::size_t bin, V* x) {
-    if constexpr (FloatBins<Values>::value) {
-        Floats4 v;
-        std::memcpy(&v, values.floats(bin), sizeof v);
-        // Lane by lane, not __builtin_convertvector: GCC lowers that to two 128-bit conversions and a
-        // spill even in the AVX2 build, where this is one vcvtps2pd.
-        if constexpr (Wide)
-            x[0] = Doubles4{v[0], v[1], v[2], v[3]};
-        else
-            x[0] = Doubles2{v[0], v[1]}, x[1] = Doubles2{v[2], v[3]};
-    } else {
-        float v[3];
-        values.load(bin, v);
-        if constexpr (Wide)
-            x[0] = V{v[0], v[1], v[2], 0.0};
-        else
-            x[0] = V{v[0], v[1]}, x[1] = V{v[2], 0.0};
-    }
-}
-}  // namespace lanes
-
-template <bool Wide, typename G, typename Values>
-[[gnu::always_inline]] inline void blend_linear_vectors(const G& g, const Values& values, const Corners& k, double f[3]) {
-    using V = std::conditional_t<Wide, lanes::Doubles4, lanes::Doubles2>;
-    using M = std::conditional_t<Wide, lanes::Mask4, lanes::Mask2>;
-    constexpr int kParts = Wide ? 1 : 2;  // vectors per three channels
-    constexpr int kLanes = Wide ? 4 : 2;
-    const V zero = {};
-    V sum[kParts], wsum[kParts];
-    for (int i = 0; i < kParts; ++i) sum[i] = wsum[i] = zero;
-    for_each_corner(g, k, [&](std::size_t bin, double w) {
-        V x[kParts];
-        const V wv = w - zero;  // w in every lane: one broadcast (a lane loop became two shuffles)
-        lanes::load_bin<Wide>(values, bin, x);
-        for (int i = 0; i < kParts; ++i) {
-            // Invalid samples are NaN: they contribute neither value nor weight.
-            const M ok = x[i] == x[i];
-            sum[i] += ok ? wv * x[i] : zero;
-            wsum[i] += ok ? wv : zero;
-        }
-    });
-    for (int i = 0; i < kParts; ++i) {
-        const V q = wsum[i] > zero ? sum[i] / wsum[i] : zero;
-        for (int j = 0; j < kLanes && i * kLanes + j < 3; ++j) f[i * kLanes + j] = q[j];
-    }
-}
-#else
-template <bool Wide, typename G, typename Values>
-inline void blend_linear_vectors(const G& g, const Values& values, const Corners& k, double f[3]) {
-    blend_linear(g, values, k, f);
-}
-#endif
 
 // The nearest sample's channels, 0 for an invalid one.
 template <typename Values>
