@@ -95,23 +95,57 @@ HWY_INLINE void split(D tag, VU u, hn::Vec<D>& first, hn::Vec<D>& second) {
     second = hn::PromoteTo(tag, hn::BitCast(df, hn::TruncateTo(du32, hn::ShiftRight<32>(u))));
 }
 
-// T[idx[k]] and T[idx[k] + 1] for k < m, one 8-byte read each, as bits for the vector loops to load: a
-// gather instruction does not pay on every CPU (AMD's are microcoded).
-HWY_INLINE void read_bits(const float* t, const int* idx, int m, std::uint64_t* bits) {
-    for (int k = 0; k < m; ++k) std::memcpy(bits + k, t + idx[k], sizeof *bits);
+// T[idx[k]] and T[idx[k] + 1] for the lanes k of a block, one 8-byte read each, as bits: a gather
+// instruction does not pay on every CPU (AMD's are microcoded). at(du, k): the vector of lanes from k.
+// Where vectors have a fixed size, a vector's reads are combined in registers, halves of halves: a
+// vector loaded from the lanes' stores would wait for them (a load spanning several stores is not
+// forwarded from them). Scalable vectors (SVE) and the one-lane target take a block's reads through
+// memory.
+#if !HWY_HAVE_SCALABLE && HWY_TARGET != HWY_SCALAR
+template <class DU>
+HWY_INLINE hn::Vec<DU> read_lanes(DU du, const float* t, const int* idx) {
+    if constexpr (hn::MaxLanes(du) == 1) {
+        std::uint64_t bits;
+        std::memcpy(&bits, t + idx[0], sizeof bits);
+        return hn::Set(du, bits);
+    } else {
+        constexpr int kHalf = static_cast<int>(hn::MaxLanes(du) / 2);
+        const hn::Half<DU> dh;
+        return hn::Combine(du, read_lanes(dh, t, idx + kHalf), read_lanes(dh, t, idx));
+    }
 }
+struct Reads {
+    const float* t;
+    const int* idx;
+    HWY_INLINE Reads(const float* table, const int* index, int) : t(table), idx(index) {}
+    template <class DU>
+    HWY_INLINE hn::Vec<DU> at(DU du, int k) const {
+        return read_lanes(du, t, idx + k);
+    }
+};
+#else
+struct Reads {
+    std::uint64_t bits[kBlock];
+    HWY_INLINE Reads(const float* t, const int* idx, int m) {
+        for (int k = 0; k < m; ++k) std::memcpy(bits + k, t + idx[k], sizeof *bits);
+    }
+    template <class DU>
+    HWY_INLINE hn::Vec<DU> at(DU du, int k) const {
+        return hn::LoadU(du, bits + k);
+    }
+};
+#endif
 
 // out[k] = (1 − w[k])·T[idx[k]] + w[k]·T[idx[k] + 1] for k < m (whole vectors): an entry blended between
 // a lane's two slices.
 template <class D>
 HWY_INLINE void blend_reads(D tag, const float* t, const int* idx, const double* w, int m, double* out) {
     const hn::RebindToUnsigned<D> du;
-    std::uint64_t bits[kBlock];
-    read_bits(t, idx, m, bits);
+    const Reads reads(t, idx, m);
     const hn::Vec<D> one = hn::Set(tag, 1.0);
     for (int k = 0; k < m; k += static_cast<int>(hn::Lanes(tag))) {
         hn::Vec<D> a, b;
-        split(tag, hn::LoadU(du, bits + k), a, b);
+        split(tag, reads.at(du, k), a, b);
         const hn::Vec<D> wk = hn::LoadU(tag, w + k);
         hn::StoreU(hn::Add(hn::Mul(hn::Sub(one, wk), a), hn::Mul(wk, b)), tag, out + k);
     }
@@ -121,11 +155,10 @@ HWY_INLINE void blend_reads(D tag, const float* t, const int* idx, const double*
 template <class D>
 HWY_INLINE void pair_reads(D tag, const float* t, const int* idx, int m, double* first, double* second) {
     const hn::RebindToUnsigned<D> du;
-    std::uint64_t bits[kBlock];
-    read_bits(t, idx, m, bits);
+    const Reads reads(t, idx, m);
     for (int k = 0; k < m; k += static_cast<int>(hn::Lanes(tag))) {
         hn::Vec<D> a, b;
-        split(tag, hn::LoadU(du, bits + k), a, b);
+        split(tag, reads.at(du, k), a, b);
         hn::StoreU(a, tag, first + k);
         hn::StoreU(b, tag, second + k);
     }
