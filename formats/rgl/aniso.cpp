@@ -4,7 +4,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <numbers>
 #include <string>
 #include <utility>
 
@@ -14,15 +13,10 @@
 namespace brdfz::rgl::detail {
 namespace {
 
-constexpr double kPi = std::numbers::pi;
+using namespace scalar;
 
-double u_of_theta(double theta) { return std::sqrt(theta * (2.0 / kPi)); }
-double u_of_phi(double phi) { return (phi + kPi) * (0.5 / kPi); }
 double theta_of_u(double u) { return u * u * (kPi / 2.0); }
 double phi_of_u(double u) { return (2.0 * u - 1.0) * kPi; }
-double clamp01(double v) { return std::fmin(std::fmax(v, 0.0), 1.0); }  // NaN goes to 0
-double lerp(double a, double b, double t) { return a * (1.0 - t) + b * t; }
-bool finite(const Vec3& v) { return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z); }
 
 // The corner slices' entries i of a stack of tables `stride` floats apart, blended.
 struct Blend {
@@ -36,62 +30,8 @@ struct Blend {
     }
 };
 
-struct Patch {
-    std::size_t ix, iy;
-    double fx, fy;
-};
-Patch locate(double x, double y, std::size_t rows, std::size_t cols) {
-    const double sx = clamp01(x) * static_cast<double>(cols - 1), sy = clamp01(y) * static_cast<double>(rows - 1);
-    const std::size_t ix = std::min(static_cast<std::size_t>(sx), cols - 2);
-    const std::size_t iy = std::min(static_cast<std::size_t>(sy), rows - 2);
-    return {ix, iy, sx - static_cast<double>(ix), sy - static_cast<double>(iy)};
-}
-
-template <typename Table>
-double bilinear(const Table& t, std::size_t rows, std::size_t cols, double x, double y) {
-    const Patch q = locate(x, y, rows, cols);
-    const std::size_t i = q.iy * cols + q.ix;
-    return lerp(lerp(t[i], t[i + 1], q.fx), lerp(t[i + cols], t[i + cols + 1], q.fx), q.fy);
-}
-
-double partial_integral(double t, double width, double v0, double v1) { return t * lerp(v0, v1, 0.5 * t) * width; }
-// The t in [0, 1] with t·lerp(v0, v1, t/2) = s, rationalised (no cancellation, no special case).
-double invert_partial_integral(double s, double v0, double v1) {
-    const double denom = v0 + std::sqrt(std::fmax(v0 * v0 + 2.0 * s * (v1 - v0), 0.0));
-    return denom > 0.0 ? clamp01(2.0 * s / denom) : 0.0;
-}
-// The largest j in [0, n) with cdf(j) < u, or 0 (cdf non-decreasing, cdf(0) = 0).
-template <typename Cdf>
-std::size_t find_cell(std::size_t n, const Cdf& cdf, double u) {
-    std::size_t lo = 0, hi = n - 1;
-    while (lo < hi) {
-        const std::size_t mid = (lo + hi + 1) / 2;
-        if (cdf(mid) < u) lo = mid;
-        else hi = mid - 1;
-    }
-    return lo;
-}
-
-// Where x falls among increasing values (Mitsuba's interval search, clamped): lower index, step to
-// the upper one (0 for a single value) and the upper one's weight.
-struct Axis {
-    std::size_t lower = 0, step = 0;
-    double w = 0.0;
-};
-Axis axis(const std::vector<float>& v, double x) {
-    if (v.size() < 2) return {};
-    const auto it = std::lower_bound(v.begin() + 1, v.end() - 1, x, [](float a, double b) { return a < b; });
-    const auto lower = static_cast<std::size_t>(it - v.begin()) - 1;
-    return {lower, 1, clamp01((x - v[lower]) / (static_cast<double>(v[lower + 1]) - v[lower]))};
-}
-
 // Mitsuba's mulsign_neg: a times the opposite of b's sign (+0 counts as positive).
 double mulsign_neg(double a, double b) { return std::signbit(b) ? a : -a; }
-
-// dω/du_m for the direction reflected about m (see brdf.cpp); 0 for back-facing m.
-double solid_angle_per_unit_square(double u_theta, double theta_m, double w_dot_m) {
-    return std::fmax(2.0 * kPi * kPi * u_theta * std::sin(theta_m) * 4.0 * w_dot_m, 0.0);
-}
 
 }  // namespace
 
@@ -105,41 +45,13 @@ SliceWarp::SliceWarp(const char* what, const std::vector<float>& data, std::size
 }
 
 WarpPoint SliceWarp::sample(double ux, double uy, const Corners& c) const {
-    const std::size_t n_cond = cols_ - 1;
-    const Blend data{data_.data(), rows_ * cols_, c}, cond{cond_.data(), rows_ * n_cond, c},
-        marg{marg_.data(), rows_ - 1, c};
-    const double width = 1.0 / static_cast<double>(cols_ - 1), height = 1.0 / static_cast<double>(rows_ - 1);
-    ux = clamp01(ux);
-    uy = clamp01(uy);
-    const auto marg_at = [&](std::size_t j) { return j == 0 ? 0.0 : marg[j - 1]; };
-    const std::size_t iy = find_cell(rows_ - 1, marg_at, uy);
-    const std::size_t row0 = iy * n_cond, row1 = row0 + n_cond;
-    const double r0 = cond[row0 + n_cond - 1], r1 = cond[row1 + n_cond - 1];
-    const double fy = invert_partial_integral((uy - marg_at(iy)) / height, r0, r1);
-    const double target = ux * lerp(r0, r1, fy);
-    const auto cond_at = [&](std::size_t j) { return j == 0 ? 0.0 : lerp(cond[row0 + j - 1], cond[row1 + j - 1], fy); };
-    const std::size_t ix = find_cell(cols_ - 1, cond_at, target);
-    const std::size_t i = iy * cols_ + ix;
-    const double c0 = lerp(data[i], data[i + cols_], fy), c1 = lerp(data[i + 1], data[i + cols_ + 1], fy);
-    const double fx = invert_partial_integral((target - cond_at(ix)) / width, c0, c1);
-    return {(static_cast<double>(ix) + fx) * width, (static_cast<double>(iy) + fy) * height, lerp(c0, c1, fx)};
+    return warp_sample(Blend{data_.data(), rows_ * cols_, c}, Blend{cond_.data(), rows_ * (cols_ - 1), c},
+                       Blend{marg_.data(), rows_ - 1, c}, rows_, cols_, ux, uy);
 }
 
 WarpPoint SliceWarp::invert(double px, double py, const Corners& c) const {
-    const std::size_t n_cond = cols_ - 1;
-    const Blend data{data_.data(), rows_ * cols_, c}, cond{cond_.data(), rows_ * n_cond, c},
-        marg{marg_.data(), rows_ - 1, c};
-    const Patch q = locate(px, py, rows_, cols_);
-    const std::size_t i = q.iy * cols_ + q.ix;
-    const double c0 = lerp(data[i], data[i + cols_], q.fy), c1 = lerp(data[i + 1], data[i + cols_ + 1], q.fy);
-    const std::size_t row0 = q.iy * n_cond, row1 = row0 + n_cond;
-    double x = partial_integral(q.fx, 1.0 / static_cast<double>(cols_ - 1), c0, c1);
-    if (q.ix > 0) x += lerp(cond[row0 + q.ix - 1], cond[row1 + q.ix - 1], q.fy);
-    const double r0 = cond[row0 + n_cond - 1], r1 = cond[row1 + n_cond - 1];
-    x /= lerp(r0, r1, q.fy);
-    double y = partial_integral(q.fy, 1.0 / static_cast<double>(rows_ - 1), r0, r1);
-    if (q.iy > 0) y += marg[q.iy - 1];
-    return {x, y, lerp(c0, c1, q.fx)};
+    return warp_invert(Blend{data_.data(), rows_ * cols_, c}, Blend{cond_.data(), rows_ * (cols_ - 1), c},
+                       Blend{marg_.data(), rows_ - 1, c}, rows_, cols_, px, py);
 }
 
 double SliceWarp::eval(double x, double y, const Corners& c) const {
@@ -167,7 +79,7 @@ Anisotropic::Anisotropic(const Tensors& t)
 }
 
 Corners Anisotropic::corners(double phi, double theta) const {
-    const Axis p = axis(t_.phi_i, phi), q = axis(t_.theta_i, theta);
+    const SliceAxis p = slice_axis(t_.phi_i, phi), q = slice_axis(t_.theta_i, theta);
     const std::size_t n_theta = t_.theta_i.size();
     Corners c;
     for (int a = 0; a < 2; ++a)

@@ -17,6 +17,7 @@
 
 #include "brdfz/brdf.h"
 #include "brdfz/formats/rgl.h"
+#include "scalar_warp.h"
 
 namespace brdfz::rgl::detail {
 
@@ -27,10 +28,6 @@ struct Corners {
 };
 
 // A point of [0,1]² and the density there.
-struct WarpPoint {
-    double x = 0, y = 0, pdf = 0;
-};
-
 // A density given by a bilinearly interpolated rows × cols table per slice, normalised per slice, with
 // the CDFs that sample it (Mitsuba's Marginal2D with Continuous = true); tables of several slices are
 // blended entry by entry before any nonlinear step, so the blended CDFs are those of the blended density.

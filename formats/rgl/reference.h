@@ -9,6 +9,7 @@
 
 #include "brdfz/formats/rgl.h"
 #include "rgl/marginal2d.h"
+#include "rgl/scalar_warp.h"
 
 namespace brdfz::rgl::detail {
 
