@@ -56,7 +56,9 @@ struct BlendLanes {
 
 #if HWY_TARGET != HWY_SCALAR
     // A bin's channels from `first` as doubles, as many as D holds (beyond the third, unused content).
-    // Bins of three floats padded to four load as one vector (grid.h, FloatBins).
+    // Bins of three floats padded to four load as one vector (grid.h, FloatBins); others decode to
+    // scalars, combined in registers: a vector loaded from their stores would wait for them (a load
+    // spanning several stores is not forwarded from them).
     template <class D, typename Values>
     HWY_INLINE static auto load_bin(D d, const Values& values, std::size_t bin, int first) {
         namespace hn = hwy::HWY_NAMESPACE;
@@ -66,7 +68,17 @@ struct BlendLanes {
             float v[3];
             values.load(bin, v);
             const double x[4] = {v[0], v[1], v[2], 0.0};
-            return hn::LoadU(d, x + first);
+            return combined(d, x + first);
+        }
+    }
+    template <class D>
+    HWY_INLINE static hwy::HWY_NAMESPACE::Vec<D> combined(D d, const double* x) {
+        namespace hn = hwy::HWY_NAMESPACE;
+        if constexpr (hn::MaxLanes(d) == 1) {
+            return hn::Set(d, x[0]);
+        } else {
+            const hn::Half<D> dh;
+            return hn::Combine(d, combined(dh, x + hn::MaxLanes(dh)), combined(dh, x));
         }
     }
 
