@@ -7,7 +7,8 @@
 //
 //   level          x86-64                          ARM64
 //   Sse2 (Neon)    SSE4, or SCALAR on a CPU        NEON
-//                  without SSE4.2
+//                  without SSE4.2 (or with
+//                  baseline_sse4 cleared)
 //   Avx2Fma (Sve)  AVX2                            SVE
 //   Avx512 (Sve2)  AVX3 (AVX-512 F, VL, DQ, BW)    SVE2
 //
@@ -46,7 +47,7 @@ struct HwyBuilds {
         if (level >= Simd::Sve2 && sve2) return sve2;
         if (level >= Simd::Avx2Fma && avx2) return avx2;
         if (level >= Simd::Sve && sve) return sve;
-        return sse4 && cpu_has_sse4() ? sse4 : fallback;
+        return sse4 && cpu_has_sse4() && baseline_sse4.load(std::memory_order_relaxed) ? sse4 : fallback;
     }
 };
 

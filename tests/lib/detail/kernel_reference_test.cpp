@@ -173,4 +173,19 @@ TEST_CASE("kernels: every build's factor sums give factor_sums_reference's bits"
     }
     CHECK(clamped > 0);
 }
+
+TEST_CASE("kernels: the baseline level runs its scalar form where SSE4.2 is missing or turned off", "[kernels]") {
+    const auto lanes = BRDFZ_HWY_BUILDS(SumsLanes);
+    REQUIRE(lanes.fallback != nullptr);
+    if (!runtime::kernels::cpu_has_sse4()) {
+        CHECK(lanes.at(detail::Simd::Sse2) == lanes.fallback);
+        return;
+    }
+    CHECK(lanes.at(detail::Simd::Sse2) == lanes.sse4);
+    runtime::kernels::baseline_sse4 = false;
+    const auto scalar = lanes.at(detail::Simd::Sse2);
+    runtime::kernels::baseline_sse4 = true;
+    CHECK(scalar == lanes.fallback);
+    CHECK(scalar != lanes.sse4);
+}
 #endif  // HWY_ONCE

@@ -58,6 +58,8 @@ inline bool cpu_has_sse4() {
 // Tests lower it to run the narrower builds on a CPU that has the wider ones; Avx512 is no cap. A
 // runtime material takes its builds when it is opened.
 inline std::atomic<Simd> simd_cap{Simd::Avx512};
+// Tests clear it to run the baseline level's scalar form on a CPU with SSE4.2, as CPUs without it do.
+inline std::atomic<bool> baseline_sse4{true};
 
 // The widest level both the CPU and simd_cap allow (brdfz::simd_level() for code outside the core).
 inline Simd simd_level() {
