@@ -74,12 +74,17 @@ struct BlendLanes {
     template <class D>
     HWY_INLINE static hwy::HWY_NAMESPACE::Vec<D> combined(D d, const double* x) {
         namespace hn = hwy::HWY_NAMESPACE;
+#if HWY_HAVE_SCALABLE
+        // Two lanes: SVE's tags have no one-lane halves to combine.
+        return hn::InterleaveLower(d, hn::Set(d, x[0]), hn::Set(d, x[1]));
+#else
         if constexpr (hn::MaxLanes(d) == 1) {
             return hn::Set(d, x[0]);
         } else {
             const hn::Half<D> dh;
             return hn::Combine(d, combined(dh, x + hn::MaxLanes(dh)), combined(dh, x));
         }
+#endif
     }
 
     // Invalid samples are NaN: they contribute neither value nor weight.
