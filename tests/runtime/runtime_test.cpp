@@ -342,7 +342,7 @@ TEST_CASE("runtime: every build this CPU runs gives the baseline build's bits", 
     const std::vector<Vec3>& wo = views.first;
     const std::vector<std::array<double, 2>>& us = views.second;
     const std::vector<Vec3> wi = test::random_views(5000, 4).first;
-    // Factorisations are not among them: their builds contract to FMA (the next test).
+    // Factorisations are not among them: their wide builds fuse multiply-adds (the next test).
     for (const char* spec : {"tabular:res=16x16x32,dtype=f16,symmetry=none", "tabular:res=16x16x32,lookup=nearest",
                              "tabular:res=12x12x16,phih=3,symmetry=bilateral", "analytic:lambert+ggx"}) {
         const Compressed c = compress(source, spec);

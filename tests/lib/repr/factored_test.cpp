@@ -454,7 +454,7 @@ TEST_CASE("factored: eval is the interpolated reconstruction, within 1e-5, at ra
 }
 
 // The kernel is built for each SIMD level (detail/simd.h): SSE2, AVX2 + FMA and AVX-512, the widest the
-// CPU has chosen. They blend in float, so they agree to float rounding, not bit for bit (FMA contracts,
+// CPU has chosen. They blend in float, so they agree to float rounding, not bit for bit (the wide ones fuse,
 // lanes sum in another order); single-pair eval runs the batch's build, bit for bit, in each. nmf:
 // without cancelling components, float rounding stays relative to each value.
 namespace {
