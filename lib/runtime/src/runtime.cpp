@@ -411,8 +411,8 @@ std::shared_ptr<const Data> parsed(std::unique_ptr<Data> d, std::string* error) 
 }
 
 // The evaluators of one kind of object, for a pair above the horizon (eval<Blend>(o, wi, wo, f); Blend:
-// a table's blend across channels, grid.h's ScalarBlend or a target's BlendLanes). Each call table below is built for one of them, so that a material's calls
-// hold only its own kind's code.
+// a table's blend across channels, grid.h's ScalarBlend or a target's BlendLanes). Each call table
+// below is built for one of them, so that a material's calls hold only its own kind's code.
 template <typename Values, bool Nearest>
 struct TableLeaf {
     static Values values(const Object& o) {
