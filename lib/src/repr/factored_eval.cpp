@@ -70,6 +70,8 @@ template <typename Sums, bool Grouped, typename Corners>
 template <typename Sums, FactorLayout L, bool Grouped>
 [[gnu::always_inline]] inline void eval_pairs(const FactorView& f, FactorSpace space, const Vec3* wi, const Vec3* wo,
                                               Rgb* out, std::size_t n, std::uint64_t& clamped) {
+    using runtime::kernels::ThetaHAxes;
+    constexpr bool kFused = Sums::kFused;  // the coordinates and the inverse transform fuse as the sums
     const GridSpec& g = f.grid;
     const double off = g.sample_offset();
     detail::BinCoords coords[kBlock];
@@ -83,9 +85,9 @@ template <typename Sums, FactorLayout L, bool Grouped>
         const Vec3* b = wo + start;
         if (g.theta_h_warp == 0.0)
             for (std::size_t k = 0; k < m; ++k)
-                coords[k] = detail::fast_bin_coords<runtime::kernels::ThetaHAxes::SquareRoot>(g, a[k], b[k]);
+                coords[k] = detail::fast_bin_coords<ThetaHAxes::SquareRoot, kFused>(g, a[k], b[k]);
         else
-            for (std::size_t k = 0; k < m; ++k) coords[k] = detail::fast_bin_coords(g, a[k], b[k]);
+            for (std::size_t k = 0; k < m; ++k) coords[k] = detail::fast_bin_coords<ThetaHAxes::Any, kFused>(g, a[k], b[k]);
         for (std::size_t k = 0; k < m; ++k) above[k] = (a[k].z > 0.0) & (b[k].z > 0.0);
         for (std::size_t k = 0; k < m; ++k)
             if (above[k] & !(coords[k].up <= g.n_phi_d)) [[unlikely]]  // kIllConditioned or NaN
@@ -116,7 +118,7 @@ template <typename Sums, FactorLayout L, bool Grouped>
             else
                 y[3 * k] = y[3 * k + 1] = y[3 * k + 2] = 0.0f;  // gives the value 0, not counted
         }
-        detail::from_space_n(space, y, values, 3 * m, clamped);
+        detail::from_space_n<kFused>(space, y, values, 3 * m, clamped);
         for (std::size_t k = 0; k < m; ++k) out[start + k] = {values[3 * k], values[3 * k + 1], values[3 * k + 2]};
     }
 }

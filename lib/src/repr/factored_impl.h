@@ -30,13 +30,14 @@ inline double to_space(FactorSpace s, double f) {
 // The value for a reconstruction y (already at most the ceiling); y < 0 (possible for svd) gives 0.
 // No libm call, so the loop below vectorises. A float y (eval's blend, ~1e-7 from exact already)
 // takes the float expm1, a double y (reconstruct) the double one; the cube is in double, where the
-// ceiling's cube cannot overflow.
-template <FactorSpace S, typename T>
+// ceiling's cube cannot overflow. Fused: the float expm1 with fused multiply-adds (math.h, madd), in
+// the eval builds that fuse their sums.
+template <FactorSpace S, bool Fused = false, typename T>
 inline double from_space(T y) {
     const T p = y > T(0) ? y : T(0);  // NaN cannot occur: factors are finite
     if constexpr (S == FactorSpace::Log) {
         if constexpr (std::is_same_v<T, float>)
-            return expm1_nonneg_f(p);
+            return expm1_nonneg_f<Fused>(p);
         else
             return expm1_nonneg(p);
     } else if constexpr (S == FactorSpace::Cbrt) {
@@ -49,22 +50,22 @@ inline double from_space(T y) {
 
 // out[i] = the value of y[i], counting the negatives clamped (in a T: GCC vectorises that sum
 // with the loop, not an integer one).
-template <FactorSpace S, typename T>
+template <FactorSpace S, bool Fused, typename T>
 void from_space_n(const T* y, double* out, std::size_t n, std::uint64_t& clamped) {
     T count = 0;
     for (std::size_t i = 0; i < n; ++i) {
         count += y[i] < T(0) ? T(1) : T(0);
-        out[i] = from_space<S>(y[i]);
+        out[i] = from_space<S, Fused>(y[i]);
     }
     clamped += static_cast<std::uint64_t>(count);
 }
 
-template <typename T>
+template <bool Fused = false, typename T>
 void from_space_n(FactorSpace s, const T* y, double* out, std::size_t n, std::uint64_t& clamped) {
     switch (s) {
-        case FactorSpace::Log: return from_space_n<FactorSpace::Log>(y, out, n, clamped);
-        case FactorSpace::Cbrt: return from_space_n<FactorSpace::Cbrt>(y, out, n, clamped);
-        default: return from_space_n<FactorSpace::Linear>(y, out, n, clamped);
+        case FactorSpace::Log: return from_space_n<FactorSpace::Log, Fused>(y, out, n, clamped);
+        case FactorSpace::Cbrt: return from_space_n<FactorSpace::Cbrt, Fused>(y, out, n, clamped);
+        default: return from_space_n<FactorSpace::Linear, Fused>(y, out, n, clamped);
     }
 }
 

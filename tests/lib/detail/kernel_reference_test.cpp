@@ -1,11 +1,13 @@
 // The Highway builds of the kernels shared by the library and brdfz::runtime (lib/runtime/src/
 // blend_lanes-inl.h, factor_lanes-inl.h) against their scalar references (runtime/kernels/grid.h:
-// blend_linear; factored.h: factor_sums_reference), bit for bit, at every level this CPU runs. This file
-// is compiled once per Highway target (hwy/foreach_target.h), as the kernels' own files are.
+// blend_linear; factored.h: factor_sums_reference, and the whole eval with it), bit for bit, at every
+// level this CPU runs. This file is compiled once per Highway target (hwy/foreach_target.h), as the
+// kernels' own files are.
 #ifndef BRDFZ_TEST_KERNEL_REFERENCE_ONCE
 #define BRDFZ_TEST_KERNEL_REFERENCE_ONCE
 #include <catch2/catch.hpp>
 
+#include <algorithm>
 #include <cmath>
 #include <cstring>
 #include <limits>
@@ -70,6 +72,11 @@ void BlendPadded(const k::Grid& g, const float* data, const k::Corners* c, std::
         S::sums<false, 4, 2>(f, c[i].rows, c[i].rw, c[i].cols, c[i].cw, y + 9);
     }
 }
+// The whole factored eval: coordinates, corners, sums and inverse transform, fused where the sums are.
+[[gnu::flatten]] void EvalAll(const k::FactorView& f, const Vec3* wi, const Vec3* wo, std::size_t n,
+                              double* out) {
+    for (std::size_t i = 0; i < n; ++i) k::eval_factored<k::HWY_NAMESPACE::FactorLanes>(f, wi[i], wo[i], out + 3 * i);
+}
 int SumsLanes() { return k::HWY_NAMESPACE::FactorLanes::kLanes; }
 bool SumsFused() { return k::HWY_NAMESPACE::FactorLanes::kFused; }
 
@@ -88,6 +95,13 @@ void reference_sums(const k::FactorView& f, const SumsCase* c, std::size_t n, fl
         k::factor_sums_reference<W, Fused, false, 2, 4>(f, c[i].rows, c[i].rw, c[i].cols, c[i].cw, y + 6);
         k::factor_sums_reference<W, Fused, false, 4, 2>(f, c[i].rows, c[i].rw, c[i].cols, c[i].cw, y + 9);
     }
+}
+
+// The reference's eval, compiled for no target: its fused multiply-adds are libm's std::fma.
+template <int W, bool Fused>
+void reference_eval(const k::FactorView& f, const Vec3* wi, const Vec3* wo, std::size_t n,
+                    double* out) {
+    for (std::size_t i = 0; i < n; ++i) k::eval_factored<k::ReferenceSums<W, Fused>>(f, wi[i], wo[i], out + 3 * i);
 }
 
 }  // namespace
@@ -172,6 +186,59 @@ TEST_CASE("kernels: every build's factor sums give factor_sums_reference's bits"
         for (std::size_t i = 0; i < got.size(); i += 3) clamped += got[i] == f.ceiling[0];
     }
     CHECK(clamped > 0);
+}
+
+TEST_CASE("kernels: every build's factored eval gives the reference's bits, coordinates and transform too",
+          "[kernels][qemu]") {
+    k::FactorView f;
+    f.grid.n_theta_h = 10, f.grid.n_theta_d = 9, f.grid.n_phi_d = 12;
+    f.space = runtime::layout::kSpaceLog;
+    f.width = 16;
+    std::mt19937 rng(5);
+    std::uniform_real_distribution<float> factor(-0.5f, 1.0f);
+    std::uniform_real_distribution<double> unit(0.0, 1.0);
+    const std::size_t n_rows = static_cast<std::size_t>(f.grid.n_theta_h) * f.grid.n_theta_d;
+    const std::size_t n_cols = static_cast<std::size_t>(f.grid.n_theta_d) * f.grid.n_phi_d;
+    // Rows enough for either layout's U and V.
+    std::vector<float> u(std::max(n_rows, n_cols) * f.width), v(u.size()), mix(3 * f.width);
+    for (float& x : u) x = factor(rng);
+    for (float& x : v) x = factor(rng);
+    for (float& x : mix) x = factor(rng);
+    f.u = u.data(), f.v = v.data(), f.mix = mix.data();
+    f.ceiling[0] = 0.3f, f.ceiling[1] = f.ceiling[2] = 4.0f;
+    // Directions over the hemisphere; some pairs at the pole or mirrored (θh or θd 0: the exact fallback).
+    const std::size_t n = 4000;
+    std::vector<Vec3> wi(n), wo(n);
+    const auto direction = [&] {
+        const double z = unit(rng), r = std::sqrt(1.0 - z * z), phi = 2.0 * k::kPi * unit(rng);
+        return Vec3{r * std::cos(phi), r * std::sin(phi), z};
+    };
+    for (std::size_t i = 0; i < n; ++i) {
+        wi[i] = direction(), wo[i] = i % 50 == 0 ? wi[i] : direction();
+        if (i % 50 == 1) wi[i] = wo[i] = {0.0, 0.0, 1.0};
+    }
+    const auto eval = BRDFZ_HWY_BUILDS(EvalAll);
+    std::vector<double> ref(3 * n), got(3 * n);
+    std::size_t cases = 0;
+    for (int layout : {runtime::layout::kLayoutHxDP, runtime::layout::kLayoutHDxP})
+        for (bool grouped : {false, true})
+            for (detail::Simd level : test::simd_levels()) {
+                INFO(test::simd_label(level) << ", layout " << layout << (grouped ? ", grouped" : ""));
+                f.layout = layout, f.grouped = grouped;
+                const bool fma = k::factor_fused(level);
+                if (k::factor_lanes(level) == 8)
+                    fma ? reference_eval<8, true>(f, wi.data(), wo.data(), n, ref.data())
+                        : reference_eval<8, false>(f, wi.data(), wo.data(), n, ref.data());
+                else
+                    fma ? reference_eval<4, true>(f, wi.data(), wo.data(), n, ref.data())
+                        : reference_eval<4, false>(f, wi.data(), wo.data(), n, ref.data());
+                std::fill(got.begin(), got.end(), -1.0);
+                eval.at(level)(f, wi.data(), wo.data(), n, got.data());
+                CHECK(std::memcmp(got.data(), ref.data(), sizeof(double) * got.size()) == 0);
+                CHECK(std::all_of(got.begin(), got.end(), [](double x) { return std::isfinite(x) && x >= 0.0; }));
+                ++cases;
+            }
+    CHECK(cases == 4 * test::simd_levels().size());
 }
 
 TEST_CASE("kernels: the baseline level runs its scalar form where SSE4.2 is missing or turned off", "[kernels]") {

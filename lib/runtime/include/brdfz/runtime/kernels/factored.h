@@ -31,7 +31,8 @@ constexpr std::size_t factor_lanes([[maybe_unused]] Simd s) {
     return 4;
 #endif
 }
-// Whether a level's build fuses the sums' multiply-adds: x86-64's builds whose CPU test includes FMA.
+// Whether a level's build fuses the eval's multiply-adds (the sums, and through math.h's madd the
+// coordinates and the inverse transform): x86-64's builds whose CPU test includes FMA.
 constexpr bool factor_fused([[maybe_unused]] Simd s) {
 #if defined(__x86_64__) || defined(_M_X64)
     return s >= Simd::Avx2Fma;
@@ -108,6 +109,7 @@ inline void factor_sums_reference(const View& f, const int* rows, const float* r
 template <int W, bool Fused>
 struct ReferenceSums {
     static constexpr int kLanes = W;
+    static constexpr bool kFused = Fused;
     template <bool Grouped, int NR, int NC, typename View>
     static void sums(const View& f, const int* rows, const float* rw, const int* cols, const float* cw, float y[3]) {
         factor_sums_reference<W, Fused, Grouped, NR, NC>(f, rows, rw, cols, cw, y);
@@ -126,17 +128,19 @@ inline void factor_corners_1d(const Span& a, int idx[2], float w[2]) {
 }
 
 // A transform-space value y (clamped to the ceiling) as the BRDF's value: reconstructions below 0 are 0.
+template <bool Fused>
 inline double from_factor_space(int space, float y) {
     const float pos = y > 0.0f ? y : 0.0f;
-    return space == layout::kSpaceLog ? expm1_nonneg_f(pos) : space == layout::kSpaceCbrt ? static_cast<double>(pos) * pos * pos : pos;
+    return space == layout::kSpaceLog ? expm1_nonneg_f<Fused>(pos) : space == layout::kSpaceCbrt ? static_cast<double>(pos) * pos * pos : pos;
 }
 
 // f for a pair above the horizon, with a sums policy (ReferenceSums, or a target's FactorLanes; the
-// view's width a multiple of its kLanes).
+// view's width a multiple of its kLanes), whose kFused the coordinates and the inverse transform take too.
 template <typename Sums>
 [[gnu::always_inline]] inline void eval_factored(const FactorView& f, const Vec3& wi, const Vec3& wo, double out[3]) {
     const Grid& g = f.grid;
-    BinCoords c = fast_bin_coords(g, wi, wo);
+    constexpr bool kFused = Sums::kFused;
+    BinCoords c = fast_bin_coords<ThetaHAxes::Any, kFused>(g, wi, wo);
     if (!(c.up <= g.n_phi_d)) c = bin_coords(g, wi, wo);  // kIllConditioned or NaN
     const double off = g.sample_offset();
     const Span h = clamped_span(c.uh - off, g.n_theta_h), d = clamped_span(c.ud - off, g.n_theta_d),
@@ -152,7 +156,7 @@ template <typename Sums>
         factor_corners_1d(p, cols, cw);
         f.grouped ? Sums::template sums<true, 4, 2>(f, rows, rw, cols, cw, y) : Sums::template sums<false, 4, 2>(f, rows, rw, cols, cw, y);
     }
-    for (int ch = 0; ch < 3; ++ch) out[ch] = from_factor_space(f.space, y[ch]);
+    for (int ch = 0; ch < 3; ++ch) out[ch] = from_factor_space<kFused>(f.space, y[ch]);
 }
 
 }  // namespace brdfz::runtime::kernels

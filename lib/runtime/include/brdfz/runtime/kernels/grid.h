@@ -101,11 +101,11 @@ constexpr double kIllConditioned = 1e300;
 
 // θd's bin coordinate on the grid's axis, from θd and cosθd: the warped axis is a select, so the linear
 // axis stays exact and the callers' loops stay branch-free.
-template <typename G>
+template <bool Fused = false, typename G>
 [[gnu::always_inline]] inline double theta_d_coord(const G& g, double theta_d, double cos_d) {
     const double w = g.theta_d_warp;
     const double ud_linear = theta_d * (2.0 / kPi) * g.n_theta_d;
-    const double ud_warped = ((1.0 - w) * theta_d * (2.0 / kPi) + w * (1.0 - cos_d)) * g.n_theta_d;
+    const double ud_warped = madd<Fused>((1.0 - w) * theta_d, 2.0 / kPi, w * (1.0 - cos_d)) * g.n_theta_d;
     return w == 0.0 ? ud_linear : ud_warped;
 }
 
@@ -127,31 +127,35 @@ template <ThetaHAxes Axes = ThetaHAxes::Any, typename G>
 // the angle into [0, π] (a reciprocal grid's axis); the full circle adds π where d_y < 0; the mirror
 // fold takes |d_y|, so |φd|. Selects, not branches, and on a reciprocal grid the arithmetic of the
 // folded axis exactly.
-template <typename G>
+template <bool Fused = false, typename G>
 [[gnu::always_inline]] inline double phi_d_coord(const G& g, double y, double x) {
     const bool full = g.full_circle();
     // |d_y| by masking its sign bit (all bits kept on the other axes): one AND per pair, not a select.
     const std::uint64_t keep = g.bilateral() ? ~(std::uint64_t{1} << 63) : ~std::uint64_t{0};
     const double folded = bits_as<double>(bits_as<std::uint64_t>(y) & keep);
-    const double phi = fast_half_turn_angle(folded, x) + ((full & (y < 0.0)) ? kPi : 0.0);
+    const double phi = fast_half_turn_angle<Fused>(folded, x) + ((full & (y < 0.0)) ? kPi : 0.0);
     return phi * (full ? 0.5 / kPi : 1.0 / kPi) * g.n_phi_d;
 }
 
-// Always inlined: a call per pair would keep the callers' coordinate loops from vectorising.
-template <ThetaHAxes Axes = ThetaHAxes::Any, typename G>
+// Always inlined: a call per pair would keep the callers' coordinate loops from vectorising. Fused
+// (math.h, madd): the products and sums as fused multiply-adds, for a build of a CPU with FMA.
+template <ThetaHAxes Axes = ThetaHAxes::Any, bool Fused = false, typename G>
 [[gnu::always_inline]] inline BinCoords fast_bin_coords(const G& g, const Vec3& wi, const Vec3& wo) {
+    const auto m = [](double a, double b, double c) { return madd<Fused>(a, b, c); };
+    const auto dot3 = [&](const Vec3& a, const Vec3& b) { return m(a.z, b.z, m(a.y, b.y, a.x * b.x)); };
     const Vec3 s = wi + wo;
-    const double rxy2 = s.x * s.x + s.y * s.y;
+    const double rxy2 = m(s.x, s.x, s.y * s.y);
     const double rxy = std::sqrt(rxy2);
-    const double len = std::sqrt(rxy2 + s.z * s.z);
-    const Vec3 cr{wi.y * s.z - wi.z * s.y, wi.z * s.x - wi.x * s.z, wi.x * s.y - wi.y * s.x};
-    const double sin_d = std::sqrt(dot(cr, cr));  // sinθd·|s|
-    const double theta_h = fast_half_turn_angle(rxy, s.z);
-    const double theta_d = fast_half_turn_angle(sin_d, dot(wi, s));
-    const double up = phi_d_coord(g, -cr.z * len, s.z * (wi.x * s.x + wi.y * s.y) - wi.z * rxy2);
+    const double len = std::sqrt(m(s.z, s.z, rxy2));
+    const Vec3 cr{m(wi.y, s.z, -(wi.z * s.y)), m(wi.z, s.x, -(wi.x * s.z)), m(wi.x, s.y, -(wi.y * s.x))};
+    const double sin_d = std::sqrt(dot3(cr, cr));  // sinθd·|s|
+    const double cos_d = dot3(wi, s);              // cosθd·|s|
+    const double theta_h = fast_half_turn_angle<Fused>(rxy, s.z);
+    const double theta_d = fast_half_turn_angle<Fused>(sin_d, cos_d);
+    const double up = phi_d_coord<Fused>(g, -cr.z * len, m(s.z, m(wi.y, s.y, wi.x * s.x), -(wi.z * rxy2)));
     constexpr double kMinSin = 1e-6;
     const bool sure = (rxy > kMinSin * len) & (sin_d > kMinSin * len);
-    return {theta_h_coord<Axes>(g, theta_h), theta_d_coord(g, theta_d, dot(wi, s) / len),
+    return {theta_h_coord<Axes>(g, theta_h), theta_d_coord<Fused>(g, theta_d, cos_d / len),
             std::max(up, sure ? 0.0 : kIllConditioned)};
 }
 

@@ -21,29 +21,44 @@ inline To bits_as(const From& from) {
     return to;
 }
 
+// a·b + c as one fused multiply-add where Fused, else a rounded product and a rounded sum. A kernel
+// that takes Fused passes it from its build's level (factored.h, factor_fused), so that whether it
+// fuses is in its code, not in its file's compiler flags; std::fma is one instruction in a build for a
+// CPU with FMA, and a correctly rounded libm call elsewhere (the same bits, slowly).
+template <bool Fused, typename T>
+[[gnu::always_inline]] inline T madd(T a, T b, T c) {
+    if constexpr (Fused)
+        return std::fma(a, b, c);
+    else
+        return a * b + c;
+}
+
 // atan(t) for t in [0, 1] as t·P(t²), a least-squares fit of the relative error: |rel err| < 6e-11.
 // Estrin's scheme: a dependency chain of 4 multiply-adds instead of Horner's 11.
+template <bool Fused = false>
 [[gnu::always_inline]] inline double atan01(double t) {
     constexpr double c[] = {0.99999999994136979,   -0.33333331572392677, 0.19999912082711904,
                             -0.1428398114194897,   0.1109324385371387,   -0.089802498131937941,
                             0.072457466235865964,  -0.054279596397618646, 0.034210157407729216,
                             -0.016112066961960693, 0.0048510884142120014, -0.00068481937721016906};
+    const auto m = [](double a, double b, double c) { return madd<Fused>(a, b, c); };
     const double x = t * t, x2 = x * x, x4 = x2 * x2, x8 = x4 * x4;
-    const double p01 = c[0] + c[1] * x, p23 = c[2] + c[3] * x, p45 = c[4] + c[5] * x, p67 = c[6] + c[7] * x;
-    const double p89 = c[8] + c[9] * x, pab = c[10] + c[11] * x;
-    const double q0 = p01 + p23 * x2, q1 = p45 + p67 * x2, q2 = p89 + pab * x2;
-    return t * ((q0 + q1 * x4) + q2 * x8);
+    const double p01 = m(c[1], x, c[0]), p23 = m(c[3], x, c[2]), p45 = m(c[5], x, c[4]), p67 = m(c[7], x, c[6]);
+    const double p89 = m(c[9], x, c[8]), pab = m(c[11], x, c[10]);
+    const double q0 = m(p23, x2, p01), q1 = m(p67, x2, p45), q2 = m(pab, x2, p89);
+    return t * m(q2, x8, m(q1, x4, q0));
 }
 
 // The angle of (x, y) folded into [0, π] (φ ~ φ + π, as MERL folds φd by reciprocity), to ~1e-10
 // relative. No branch: octant tests on random directions would mispredict half the time, and
 // branch-free code vectorises. A NaN x gives NaN (a NaN y alone does not); (0, 0) gives NaN.
+template <bool Fused = false>
 [[gnu::always_inline]] inline double fast_half_turn_angle(double y, double x) {
     const double ax = std::fabs(x), ay = std::fabs(y);
-    const double a = atan01(std::min(ax, ay) / std::max(ax, ay));
+    const double a = atan01<Fused>(std::min(ax, ay) / std::max(ax, ay));
     const double steep = ay > ax ? 1.0 : 0.0, left = (x < 0.0) != (y < 0.0) ? 1.0 : 0.0;
-    const double b = a + steep * (kPi / 2 - 2.0 * a);  // π/2 - a when |y| > |x|
-    return b + left * (kPi - 2.0 * b);                  // π - b in the 2nd quadrant
+    const double b = madd<Fused>(steep, madd<Fused>(-2.0, a, kPi / 2), a);  // π/2 - a when |y| > |x|
+    return madd<Fused>(left, madd<Fused>(-2.0, b, kPi), b);                  // π - b in the 2nd quadrant
 }
 
 // sin and cos of a in [0, π] without a table or a branch: a is reduced to |b| ≤ π/4 by the quarter
@@ -108,22 +123,24 @@ inline double expm1_nonneg(double x) {
 // values blended in float (already ~1e-7 from exact), where expm1_nonneg's double polynomial buys no
 // accuracy. The reduction and the 7-term series run in float (twice the SIMD lanes, half the terms);
 // only the final scaling by 2^k is in double, so no x up to 709 overflows.
+template <bool Fused = false>
 inline double expm1_nonneg_f(float x) {
     x = x < 709.0f ? x : 709.0f;
     constexpr float kShift = 0x1.8p23f;  // x·log2(e) + kShift rounds to an integer k ≤ 1023 in the low bits
-    const float t = x * 1.44269504088896340736f + kShift;
+    const float t = madd<Fused>(x, 1.44269504088896340736f, kShift);
     const float k = t - kShift;
     const std::int64_t ki = bits_as<std::int32_t>(t) - bits_as<std::int32_t>(kShift);
     const double scale = bits_as<double>((ki + 1023) << 52);  // 2^k
     // kLn2Hi has 13 significant bits, so k·kLn2Hi is exact for k < 2^11.
     constexpr float kLn2Hi = 0x1.62ep-1f, kLn2Lo = static_cast<float>(0.693147180559945309417 - 0x1.62ep-1);
-    const float r = (x - k * kLn2Hi) - k * kLn2Lo;
+    const float r = madd<Fused>(-k, kLn2Lo, madd<Fused>(-k, kLn2Hi, x));
     // e^r − 1 = r·Σ r^i/(i+1)!, i ≤ 6: the truncation is < 2e-8 relative for |r| ≤ ln2/2.
     constexpr float c[] = {1.0f, 1.0f / 2, 1.0f / 6, 1.0f / 24, 1.0f / 120, 1.0f / 720, 1.0f / 5040};
     const float r2 = r * r, r4 = r2 * r2;
-    const float p01 = c[0] + c[1] * r, p23 = c[2] + c[3] * r, p45 = c[4] + c[5] * r;
-    const float em = r * ((p01 + p23 * r2) + (p45 + c[6] * r2) * r4);
-    return scale * em + (scale - 1.0);
+    const auto m = [](float a, float b, float c) { return madd<Fused>(a, b, c); };
+    const float p01 = m(c[1], r, c[0]), p23 = m(c[3], r, c[2]), p45 = m(c[5], r, c[4]);
+    const float em = r * m(m(c[6], r2, p45), r4, m(p23, r2, p01));
+    return madd<Fused>(scale, static_cast<double>(em), scale - 1.0);
 }
 
 // IEEE binary16 -> binary32, exact for every code (subnormals without float denormals, so it stays
