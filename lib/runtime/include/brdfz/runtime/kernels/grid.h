@@ -105,7 +105,7 @@ template <bool Fused = false, typename G>
 [[gnu::always_inline]] inline double theta_d_coord(const G& g, double theta_d, double cos_d) {
     const double w = g.theta_d_warp;
     const double ud_linear = theta_d * (2.0 / kPi) * g.n_theta_d;
-    const double ud_warped = madd<Fused>((1.0 - w) * theta_d, 2.0 / kPi, w * (1.0 - cos_d)) * g.n_theta_d;
+    const double ud_warped = madd<Fused>(w, 1.0 - cos_d, (1.0 - w) * theta_d * (2.0 / kPi)) * g.n_theta_d;
     return w == 0.0 ? ud_linear : ud_warped;
 }
 
@@ -137,25 +137,34 @@ template <bool Fused = false, typename G>
     return phi * (full ? 0.5 / kPi : 1.0 / kPi) * g.n_phi_d;
 }
 
+// dot(a, b), (a_x b_x + a_y b_y) + a_z b_z, in fused multiply-adds where Fused, else dot itself (math.h,
+// madd: why the unfused forms keep the callers' own expressions).
+template <bool Fused>
+[[gnu::always_inline]] inline double dot_madd(const Vec3& a, const Vec3& b) {
+    if constexpr (Fused)
+        return std::fma(a.z, b.z, std::fma(a.y, b.y, a.x * b.x));
+    else
+        return dot(a, b);
+}
+
 // Always inlined: a call per pair would keep the callers' coordinate loops from vectorising. Fused
 // (math.h, madd): the products and sums as fused multiply-adds, for a build of a CPU with FMA.
 template <ThetaHAxes Axes = ThetaHAxes::Any, bool Fused = false, typename G>
 [[gnu::always_inline]] inline BinCoords fast_bin_coords(const G& g, const Vec3& wi, const Vec3& wo) {
-    const auto m = [](double a, double b, double c) { return madd<Fused>(a, b, c); };
-    const auto dot3 = [&](const Vec3& a, const Vec3& b) { return m(a.z, b.z, m(a.y, b.y, a.x * b.x)); };
     const Vec3 s = wi + wo;
-    const double rxy2 = m(s.x, s.x, s.y * s.y);
+    const double rxy2 = madd<Fused>(s.y, s.y, s.x * s.x);
     const double rxy = std::sqrt(rxy2);
-    const double len = std::sqrt(m(s.z, s.z, rxy2));
-    const Vec3 cr{m(wi.y, s.z, -(wi.z * s.y)), m(wi.z, s.x, -(wi.x * s.z)), m(wi.x, s.y, -(wi.y * s.x))};
-    const double sin_d = std::sqrt(dot3(cr, cr));  // sinθd·|s|
-    const double cos_d = dot3(wi, s);              // cosθd·|s|
+    const double len = std::sqrt(madd<Fused>(s.z, s.z, rxy2));
+    const Vec3 cr{nmadd<Fused>(wi.z, s.y, wi.y * s.z), nmadd<Fused>(wi.x, s.z, wi.z * s.x),
+                  nmadd<Fused>(wi.y, s.x, wi.x * s.y)};
+    const double sin_d = std::sqrt(dot_madd<Fused>(cr, cr));  // sinθd·|s|
     const double theta_h = fast_half_turn_angle<Fused>(rxy, s.z);
-    const double theta_d = fast_half_turn_angle<Fused>(sin_d, cos_d);
-    const double up = phi_d_coord<Fused>(g, -cr.z * len, m(s.z, m(wi.y, s.y, wi.x * s.x), -(wi.z * rxy2)));
+    const double theta_d = fast_half_turn_angle<Fused>(sin_d, dot_madd<Fused>(wi, s));
+    const double dx = nmadd<Fused>(wi.z, rxy2, s.z * madd<Fused>(wi.y, s.y, wi.x * s.x));
+    const double up = phi_d_coord<Fused>(g, -cr.z * len, dx);
     constexpr double kMinSin = 1e-6;
     const bool sure = (rxy > kMinSin * len) & (sin_d > kMinSin * len);
-    return {theta_h_coord<Axes>(g, theta_h), theta_d_coord<Fused>(g, theta_d, cos_d / len),
+    return {theta_h_coord<Axes>(g, theta_h), theta_d_coord<Fused>(g, theta_d, dot_madd<Fused>(wi, s) / len),
             std::max(up, sure ? 0.0 : kIllConditioned)};
 }
 

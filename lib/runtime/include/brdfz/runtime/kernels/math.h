@@ -21,16 +21,25 @@ inline To bits_as(const From& from) {
     return to;
 }
 
-// a·b + c as one fused multiply-add where Fused, else a rounded product and a rounded sum. A kernel
-// that takes Fused passes it from its build's level (factored.h, factor_fused), so that whether it
-// fuses is in its code, not in its file's compiler flags; std::fma is one instruction in a build for a
-// CPU with FMA, and a correctly rounded libm call elsewhere (the same bits, slowly).
+// c + a·b (madd) and c − a·b (nmadd), each one fused multiply-add where Fused, else a rounded product
+// and a rounded sum. A kernel that takes Fused passes it from its build's level (factored.h,
+// factor_fused), so that whether it fuses is in its code, not in its file's compiler flags; std::fma is
+// one instruction in a build for a CPU with FMA, and a correctly rounded libm call elsewhere (the same
+// bits, slowly). The unfused forms are the kernels' own expressions, c + a·b: GCC compiles the same
+// values in another operand order to other, slower vector code.
 template <bool Fused, typename T>
 [[gnu::always_inline]] inline T madd(T a, T b, T c) {
     if constexpr (Fused)
         return std::fma(a, b, c);
     else
-        return a * b + c;
+        return c + a * b;
+}
+template <bool Fused, typename T>
+[[gnu::always_inline]] inline T nmadd(T a, T b, T c) {
+    if constexpr (Fused)
+        return std::fma(-a, b, c);
+    else
+        return c - a * b;
 }
 
 // atan(t) for t in [0, 1] as t·P(t²), a least-squares fit of the relative error: |rel err| < 6e-11.
@@ -41,12 +50,11 @@ template <bool Fused = false>
                             -0.1428398114194897,   0.1109324385371387,   -0.089802498131937941,
                             0.072457466235865964,  -0.054279596397618646, 0.034210157407729216,
                             -0.016112066961960693, 0.0048510884142120014, -0.00068481937721016906};
-    const auto m = [](double a, double b, double c) { return madd<Fused>(a, b, c); };
     const double x = t * t, x2 = x * x, x4 = x2 * x2, x8 = x4 * x4;
-    const double p01 = m(c[1], x, c[0]), p23 = m(c[3], x, c[2]), p45 = m(c[5], x, c[4]), p67 = m(c[7], x, c[6]);
-    const double p89 = m(c[9], x, c[8]), pab = m(c[11], x, c[10]);
-    const double q0 = m(p23, x2, p01), q1 = m(p67, x2, p45), q2 = m(pab, x2, p89);
-    return t * m(q2, x8, m(q1, x4, q0));
+    const double p01 = madd<Fused>(c[1], x, c[0]), p23 = madd<Fused>(c[3], x, c[2]), p45 = madd<Fused>(c[5], x, c[4]);
+    const double p67 = madd<Fused>(c[7], x, c[6]), p89 = madd<Fused>(c[9], x, c[8]), pab = madd<Fused>(c[11], x, c[10]);
+    const double q0 = madd<Fused>(p23, x2, p01), q1 = madd<Fused>(p67, x2, p45), q2 = madd<Fused>(pab, x2, p89);
+    return t * madd<Fused>(q2, x8, madd<Fused>(q1, x4, q0));
 }
 
 // The angle of (x, y) folded into [0, π] (φ ~ φ + π, as MERL folds φd by reciprocity), to ~1e-10
@@ -57,8 +65,8 @@ template <bool Fused = false>
     const double ax = std::fabs(x), ay = std::fabs(y);
     const double a = atan01<Fused>(std::min(ax, ay) / std::max(ax, ay));
     const double steep = ay > ax ? 1.0 : 0.0, left = (x < 0.0) != (y < 0.0) ? 1.0 : 0.0;
-    const double b = madd<Fused>(steep, madd<Fused>(-2.0, a, kPi / 2), a);  // π/2 - a when |y| > |x|
-    return madd<Fused>(left, madd<Fused>(-2.0, b, kPi), b);                  // π - b in the 2nd quadrant
+    const double b = madd<Fused>(steep, nmadd<Fused>(2.0, a, kPi / 2), a);  // π/2 - a when |y| > |x|
+    return madd<Fused>(left, nmadd<Fused>(2.0, b, kPi), b);                  // π - b in the 2nd quadrant
 }
 
 // sin and cos of a in [0, π] without a table or a branch: a is reduced to |b| ≤ π/4 by the quarter
@@ -133,13 +141,12 @@ inline double expm1_nonneg_f(float x) {
     const double scale = bits_as<double>((ki + 1023) << 52);  // 2^k
     // kLn2Hi has 13 significant bits, so k·kLn2Hi is exact for k < 2^11.
     constexpr float kLn2Hi = 0x1.62ep-1f, kLn2Lo = static_cast<float>(0.693147180559945309417 - 0x1.62ep-1);
-    const float r = madd<Fused>(-k, kLn2Lo, madd<Fused>(-k, kLn2Hi, x));
+    const float r = nmadd<Fused>(k, kLn2Lo, nmadd<Fused>(k, kLn2Hi, x));
     // e^r − 1 = r·Σ r^i/(i+1)!, i ≤ 6: the truncation is < 2e-8 relative for |r| ≤ ln2/2.
     constexpr float c[] = {1.0f, 1.0f / 2, 1.0f / 6, 1.0f / 24, 1.0f / 120, 1.0f / 720, 1.0f / 5040};
     const float r2 = r * r, r4 = r2 * r2;
-    const auto m = [](float a, float b, float c) { return madd<Fused>(a, b, c); };
-    const float p01 = m(c[1], r, c[0]), p23 = m(c[3], r, c[2]), p45 = m(c[5], r, c[4]);
-    const float em = r * m(m(c[6], r2, p45), r4, m(p23, r2, p01));
+    const float p01 = madd<Fused>(c[1], r, c[0]), p23 = madd<Fused>(c[3], r, c[2]), p45 = madd<Fused>(c[5], r, c[4]);
+    const float em = r * madd<Fused>(madd<Fused>(c[6], r2, p45), r4, madd<Fused>(p23, r2, p01));
     return madd<Fused>(scale, static_cast<double>(em), scale - 1.0);
 }
 
