@@ -23,7 +23,6 @@
 #include "brdfz/table.h"
 #include "brdfz/runtime/kernels/grid.h"
 #include "detail/fast_math.h"
-#include "detail/simd.h"
 
 namespace brdfz::detail {
 

@@ -12,7 +12,6 @@
 #include <numbers>
 
 #include "brdfz/sample/halfvector.h"
-#include "detail/simd.h"
 #include "detail/table_lookup.h"
 
 namespace brdfz::detail {

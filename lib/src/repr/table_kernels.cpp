@@ -7,6 +7,7 @@
 #include "repr/table_kernels.h"
 
 #include "hwy_dispatch.h"
+#include "detail/simd.h"
 #include "detail/table_lookup.h"
 #include "detail/table_sample.h"
 #endif  // BRDFZ_REPR_TABLE_KERNELS_ONCE
