@@ -20,6 +20,7 @@
 #include <chrono>
 #include <cstdio>
 #include <cstdlib>
+#include <exception>
 #include <filesystem>
 #include <fstream>
 #include <new>
@@ -124,7 +125,7 @@ double per_call(F&& f, std::size_t calls) {
 
 }  // namespace
 
-int main(int argc, char** argv) {
+int main(int argc, char** argv) try {
     int reps = 9;
     std::vector<std::string> specs, files;
     for (int i = 1; i < argc; ++i) {
@@ -239,4 +240,8 @@ int main(int argc, char** argv) {
             std::fflush(stdout);
         }
     }
+    return 0;
+} catch (const std::exception& e) {
+    std::fprintf(stderr, "runtime_bench: %s\n", e.what());
+    return 1;
 }

@@ -11,6 +11,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <exception>
 #include <random>
 #include <string>
 #include <vector>
@@ -95,7 +96,7 @@ double median(std::vector<double> v) {
 
 }  // namespace
 
-int main(int argc, char** argv) {
+int main(int argc, char** argv) try {
     std::vector<std::pair<std::string, std::unique_ptr<Brdf>>> materials;
     LoadOptions options;
     for (int i = 1; i < argc; ++i) {
@@ -191,4 +192,8 @@ int main(int argc, char** argv) {
         }
         std::printf("\n");
     }
+    return 0;
+} catch (const std::exception& e) {
+    std::fprintf(stderr, "sample: %s\n", e.what());
+    return 1;
 }

@@ -13,6 +13,7 @@
 #include <array>
 #include <cmath>
 #include <cstdio>
+#include <exception>
 #include <cstdlib>
 #include <random>
 #include <vector>
@@ -61,7 +62,7 @@ extern "C" {
 }
 }
 
-int main(int argc, char** argv) {
+int main(int argc, char** argv) try {
     if (argc < 2) {
         std::fprintf(stderr, "usage: sample_count FILE [N]\n");
         return 2;
@@ -95,4 +96,8 @@ int main(int argc, char** argv) {
     check += measured_eval(*t, wi, wo, f);
     check += measured_eval_one(*t, wi, wo, f);
     std::printf("%zu samples [%g]\n", n, check);
+    return 0;
+} catch (const std::exception& e) {
+    std::fprintf(stderr, "sample_count: %s\n", e.what());
+    return 1;
 }

@@ -7,6 +7,7 @@
 // Prints one CSV row per (file, spec (quoted), view): file,spec,theta_o,repr_bytes,compact_bytes,fine_bytes,
 // compact,fine,own (own: the representation's own sampler, e.g. an analytic model's lobe mixture).
 #include <cstdio>
+#include <exception>
 #include <cstdlib>
 #include <memory>
 #include <numbers>
@@ -56,7 +57,7 @@ private:
 
 }  // namespace
 
-int main(int argc, char** argv) {
+int main(int argc, char** argv) try {
     std::vector<std::string> specs, files;
     CompactSamplerOptions options;
     std::size_t draws = 1 << 18;
@@ -107,4 +108,8 @@ int main(int argc, char** argv) {
             }
         }
     }
+    return 0;
+} catch (const std::exception& e) {
+    std::fprintf(stderr, "sampler_quality: %s\n", e.what());
+    return 1;
 }
