@@ -51,10 +51,19 @@ template <bool Fused = false>
                             0.072457466235865964,  -0.054279596397618646, 0.034210157407729216,
                             -0.016112066961960693, 0.0048510884142120014, -0.00068481937721016906};
     const double x = t * t, x2 = x * x, x4 = x2 * x2, x8 = x4 * x4;
-    const double p01 = madd<Fused>(c[1], x, c[0]), p23 = madd<Fused>(c[3], x, c[2]), p45 = madd<Fused>(c[5], x, c[4]);
-    const double p67 = madd<Fused>(c[7], x, c[6]), p89 = madd<Fused>(c[9], x, c[8]), pab = madd<Fused>(c[11], x, c[10]);
-    const double q0 = madd<Fused>(p23, x2, p01), q1 = madd<Fused>(p67, x2, p45), q2 = madd<Fused>(pab, x2, p89);
-    return t * madd<Fused>(q2, x8, madd<Fused>(q1, x4, q0));
+    if constexpr (Fused) {
+        const auto m = [](double a, double b, double c) { return std::fma(a, b, c); };
+        const double p01 = m(c[1], x, c[0]), p23 = m(c[3], x, c[2]), p45 = m(c[5], x, c[4]), p67 = m(c[7], x, c[6]);
+        const double p89 = m(c[9], x, c[8]), pab = m(c[11], x, c[10]);
+        const double q0 = m(p23, x2, p01), q1 = m(p67, x2, p45), q2 = m(pab, x2, p89);
+        return t * m(q2, x8, m(q1, x4, q0));
+    } else {
+        // Plain expressions: through madd, GCC compiles the RGL kernels' calls to other, slower code.
+        const double p01 = c[0] + c[1] * x, p23 = c[2] + c[3] * x, p45 = c[4] + c[5] * x, p67 = c[6] + c[7] * x;
+        const double p89 = c[8] + c[9] * x, pab = c[10] + c[11] * x;
+        const double q0 = p01 + p23 * x2, q1 = p45 + p67 * x2, q2 = p89 + pab * x2;
+        return t * ((q0 + q1 * x4) + q2 * x8);
+    }
 }
 
 // The angle of (x, y) folded into [0, π] (φ ~ φ + π, as MERL folds φd by reciprocity), to ~1e-10
