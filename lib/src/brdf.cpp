@@ -37,19 +37,26 @@ bool all_prepared(const Vec3* v, std::size_t n) {
 // every call gives 0 or a failed draw.
 Vec3 prepared(Vec3 v) { return prepare_direction(v) ? v : Vec3{0.0, 0.0, -1.0}; }
 
-// Runs kernel(a, b, k0, m) over [0, n) on the prepared directions, chunk by chunk on the stack where
-// some need preparing.
+// Runs kernel(a, b, k0, m) over [0, n) on the prepared directions, a slice at a time, so that the kernel
+// finds in cache what the check has just read; a slice that needs preparing goes chunk by chunk through
+// the stack.
 template <typename Kernel>
 void with_prepared(const Vec3* a, const Vec3* b, std::size_t n, Kernel&& kernel) {
-    if (all_prepared(a, n) && (!b || all_prepared(b, n))) return kernel(a, b, 0, n);
-    constexpr std::size_t kChunk = 256;
+    constexpr std::size_t kSlice = 4096, kChunk = 256;  // a slice's directions and results fit L2
     Vec3 pa[kChunk], pb[kChunk];
-    for (std::size_t start = 0; start < n; start += kChunk) {
-        const std::size_t m = std::min(kChunk, n - start);
-        for (std::size_t k = 0; k < m; ++k) pa[k] = prepared(a[start + k]);
-        if (b)
-            for (std::size_t k = 0; k < m; ++k) pb[k] = prepared(b[start + k]);
-        kernel(pa, b ? pb : nullptr, start, m);
+    for (std::size_t slice = 0; slice < n; slice += kSlice) {
+        const std::size_t end = std::min(n, slice + kSlice);
+        if (all_prepared(a + slice, end - slice) && (!b || all_prepared(b + slice, end - slice))) {
+            kernel(a + slice, b ? b + slice : nullptr, slice, end - slice);
+            continue;
+        }
+        for (std::size_t start = slice; start < end; start += kChunk) {
+            const std::size_t m = std::min(kChunk, end - start);
+            for (std::size_t k = 0; k < m; ++k) pa[k] = prepared(a[start + k]);
+            if (b)
+                for (std::size_t k = 0; k < m; ++k) pb[k] = prepared(b[start + k]);
+            kernel(pa, b ? pb : nullptr, start, m);
+        }
     }
 }
 
