@@ -5,13 +5,15 @@
 
 Each command prints a table whose rows are `CASE  numbers... | CPU-ms ...` (rgl_batch, factored_eval),
 `  file | r1 | r2 ...` ratio rows (vs_mitsuba.py's "ratios per file"), `CASE ... median T ms` rows
-(tabular_eval, compact_eval) or sample's `sample() (...), WHERE: R M samples/s ..., R' M/s in blocks`
-lines (taken as times per sample and per draw). For every case and column the ratio A / B of each round
+(tabular_eval, compact_eval), sample's `sample() (...), WHERE: R M samples/s ..., R' M/s in blocks`
+lines (taken as times per sample and per draw) or CSV under a header line (runtime_bench: a row's text
+cells name its case, its columns ending in _ns, _us or _ms are its times). For every case and column the ratio A / B of each round
 is taken; the report is the median of those ratios and their range (for times, > 1: B faster; for
 vs_mitsuba's brdfz ÷ measured ratios, < 1: B faster). Commands run through the shell, so an environment
 assignment (PYTHONPATH=...) may lead them.
 """
 import argparse
+import csv
 import re
 import statistics
 import subprocess
@@ -23,7 +25,19 @@ NUMBER = r"[-+]?\d+(?:\.\d+)?(?:[eE][-+]?\d+)?"
 def figures(text: str) -> dict:
     """{(case, column): value} from one run's output."""
     out = {}
+    header = None
     for line in text.splitlines():
+        if re.fullmatch(r"[a-z_][a-z0-9_]*(,[a-z_][a-z0-9_]*)+", line.strip()):
+            header = line.strip().split(",")
+            continue
+        if header:
+            cells = next(csv.reader([line]), [])
+            if len(cells) == len(header):  # a CSV row: its text cells name the case
+                case = " ".join(c for c in cells if not re.fullmatch(NUMBER, c))
+                for name, c in zip(header, cells):
+                    if name.endswith(("_ns", "_us", "_ms")) and re.fullmatch(NUMBER, c):
+                        out[(case, name)] = float(c)
+                continue
         median = re.match(rf"\s*(\S.*?)\s+median\s+({NUMBER}) ms", line)
         if median:  # CASE ... median T ms
             out[(re.sub(r"\s+", " ", median.group(1)), "ms")] = float(median.group(2))
@@ -73,8 +87,9 @@ def main() -> int:
     if not ratios:
         sys.exit("interleave.py: no case appeared in both outputs")
     print(f"A: {args.a}\nB: {args.b}\nrounds: {args.rounds}; A / B per round, median (range)")
+    width = max(7, *(len(column) for _, column in ratios))
     for (case, column), v in sorted(ratios.items()):
-        print(f"  {case[:60]:60s} {column:7s} {statistics.median(v):6.3f} ({min(v):.3f}-{max(v):.3f})")
+        print(f"  {case[:60]:60s} {column:{width}s} {statistics.median(v):6.3f} ({min(v):.3f}-{max(v):.3f})")
     return 0
 
 

@@ -32,6 +32,21 @@ def test_figures_reads_every_benchmarks_rows():
     }
 
 
+def test_figures_reads_csv_rows_under_their_header():
+    text = "\n".join([
+        "file,spec,bytes,load_ms,eval_one_ns,eval_one_ratio",
+        'a.bsdf,"svd:rank=8,dtype=f16",14944,0.84,21.5,1.10',
+        'a.bsdf,"tabular:res=8x8x16",8000,0.50,30.0,0.90',
+        "[12.5]",
+    ])
+    assert interleave.figures(text) == {
+        ("a.bsdf svd:rank=8,dtype=f16", "load_ms"): 0.84,
+        ("a.bsdf svd:rank=8,dtype=f16", "eval_one_ns"): 21.5,
+        ("a.bsdf tabular:res=8x8x16", "load_ms"): 0.50,
+        ("a.bsdf tabular:res=8x8x16", "eval_one_ns"): 30.0,
+    }
+
+
 def test_ratios_of_two_builds(tmp_path, monkeypatch, capsys):
     a, b = tmp_path / "a.sh", tmp_path / "b.sh"
     a.write_text("echo 'eval linear  median  30.0 ms'\n")
